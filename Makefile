@@ -1,0 +1,27 @@
+# Both targets create or reuse the local virtual environment .venv/ themselves.
+PYTHON ?= python3.11
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+
+.PHONY: test report bench clean
+
+$(PY):
+	$(PYTHON) -m venv $(VENV)
+
+$(STAMP): pyproject.toml | $(PY)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[test]'
+	touch $(STAMP)
+
+test: $(STAMP)
+	$(PY) -m pytest
+
+report: $(STAMP)
+	$(VENV)/bin/obsdesign derive --variant lag
+
+bench: $(STAMP)
+	$(PY) benchmarks/run.py --write
+
+clean:
+	rm -rf $(VENV) build *.egg-info

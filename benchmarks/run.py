@@ -1,0 +1,60 @@
+"""Run every benchmark and print (or, with --write, record) a Markdown table.
+
+Usage: ``python benchmarks/run.py [--write]`` (``make bench`` runs it with --write).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import os
+import platform
+import subprocess
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+import bench_derive  # noqa: E402
+
+SUITES = {"Symbolic derivation (issue 2)": bench_derive.run}
+
+
+def machine() -> str:
+    cpu = "unknown CPU"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, {platform.system()} {platform.machine()}"
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--write", action="store_true", help="write benchmarks/RESULTS.md")
+    args = ap.parse_args()
+    lines = ["# Benchmark results", "",
+             f"Recorded {datetime.date.today().isoformat()} on: {machine()}.", "",
+             "Re-run with `make bench`. Each row compares against a reference measured in the same run.", ""]
+    failed = False
+    for title, suite in SUITES.items():
+        rows = suite()
+        lines += [f"## {title}", "", "| benchmark | value | reference (same run) | ratio | target | met |",
+                  "|---|---|---|---|---|---|"]
+        for r in rows:
+            lines.append(f"| {r['benchmark']} | {r['value']} | {r['reference']} | {r['ratio']} | {r['target']} | {'yes' if r['ok'] else 'NO'} |")
+            failed |= not r["ok"]
+        lines.append("")
+    text = "\n".join(lines)
+    print(text)
+    if args.write:
+        (HERE / "RESULTS.md").write_text(text)
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,34 @@
+"""obsdesign: design, verify and validate reduced-order friction observers.
+
+Implements M. Ruderman, "Reduced-order asymptotic observer of nonlinear
+friction for precise motion control": symbolic derivation, numeric design and
+stability verdicts, simulation and reports.
+"""
+
+from .params import Config as Config
+from .params import FrictionParams as FrictionParams
+from .params import ObserverSpec as ObserverSpec
+from .params import PIDSpec as PIDSpec
+from .params import PlantParams as PlantParams
+from .params import SensorSpec as SensorSpec
+from .params import load_config as load_config
+from .params import load_preset as load_preset
+from .params import preset_names as preset_names
+from .symbolic import Derivation as Derivation
+from .symbolic import derive as derive
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Config",
+    "FrictionParams",
+    "ObserverSpec",
+    "PIDSpec",
+    "PlantParams",
+    "SensorSpec",
+    "load_config",
+    "load_preset",
+    "preset_names",
+    "Derivation",
+    "derive",
+]

@@ -1,0 +1,445 @@
+"""Design parameters: plant, friction, sensor, observer and PID specifications.
+
+Every section is a frozen, keyword-only dataclass. Each field carries its unit,
+a one-line description and its admissible range in the field metadata; one
+validation routine (:func:`_validate_fields`) checks them all in
+``__post_init__``, so an invalid value can never be held by a config object.
+
+Configs are read from and written to TOML. Values are only ever parsed as TOML
+literals; nothing in a config is evaluated as code.
+
+Examples
+--------
+>>> import obsdesign as od
+>>> cfg = od.load_preset("table1")
+>>> cfg.friction.kappa, cfg.observer.variant
+(8000.0, 'lag')
+>>> round(od.load_preset("vcm").pid.phi, 6)  # derived as K * tau / m
+0.040695
+>>> od.ObserverSpec(rho=0.0)
+Traceback (most recent call last):
+...
+ValueError: observer.rho: expected a finite number > 0, found 0.0
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import tempfile
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+__all__ = [
+    "PlantParams",
+    "FrictionParams",
+    "SensorSpec",
+    "ObserverSpec",
+    "PIDSpec",
+    "Config",
+    "load_preset",
+    "load_config",
+    "preset_names",
+    "VARIANTS",
+]
+
+VARIANTS = ("lag", "static")
+
+
+@dataclass(frozen=True)
+class _Range:
+    """Admissible range of a numeric field; ``None`` bounds are open-ended."""
+
+    low: float | None = None
+    high: float | None = None
+    low_inclusive: bool = False
+    high_inclusive: bool = False
+    optional: bool = False
+
+    def describe(self) -> str:
+        parts = []
+        if self.low is not None:
+            parts.append(f"{'>=' if self.low_inclusive else '>'} {self.low:g}")
+        if self.high is not None:
+            parts.append(f"{'<=' if self.high_inclusive else '<'} {self.high:g}")
+        text = "a finite number" + (" " + " and ".join(parts) if parts else "")
+        return text + (" (or omitted)" if self.optional else "")
+
+    def check(self, name: str, value: Any) -> float | None:
+        if value is None and self.optional:
+            return None
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise TypeError(
+                f"{name}: expected {self.describe()}, found {type(value).__name__} {value!r}"
+            )
+        number = float(value)
+        ok = math.isfinite(number)
+        if ok and self.low is not None:
+            ok = number >= self.low if self.low_inclusive else number > self.low
+        if ok and self.high is not None:
+            ok = number <= self.high if self.high_inclusive else number < self.high
+        if not ok:
+            raise ValueError(f"{name}: expected {self.describe()}, found {number!r}")
+        return number
+
+
+@dataclass(frozen=True)
+class _Choice:
+    options: tuple[str, ...]
+
+    def describe(self) -> str:
+        return "one of " + ", ".join(repr(o) for o in self.options)
+
+    def check(self, name: str, value: Any) -> str:
+        if not isinstance(value, str):
+            raise TypeError(f"{name}: expected {self.describe()}, found {type(value).__name__} {value!r}")
+        if value not in self.options:
+            raise ValueError(f"{name}: expected {self.describe()}, found {value!r}")
+        return value
+
+
+@dataclass(frozen=True)
+class _Text:
+    def describe(self) -> str:
+        return "a string"
+
+    def check(self, name: str, value: Any) -> str:
+        if not isinstance(value, str):
+            raise TypeError(f"{name}: expected a string, found {type(value).__name__} {value!r}")
+        return value
+
+
+_POSITIVE = _Range(low=0.0)
+_NONNEGATIVE = _Range(low=0.0, low_inclusive=True)
+_FINITE = _Range()
+
+
+def _param(check, unit: str, doc: str, default: Any = dataclasses.MISSING):
+    """A dataclass field with its validation rule, unit and description."""
+    return field(default=default, metadata={"check": check, "unit": unit, "doc": doc})
+
+
+def _validate_fields(obj: Any) -> None:
+    """Check every field of a parameter dataclass against its metadata rule."""
+    for f in dataclasses.fields(obj):
+        rule = f.metadata.get("check")
+        if rule is None:
+            continue
+        value = rule.check(f"{obj._section}.{f.name}", getattr(obj, f.name))
+        object.__setattr__(obj, f.name, value)
+
+
+@dataclass(frozen=True, kw_only=True)
+class PlantParams:
+    """Rigid-body plant of eq:2:1, ``m x'' + f = u - g`` with ``u = K u_volt``.
+
+    Examples
+    --------
+    >>> PlantParams(m=0.538, K=3.28, G=5.27).m
+    0.538
+    """
+
+    _section = "plant"
+    m: float = _param(_POSITIVE, "kg", "moving mass")
+    K: float = _param(_POSITIVE, "N/V", "actuator force constant")
+    G: float = _param(_FINITE, "N", "known load force, pre-compensated", 0.0)
+
+    def __post_init__(self) -> None:
+        _validate_fields(self)
+
+
+@dataclass(frozen=True, kw_only=True)
+class FrictionParams:
+    """Coulomb friction with pre-sliding (eq:2:3:1-2:3:5) and viscous friction.
+
+    ``beta`` is the viscous lag time constant of eq:2:2:2; ``None`` means
+    static viscous friction (the paper's section 4 adjustment).
+
+    Examples
+    --------
+    >>> FrictionParams(Cf=0.35, sigma=21.1, s=3000, kappa=8000).beta is None
+    True
+    """
+
+    _section = "friction"
+    Cf: float = _param(_POSITIVE, "N", "Coulomb friction level")
+    sigma: float = _param(_POSITIVE, "N s/m", "viscous friction coefficient")
+    s: float = _param(_POSITIVE, "1/m", "pre-sliding distance scaling factor")
+    kappa: float = _param(_POSITIVE, "N/m", "pre-sliding stiffness bound")
+    beta: float | None = _param(
+        _Range(low=0.0, optional=True), "s", "viscous friction lag time constant", None
+    )
+
+    def __post_init__(self) -> None:
+        _validate_fields(self)
+
+
+@dataclass(frozen=True, kw_only=True)
+class SensorSpec:
+    """Displacement sensor: band-limited noise and encoder quantization.
+
+    Examples
+    --------
+    >>> SensorSpec(noise_rms=1e-6).quantization
+    0.0
+    """
+
+    _section = "sensor"
+    noise_rms: float = _param(_NONNEGATIVE, "m", "RMS of the measurement noise", 0.0)
+    noise_bandwidth: float = _param(_POSITIVE, "Hz", "bandwidth of the measurement noise", 1000.0)
+    quantization: float = _param(_NONNEGATIVE, "m", "encoder resolution (0: none)", 0.0)
+
+    def __post_init__(self) -> None:
+        _validate_fields(self)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ObserverSpec:
+    """Observer design: gain parameter rho (Proposition 2), filter and sampling.
+
+    Examples
+    --------
+    >>> ObserverSpec(rho=4.0, variant="static").dt
+    0.0001
+    """
+
+    _section = "observer"
+    rho: float = _param(_POSITIVE, "-", "gain design parameter (stable for rho > 1)")
+    omega_co: float = _param(_POSITIVE, "rad/s", "cutoff of the low-pass filter eq:3:4:5", 2 * math.pi * 40)
+    variant: str = _param(_Choice(VARIANTS), "-", "model variant the observer is derived from", "lag")
+    dt: float = _param(_POSITIVE, "s", "controller sample time", 1e-4)
+
+    def __post_init__(self) -> None:
+        _validate_fields(self)
+
+
+@dataclass(frozen=True, kw_only=True)
+class PIDSpec:
+    """Sensitivity-based PID specification of section 4.1.
+
+    The plant approximation is ``H = phi / (lambda (tau lambda + 1))``
+    (eq:linplant); ``phi`` defaults to ``K tau / m``.
+
+    Examples
+    --------
+    >>> PIDSpec(max_S=1/400, phase_margin_deg=60.0, tau=0.006675).phase_margin
+    1.0471975511965976
+    """
+
+    _section = "pid"
+    max_S: float = _param(_POSITIVE, "m/V", "upper bound of |S| (eq:pidGain)")
+    phase_margin_deg: float = _param(
+        _Range(low=0.0, high=90.0), "deg", "phase margin Phi at crossover (eq:L_omegas)"
+    )
+    tau: float = _param(_POSITIVE, "s", "plant time constant of eq:linplant")
+    phi: float | None = _param(
+        _Range(low=0.0, optional=True), "m/(V s)", "plant gain of eq:linplant (default K tau / m)", None
+    )
+
+    def __post_init__(self) -> None:
+        _validate_fields(self)
+
+    @property
+    def phase_margin(self) -> float:
+        """Phase margin in radians."""
+        return math.radians(self.phase_margin_deg)
+
+
+_SECTIONS: dict[str, type] = {
+    "plant": PlantParams,
+    "friction": FrictionParams,
+    "sensor": SensorSpec,
+    "observer": ObserverSpec,
+    "pid": PIDSpec,
+}
+
+
+@dataclass(frozen=True, kw_only=True)
+class Config:
+    """A complete design: plant, friction, sensor, observer and PID sections.
+
+    Examples
+    --------
+    >>> cfg = load_preset("vcm")
+    >>> Config.from_toml(cfg.to_toml()) == cfg
+    True
+    """
+
+    _section = "config"
+    name: str = _param(_Text(), "-", "name of the design", "custom")
+    plant: PlantParams
+    friction: FrictionParams
+    observer: ObserverSpec
+    pid: PIDSpec
+    sensor: SensorSpec = field(default_factory=SensorSpec)
+
+    def __post_init__(self) -> None:
+        _validate_fields(self)
+        for key, cls in _SECTIONS.items():
+            value = getattr(self, key)
+            if not isinstance(value, cls):
+                raise TypeError(f"config.{key}: expected {cls.__name__}, found {type(value).__name__}")
+        if self.observer.variant == "lag" and self.friction.beta is None:
+            raise ValueError(
+                "friction.beta: expected a finite number > 0 for observer.variant 'lag', found None "
+                "(use variant 'static' for friction without lag)"
+            )
+        if self.pid.phi is None:
+            object.__setattr__(
+                self, "pid", dataclasses.replace(self.pid, phi=self.plant.K * self.pid.tau / self.plant.m)
+            )
+
+    # -- TOML ---------------------------------------------------------------
+    @classmethod
+    def from_dict(cls, data: dict[str, Any], *, source: str = "config") -> "Config":
+        """Build a config from a nested mapping (as parsed from TOML).
+
+        Raises
+        ------
+        ValueError
+            On unknown or missing sections and keys, and on out-of-range values.
+        TypeError
+            On values of the wrong type.
+        """
+        if not isinstance(data, dict):
+            raise TypeError(f"{source}: expected a table, found {type(data).__name__}")
+        allowed = set(_SECTIONS) | {"name"}
+        unknown = sorted(set(data) - allowed)
+        if unknown:
+            raise ValueError(
+                f"{source}: unknown key {unknown[0]!r}; expected one of {', '.join(sorted(allowed))}"
+            )
+        kwargs: dict[str, Any] = {}
+        if "name" in data:
+            kwargs["name"] = data["name"]
+        for key, section in _SECTIONS.items():
+            table = data.get(key)
+            if table is None:
+                if key == "sensor":
+                    continue
+                raise ValueError(f"{source}: missing section [{key}]")
+            if not isinstance(table, dict):
+                raise TypeError(f"{key}: expected a table, found {type(table).__name__} {table!r}")
+            names = {f.name for f in dataclasses.fields(section)}
+            bad = sorted(set(table) - names)
+            if bad:
+                raise ValueError(
+                    f"{key}.{bad[0]}: unknown key; expected one of {', '.join(sorted(names))}"
+                )
+            for f in dataclasses.fields(section):
+                required = f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+                if required and f.name not in table:
+                    raise ValueError(f"{key}.{f.name}: required key is missing ({f.metadata['doc']})")
+            kwargs[key] = section(**table)
+        return cls(**kwargs)
+
+    @classmethod
+    def from_toml(cls, text: str, *, source: str = "config") -> "Config":
+        """Parse a TOML document (see :meth:`to_toml` for the layout)."""
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as e:
+            raise ValueError(f"{source}: not valid TOML ({e})") from e
+        return cls.from_dict(data, source=source)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Nested mapping of all set values (``None`` fields are left out)."""
+        out: dict[str, Any] = {"name": self.name}
+        for key in _SECTIONS:
+            section = getattr(self, key)
+            out[key] = {
+                f.name: getattr(section, f.name)
+                for f in dataclasses.fields(section)
+                if getattr(section, f.name) is not None
+            }
+        return out
+
+    def to_toml(self) -> str:
+        """Serialise to TOML; ``Config.from_toml(c.to_toml()) == c``."""
+        lines = [f"name = {_toml_value(self.name)}"]
+        for key, table in self.to_dict().items():
+            if key == "name":
+                continue
+            section = getattr(self, key)
+            meta = {f.name: f.metadata for f in dataclasses.fields(section)}
+            lines += ["", f"[{key}]"]
+            for name, value in table.items():
+                lines.append(f"{name} = {_toml_value(value)}  # [{meta[name]['unit']}] {meta[name]['doc']}")
+        return "\n".join(lines) + "\n"
+
+    def save(self, path: str | os.PathLike) -> None:
+        """Write :meth:`to_toml` atomically (temporary file, then rename)."""
+        atomic_write_text(path, self.to_toml())
+
+    def describe_fields(self) -> list[tuple[str, Any, str, str]]:
+        """Rows ``(qualified name, value, unit, description)`` for tables."""
+        rows = []
+        for key in _SECTIONS:
+            section = getattr(self, key)
+            for f in dataclasses.fields(section):
+                rows.append((f"{key}.{f.name}", getattr(section, f.name), f.metadata["unit"], f.metadata["doc"]))
+        return rows
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    return repr(float(value))
+
+
+def atomic_write_text(path: str | os.PathLike, text: str) -> None:
+    """Write ``text`` to ``path`` via a temporary file and an atomic rename."""
+    target = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=target.parent or ".", prefix=f".{target.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def preset_names() -> tuple[str, ...]:
+    """Names of the presets shipped with the package.
+
+    >>> preset_names()
+    ('table1', 'vcm')
+    """
+    files = resources.files("obsdesign.presets").iterdir()
+    return tuple(sorted(p.name[:-5] for p in files if p.name.endswith(".toml")))
+
+
+def load_preset(name: str) -> Config:
+    """Load a shipped preset by name (``table1`` or ``vcm``).
+
+    Raises
+    ------
+    ValueError
+        If no preset of that name exists.
+    """
+    if not isinstance(name, str):
+        raise TypeError(f"preset: expected a string, found {type(name).__name__} {name!r}")
+    names = preset_names()
+    if name not in names:
+        raise ValueError(f"preset: expected one of {', '.join(names)}, found {name!r}")
+    text = resources.files("obsdesign.presets").joinpath(f"{name}.toml").read_text(encoding="utf-8")
+    return Config.from_toml(text, source=f"preset {name}")
+
+
+def load_config(path: str | os.PathLike) -> Config:
+    """Load a config from a TOML file.
+
+    Raises
+    ------
+    ValueError
+        If the file does not exist, is not TOML, or holds invalid values.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise ValueError(f"config: expected an existing TOML file, found {str(p)!r}")
+    return Config.from_toml(p.read_text(encoding="utf-8"), source=str(p))

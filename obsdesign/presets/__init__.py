@@ -1,0 +1,1 @@
+"""Shipped design presets (TOML files)."""
