@@ -5,6 +5,12 @@ friction for precise motion control": symbolic derivation, numeric design and
 stability verdicts, simulation and reports.
 """
 
+from .design import check_stability as check_stability
+from .design import design_observer as design_observer
+from .design import design_pid as design_pid
+from .design import noise_analysis as noise_analysis
+from .design import pid_from_config as pid_from_config
+from .design import pid_from_gains as pid_from_gains
 from .params import Config as Config
 from .params import FrictionParams as FrictionParams
 from .params import ObserverSpec as ObserverSpec
@@ -31,4 +37,10 @@ __all__ = [
     "preset_names",
     "Derivation",
     "derive",
+    "check_stability",
+    "design_observer",
+    "design_pid",
+    "noise_analysis",
+    "pid_from_config",
+    "pid_from_gains",
 ]

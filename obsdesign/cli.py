@@ -16,10 +16,12 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
+import re
 import sys
 from typing import Sequence
 
-from .params import VARIANTS
+from .params import VARIANTS, _Range, load_config, load_preset, preset_names
 
 __all__ = ["main", "build_parser"]
 
@@ -29,8 +31,108 @@ class UsageError(Exception):
 
 
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        # Let "-1e-6" reach the flag's validator instead of being taken for an option.
+        self._negative_number_matcher = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|nan)$")
+
     def error(self, message: str):  # one line, no usage block
         raise UsageError(f"{self.prog}: {message}")
+
+
+def _number(rule: _Range, unit: str = ""):
+    """An argparse type: a finite number in the rule's range (the flag name is added by argparse)."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {rule.describe()}{unit}, found {text!r}") from None
+        try:
+            return rule.check("value", value)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {rule.describe()}{unit}, found {text!r}") from None
+
+    return parse
+
+
+_POSITIVE = _number(_Range(low=0.0))
+_NONNEGATIVE = _number(_Range(low=0.0, low_inclusive=True))
+_PHASE = _number(_Range(low=0.0, high=90.0), " deg")
+
+
+def _add_config_flags(p: argparse.ArgumentParser, *, default_preset: str) -> None:
+    group = p.add_mutually_exclusive_group()
+    group.add_argument("--preset", choices=preset_names(), help=f"shipped preset (default: {default_preset})")
+    group.add_argument("--config", metavar="FILE", help="TOML config file")
+    p.set_defaults(default_preset=default_preset)
+
+
+def _load(args: argparse.Namespace):
+    if getattr(args, "config", None):
+        return load_config(args.config)
+    return load_preset(args.preset or args.default_preset)
+
+
+def _jsonable(value):
+    """Strict JSON: non-finite floats become null, NumPy scalars plain numbers."""
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if hasattr(value, "item") and not isinstance(value, (str, bytes)):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _emit(args: argparse.Namespace, result, payload: dict) -> None:
+    if args.json:
+        print(json.dumps(_jsonable(payload), allow_nan=False))
+    else:
+        print(result)
+
+
+def _cmd_check(args: argparse.Namespace) -> int:
+    import warnings
+
+    from .design import check_stability
+
+    cfg = _load(args)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # reported in the output instead
+        report = check_stability(cfg, rho=args.rho, kappa=args.kappa, variant=args.variant)
+    _emit(args, report, report.to_dict())
+    if not args.json:
+        for note in report.warnings:
+            print(f"warning: {note}")
+    return 0 if report.all_hold else 1
+
+
+def _cmd_pid(args: argparse.Namespace) -> int:
+    from .design import design_pid
+
+    cfg = _load(args)
+    pid = design_pid(
+        phi=args.phi if args.phi is not None else (cfg.phi if args.tau is None else cfg.plant.K * args.tau / cfg.plant.m),
+        tau=args.tau if args.tau is not None else cfg.pid.tau,
+        max_S=args.max_s if args.max_s is not None else cfg.pid.max_S,
+        phase_margin_deg=args.phase_margin if args.phase_margin is not None else cfg.pid.phase_margin_deg,
+    )
+    _emit(args, pid, pid.to_dict())
+    return 0
+
+
+def _cmd_noise(args: argparse.Namespace) -> int:
+    from .design import noise_analysis
+
+    cfg = _load(args)
+    na = noise_analysis(cfg, rho=args.rho, kappa=args.kappa, variant=args.variant,
+                        noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
+                        stiffness=args.stiffness)
+    _emit(args, na, na.to_dict())
+    return 0
 
 
 def _cmd_derive(args: argparse.Namespace) -> int:
@@ -55,6 +157,34 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--variant", choices=VARIANTS, default="lag", help="model variant (default: lag)")
     p.add_argument("--format", choices=("text", "latex", "json"), default="text")
     p.set_defaults(run=_cmd_derive)
+
+    p = sub.add_parser("check", help="stability verdicts of an observer design (exit 1 if one fails)")
+    _add_config_flags(p, default_preset="table1")
+    p.add_argument("--variant", choices=VARIANTS, help="override the config's model variant")
+    p.add_argument("--rho", type=_POSITIVE, help="override the gain parameter rho (> 0)")
+    p.add_argument("--kappa", type=_POSITIVE, help="override the stiffness bound kappa [N/m] (> 0)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(run=_cmd_check)
+
+    p = sub.add_parser("pid", help="sensitivity-based PID design (section 4.1)")
+    _add_config_flags(p, default_preset="vcm")
+    p.add_argument("--phi", type=_POSITIVE, help="plant gain phi [m/(V s)] (default: K tau / m)")
+    p.add_argument("--tau", type=_POSITIVE, help="plant time constant tau [s]")
+    p.add_argument("--max-s", type=_POSITIVE, help="bound of |S| [m/V]; k = 1/max|S|")
+    p.add_argument("--phase-margin", type=_PHASE, help="phase margin [deg], in (0, 90)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(run=_cmd_pid)
+
+    p = sub.add_parser("noise", help="measurement noise in the friction estimate (section 3.4)")
+    _add_config_flags(p, default_preset="vcm")
+    p.add_argument("--variant", choices=VARIANTS, help="override the config's model variant")
+    p.add_argument("--rho", type=_POSITIVE, help="override the gain parameter rho (> 0)")
+    p.add_argument("--kappa", type=_POSITIVE, help="override the stiffness bound kappa [N/m] (> 0)")
+    p.add_argument("--noise-rms", type=_NONNEGATIVE, help="noise RMS [m] (>= 0)")
+    p.add_argument("--noise-bandwidth", type=_POSITIVE, help="noise bandwidth [Hz] (> 0)")
+    p.add_argument("--stiffness", type=_NONNEGATIVE, default=0.0, help="constant stiffness k [N/m] (default 0)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(run=_cmd_noise)
     return parser
 
 

@@ -14,7 +14,7 @@ Examples
 >>> cfg = od.load_preset("table1")
 >>> cfg.friction.kappa, cfg.observer.variant
 (8000.0, 'lag')
->>> round(od.load_preset("vcm").pid.phi, 6)  # derived as K * tau / m
+>>> round(od.load_preset("vcm").phi, 6)  # derived as K * tau / m
 0.040695
 >>> od.ObserverSpec(rho=0.0)
 Traceback (most recent call last):
@@ -288,10 +288,38 @@ class Config:
                 "friction.beta: expected a finite number > 0 for observer.variant 'lag', found None "
                 "(use variant 'static' for friction without lag)"
             )
-        if self.pid.phi is None:
-            object.__setattr__(
-                self, "pid", dataclasses.replace(self.pid, phi=self.plant.K * self.pid.tau / self.plant.m)
-            )
+
+    @property
+    def phi(self) -> float:
+        """PID plant gain phi of eq:linplant: ``pid.phi`` if set, else ``K tau / m``."""
+        return self.pid.phi if self.pid.phi is not None else self.plant.K * self.pid.tau / self.plant.m
+
+    def override(self, **values: Any) -> "Config":
+        """A copy with some fields replaced, addressed by their (unique) field names.
+
+        ``None`` values are ignored, so optional command-line flags can be passed
+        straight through. Validation is that of the sections' constructors.
+
+        Examples
+        --------
+        >>> cfg = load_preset("table1").override(rho=0.98, kappa=None)
+        >>> cfg.observer.rho, cfg.friction.kappa
+        (0.98, 8000.0)
+        >>> load_preset("table1").override(mass=1.0)
+        Traceback (most recent call last):
+        ...
+        ValueError: override: unknown parameter 'mass'; expected one of Cf, G, K, beta, dt, kappa, m, max_S, noise_bandwidth, noise_rms, omega_co, phase_margin_deg, phi, quantization, rho, s, sigma, tau, variant
+        """
+        changes: dict[str, dict[str, Any]] = {}
+        for name, value in values.items():
+            if name not in _FIELD_SECTION:
+                raise ValueError(
+                    f"override: unknown parameter {name!r}; expected one of {', '.join(sorted(_FIELD_SECTION))}"
+                )
+            if value is not None:
+                changes.setdefault(_FIELD_SECTION[name], {})[name] = value
+        sections = {key: dataclasses.replace(getattr(self, key), **kw) for key, kw in changes.items()}
+        return dataclasses.replace(self, **sections)
 
     # -- TOML ---------------------------------------------------------------
     @classmethod
@@ -383,6 +411,11 @@ class Config:
             for f in dataclasses.fields(section):
                 rows.append((f"{key}.{f.name}", getattr(section, f.name), f.metadata["unit"], f.metadata["doc"]))
         return rows
+
+
+_FIELD_SECTION: dict[str, str] = {
+    f.name: key for key, cls in _SECTIONS.items() for f in dataclasses.fields(cls)
+}
 
 
 def _toml_value(value: Any) -> str:

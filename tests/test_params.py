@@ -17,7 +17,7 @@ def test_presets_hold_the_paper_values():
     assert (vcm.plant.K, vcm.plant.m, vcm.plant.G) == (3.28, 0.538, 5.27)
     assert vcm.observer.rho == 4.0 and vcm.observer.variant == "static" and vcm.friction.beta is None
     assert vcm.pid.max_S == 1 / 400 and vcm.pid.phase_margin == pytest.approx(math.pi / 3)
-    assert vcm.pid.phi == pytest.approx(vcm.plant.K * vcm.pid.tau / vcm.plant.m)
+    assert vcm.pid.phi is None and vcm.phi == pytest.approx(vcm.plant.K * vcm.pid.tau / vcm.plant.m)
     assert vcm.sensor.quantization == 1e-6
 
 
@@ -112,8 +112,15 @@ def test_missing_config_file(tmp_path):
 
 def test_explicit_phi_is_kept():
     cfg = od.load_preset("vcm")
-    import re
-
-    text = re.sub(r"\nphi = [^\n]*", "\nphi = 0.05", cfg.to_toml())
-    assert Config.from_toml(text).pid.phi == 0.05
+    text = cfg.to_toml().replace("tau = 0.006675", "tau = 0.006675\nphi = 0.05")
+    assert Config.from_toml(text).phi == 0.05
     assert Config.from_toml(text) != cfg
+
+
+def test_override_validates_and_recomputes_derived_phi():
+    cfg = od.load_preset("vcm")
+    assert cfg.override(tau=0.01).phi == pytest.approx(3.28 * 0.01 / 0.538)
+    with pytest.raises(ValueError, match=r"observer\.rho: expected a finite number > 0, found -1\.0"):
+        cfg.override(rho=-1.0)
+    with pytest.raises(ValueError, match=r"friction\.beta: .*variant 'lag', found None"):
+        cfg.override(variant="lag")

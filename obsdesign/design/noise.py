@@ -1,0 +1,171 @@
+"""Propagation of measurement noise into the observer's estimates (section 3.4).
+
+At a constant stiffness ``k`` the observer is LTI; the transfer functions from
+measurement noise ``eta`` (eq:3:4:1) to the velocity and friction estimates come
+from the symbolic derivation (``Derivation.noise``). The friction estimate is
+passed through the second-order low-pass of eq:3:4:5,
+``F(p) = omega_co^2 / (p + omega_co)^2``.
+
+Noise model: band-limited white noise, flat one-sided spectrum on
+``[0, B]`` Hz and none above, with RMS ``eta``. Then
+``rms^2 = eta^2 / B * integral_0^B |G(j 2 pi f)|^2 df``.
+
+Examples
+--------
+>>> import obsdesign as od
+>>> na = od.noise_analysis(od.load_preset("vcm"), noise_rms=1e-6, noise_bandwidth=1000.0)
+>>> na.direct_gain  # kappa (1 - rho^2): 1 um of noise is 0.12 N at once
+-120000.0
+>>> na.rms_filtered < na.rms_raw
+True
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import control as ct
+import numpy as np
+import scipy.integrate
+
+from ..params import Config, _Range
+from .numeric import poly_coeffs
+from .observer import design_observer
+from .results import ResultDisplay
+
+__all__ = ["NoiseAnalysis", "noise_analysis", "lowpass", "band_limited_rms"]
+
+_NONNEG = _Range(low=0.0, low_inclusive=True)
+_POS = _Range(low=0.0)
+
+
+def lowpass(omega_co: float) -> ct.TransferFunction:
+    """The second-order low-pass filter of eq:3:4:5.
+
+    >>> F = lowpass(10.0)
+    >>> F.num[0][0], F.den[0][0]
+    (array([100.]), array([  1.,  20., 100.]))
+    """
+    w = _POS.check("omega_co", omega_co)
+    return ct.tf([w * w], [1.0, 2.0 * w, w * w])
+
+
+def band_limited_rms(G: ct.TransferFunction, noise_rms: float, bandwidth_hz: float) -> float:
+    """RMS of ``G`` driven by band-limited white noise of RMS ``noise_rms`` over ``[0, B]`` Hz.
+
+    Examples
+    --------
+    >>> # First-order low-pass 1/(p/a + 1): closed form eta * sqrt(a/W * atan(W/a)), W = 2 pi B.
+    >>> a, B = 100.0, 50.0
+    >>> W = 2 * math.pi * B
+    >>> round(band_limited_rms(ct.tf([1.0], [1 / a, 1.0]), 2.0, B) / (2 * math.sqrt(a / W * math.atan(W / a))), 12)
+    1.0
+    """
+    eta = _NONNEG.check("noise_rms", noise_rms)
+    B = _POS.check("noise_bandwidth", bandwidth_hz)
+    if eta == 0.0:
+        return 0.0
+    num, den = np.asarray(G.num[0][0], float), np.asarray(G.den[0][0], float)
+
+    def power(w: float) -> float:
+        return abs(np.polyval(num, 1j * w) / np.polyval(den, 1j * w)) ** 2
+
+    W = 2.0 * math.pi * B
+    corners = sorted({abs(p) for p in np.roots(den) if 0.0 < abs(p) < W} | {abs(z) for z in np.roots(num) if 0.0 < abs(z) < W})
+    edges = [0.0, *corners, W]
+    total = 0.0
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        total += scipy.integrate.quad(power, lo, hi, limit=400, epsrel=1e-10, epsabs=0.0)[0]
+    return eta * math.sqrt(total / W)
+
+
+@dataclass(frozen=True, kw_only=True)
+class NoiseAnalysis(ResultDisplay):
+    """Noise propagation into the estimates at one stiffness.
+
+    Attributes
+    ----------
+    stiffness : float
+        Constant pre-sliding stiffness k [N/m] of the analysis.
+    noise_rms, noise_bandwidth : float
+        Measurement noise RMS [m] and bandwidth [Hz].
+    omega_co : float
+        Low-pass cutoff [rad/s].
+    direct_gain : float
+        Direct feedthrough of the noise into the friction estimate, ``L2`` [N/m] (eq:3:4:3).
+    velocity_direct_gain : float
+        Same for the velocity estimate, ``L1`` [1/s].
+    rms_raw, rms_filtered : float
+        RMS of the friction estimate's noise without and with the low-pass [N].
+    rms_velocity_raw : float
+        RMS of the velocity estimate's noise [m/s].
+    G_friction, G_velocity, lowpass : control.TransferFunction
+    """
+
+    _title = "Measurement noise propagation"
+    stiffness: float
+    noise_rms: float
+    noise_bandwidth: float
+    omega_co: float
+    direct_gain: float
+    velocity_direct_gain: float
+    rms_raw: float
+    rms_filtered: float
+    rms_velocity_raw: float
+    G_friction: ct.TransferFunction = field(repr=False, compare=False)
+    G_velocity: ct.TransferFunction = field(repr=False, compare=False)
+    lowpass: ct.TransferFunction = field(repr=False, compare=False)
+
+    def to_dict(self) -> dict:
+        """JSON-ready values (the keys of ``obsdesign noise --json`` and more)."""
+        keys = ("direct_gain", "rms_raw", "rms_filtered", "rms_velocity_raw", "velocity_direct_gain",
+                "stiffness", "noise_rms", "noise_bandwidth", "omega_co")
+        return {key: getattr(self, key) for key in keys}
+
+    def _rows(self):
+        return [("stiffness k [N/m]", self.stiffness), ("noise RMS [m]", self.noise_rms),
+                ("noise bandwidth [Hz]", self.noise_bandwidth), ("omega_co [rad/s]", self.omega_co),
+                ("direct gain to friction L2 [N/m]", self.direct_gain),
+                ("friction estimate RMS, raw [N]", self.rms_raw),
+                ("friction estimate RMS, filtered [N]", self.rms_filtered),
+                ("velocity estimate RMS, raw [m/s]", self.rms_velocity_raw)]
+
+
+def noise_analysis(cfg: Config, *, rho: float | None = None, kappa: float | None = None,
+                   variant: str | None = None, noise_rms: float | None = None,
+                   noise_bandwidth: float | None = None, stiffness: float = 0.0) -> NoiseAnalysis:
+    """Noise transfer, low-pass and RMS of the friction and velocity estimates.
+
+    Parameters
+    ----------
+    cfg : Config
+    rho, kappa, variant : optional
+        Overrides of the config.
+    noise_rms : float, optional
+        Noise RMS [m]; default ``sqrt(sensor.noise_rms^2 + sensor.quantization^2 / 12)``.
+    noise_bandwidth : float, optional
+        Noise bandwidth [Hz]; default ``sensor.noise_bandwidth``.
+    stiffness : float
+        Constant stiffness k [N/m] of the analysis (default 0, gross sliding).
+
+    Returns
+    -------
+    NoiseAnalysis
+    """
+    design = design_observer(cfg, rho=rho, kappa=kappa, variant=variant)
+    sensor = cfg.sensor
+    eta = (math.hypot(sensor.noise_rms, sensor.quantization / math.sqrt(12.0)) if noise_rms is None
+           else _NONNEG.check("noise_rms", noise_rms))
+    B = sensor.noise_bandwidth if noise_bandwidth is None else _POS.check("noise_bandwidth", noise_bandwidth)
+    k = _NONNEG.check("stiffness", stiffness)
+    values = design._values(k)
+    G_f = ct.tf(*poly_coeffs(design.variant, "friction")(**values))
+    G_v = ct.tf(*poly_coeffs(design.variant, "velocity")(**values))
+    F = lowpass(cfg.observer.omega_co)
+    return NoiseAnalysis(
+        stiffness=k, noise_rms=eta, noise_bandwidth=B, omega_co=cfg.observer.omega_co,
+        direct_gain=design.L2, velocity_direct_gain=design.L1,
+        rms_raw=band_limited_rms(G_f, eta, B), rms_filtered=band_limited_rms(F * G_f, eta, B),
+        rms_velocity_raw=band_limited_rms(G_v, eta, B), G_friction=G_f, G_velocity=G_v, lowpass=F,
+    )

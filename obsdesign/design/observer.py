@@ -1,0 +1,364 @@
+"""Observer gains from rho (Proposition 2) and the stability verdicts of a design.
+
+Examples
+--------
+>>> import obsdesign as od
+>>> rep = od.check_stability(od.load_preset("table1"))
+>>> rep.stable, rep.eigenvalues_real, round(rep.dominant_pole, 3)
+(True, True, -2.439)
+>>> od.check_stability(od.load_preset("table1"), rho=0.98).failed()
+('Proposition 1: L_2 < sigma/beta', 'eigenvalues negative on [0, kappa]', 'Ignatyev (ii) at kdot = 0', 'discrete poles inside unit circle')
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+
+import control as ct
+import numpy as np
+import scipy.linalg
+import sympy as sp
+
+from ..params import Config
+from ..symbolic import derive
+from .numeric import compiled, model_values
+from .results import Condition, ResultDisplay
+
+__all__ = [
+    "ObserverDesign",
+    "FrozenSystems",
+    "StabilityReport",
+    "design_observer",
+    "check_stability",
+]
+
+#: Relative tolerance on the discriminant at k = kappa, where the design puts a double pole.
+DISCRIMINANT_RTOL = 1e-9
+
+
+def _affine_in_stiffness(variant: str) -> None:
+    """The interval checks rely on a0 affine and a1 constant in k; prove it once."""
+    d = derive(variant)
+    k = d.symbols["k"]
+    if sp.diff(d.a0, k, 2) != 0 or sp.diff(d.a1, k) != 0:
+        raise NotImplementedError(f"variant {variant!r}: a0 must be affine and a1 constant in k")
+
+
+@dataclass(frozen=True)
+class FrozenSystems:
+    """The plant model and the observer frozen at one stiffness (python-control).
+
+    Attributes
+    ----------
+    stiffness : float
+        The pre-sliding stiffness k [N/m] they are frozen at.
+    plant : control.StateSpace
+        eq:3:1 with states ``x, v, f``, input ``u`` [N], output ``x``.
+    observer : control.StateSpace
+        eq:3:1:2-3 with states ``ytilde``, inputs ``u, x_meas`` and outputs
+        ``v_hat, f_hat`` (the back transformation is the feedthrough ``L``).
+    """
+
+    stiffness: float
+    plant: ct.StateSpace
+    observer: ct.StateSpace
+
+
+@dataclass(frozen=True, kw_only=True)
+class ObserverDesign(ResultDisplay):
+    """Observer gains for one config, with the numeric observer matrices.
+
+    Use :func:`design_observer` to build one.
+    """
+
+    _title = "Observer design"
+    variant: str
+    m: float
+    sigma: float
+    beta: float | None
+    Cf: float
+    s: float
+    kappa: float
+    rho: float
+    L1: float
+    L2: float
+    dt: float
+
+    def _values(self, stiffness: float) -> dict[str, float]:
+        return model_values(
+            m=self.m, sigma=self.sigma, beta=math.nan if self.beta is None else self.beta,
+            Cf=self.Cf, s=self.s, kappa=self.kappa, rho=self.rho, k=stiffness, L1=self.L1, L2=self.L2,
+        )
+
+    def coefficients(self, stiffness: float) -> tuple[float, float]:
+        """``(a0, a1)`` of the characteristic polynomial (eq:3:2:3-4) at stiffness k."""
+        a0, a1 = compiled(self.variant, "coefficients")(**self._values(stiffness))
+        return float(a0), float(a1)
+
+    def eigenvalues(self, stiffness: float) -> np.ndarray:
+        """The two observer eigenvalues (eq:3:3:1) at stiffness k [N/m], larger real part first.
+
+        >>> d = design_observer(__import__("obsdesign").load_preset("vcm"))
+        >>> np.round(d.eigenvalues(d.kappa).real, 3)  # the designed double pole
+        array([-487.769, -487.769])
+        """
+        a0, a1 = self.coefficients(stiffness)
+        root = np.lib.scimath.sqrt(a1 * a1 - 4.0 * a0)
+        return np.array([(-a1 + root) / 2.0, (-a1 - root) / 2.0], dtype=complex)
+
+    def matrices(self, stiffness: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(A22 - L A12, B2 - L B1, A21 - L A11 + A22 L - L A12 L)`` as arrays (eq:3:1:2)."""
+        v = self._values(stiffness)
+        A_obs = np.asarray(compiled(self.variant, "observer_matrix")(**v), float)
+        b_u = np.asarray(compiled(self.variant, "observer_input")(**v), float).ravel()
+        g_x = np.asarray(compiled(self.variant, "observer_output_gain")(**v), float).ravel()
+        return A_obs, b_u, g_x
+
+    def to_statespace(self, stiffness: float) -> FrozenSystems:
+        """Plant model and observer frozen at stiffness k, as python-control systems.
+
+        >>> import obsdesign as od
+        >>> sys = design_observer(od.load_preset("vcm")).to_statespace(0.0)
+        >>> sys.observer.ninputs, sys.observer.noutputs, sys.plant.nstates
+        (2, 2, 3)
+        """
+        if isinstance(stiffness, bool) or not isinstance(stiffness, (int, float)) or not (
+            math.isfinite(stiffness) and stiffness >= 0
+        ):
+            raise ValueError(f"stiffness: expected a finite number >= 0 [N/m], found {stiffness!r}")
+        v = self._values(float(stiffness))
+        A, B, C = (np.asarray(compiled(self.variant, n)(**v), float) for n in ("A", "B", "C"))
+        plant = ct.ss(A, B.reshape(3, 1), C.reshape(1, 3), 0.0, states=["x", "v", "f"], inputs=["u"], outputs=["x"])
+        A_obs, b_u, g_x = self.matrices(float(stiffness))
+        observer = ct.ss(
+            A_obs, np.column_stack([b_u, g_x]), np.eye(2), np.array([[0.0, self.L1], [0.0, self.L2]]),
+            states=["ytilde1", "ytilde2"], inputs=["u", "x_meas"], outputs=["v_hat", "f_hat"],
+        )
+        return FrozenSystems(stiffness=float(stiffness), plant=plant, observer=observer)
+
+    def _rows(self):
+        return [("variant", self.variant), ("rho", self.rho), ("kappa [N/m]", self.kappa),
+                ("L1 [1/s]", self.L1), ("L2 [N/m]", self.L2)]
+
+
+def design_observer(cfg: Config, *, rho: float | None = None, kappa: float | None = None,
+                    variant: str | None = None) -> ObserverDesign:
+    """Observer gains from rho by the gain rule of Proposition 2 (eq:3:3:3-4).
+
+    Parameters
+    ----------
+    cfg : Config
+        The design; ``rho``, ``kappa`` and ``variant`` override its values.
+
+    Returns
+    -------
+    ObserverDesign
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> d = design_observer(od.load_preset("table1"))
+    >>> round(d.L1, 4), round(d.L2, 3)  # 2 rho sqrt(kappa/m), sigma/beta + kappa (1 - rho^2)
+    (248.762, 20776.8)
+    """
+    if not isinstance(cfg, Config):
+        raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
+    cfg = cfg.override(rho=rho, kappa=kappa, variant=variant)
+    fr, ob = cfg.friction, cfg.observer
+    _affine_in_stiffness(ob.variant)
+    vals = model_values(m=cfg.plant.m, sigma=fr.sigma, beta=fr.beta if ob.variant == "lag" else math.nan,
+                        Cf=fr.Cf, s=fr.s, kappa=fr.kappa, rho=ob.rho)
+    L1, L2 = compiled(ob.variant, "gain_rule")(**vals)
+    return ObserverDesign(
+        variant=ob.variant, m=cfg.plant.m, sigma=fr.sigma, beta=fr.beta if ob.variant == "lag" else None,
+        Cf=fr.Cf, s=fr.s, kappa=fr.kappa, rho=ob.rho, L1=float(L1), L2=float(L2), dt=ob.dt,
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class StabilityReport(ResultDisplay):
+    """Stability verdicts of an observer design over the stiffness range [0, kappa].
+
+    Attributes
+    ----------
+    design : ObserverDesign
+    stable : bool
+        Proposition 1 holds and both eigenvalues are negative on [0, kappa].
+    eigenvalues_real, observable : bool
+    dominant_pole, fastest_pole : float
+        Largest and smallest real part of the eigenvalues over [0, kappa] [1/s].
+    eigenvalues_at_ends : dict
+        ``{0.0: array, kappa: array}``.
+    alpha1, alpha2 : float or None
+        Constants of Ignatyev's conditions (i), (ii) with ``kdot = 0``; None where none exists.
+    presliding_velocity_bound : dict
+        Largest ``|dx/dt|`` [m/s] for which condition (ii) holds along a whole pre-sliding
+        transition with the stiffness rate of eq:3:2:7 (corrected sign), for ``D = 2``
+        (reversal from gross sliding) and ``D = 1`` (start from rest).
+    discrete_pole_radii : dict
+        Radii of the exactly discretized observer poles at ``dt``, at k = 0 and kappa.
+    conditions : tuple of Condition
+    warnings : tuple of str
+    """
+
+    _title = "Observer stability check"
+    design: ObserverDesign
+    stable: bool
+    eigenvalues_real: bool
+    observable: bool
+    dominant_pole: float
+    fastest_pole: float
+    eigenvalues_at_ends: dict
+    alpha1: float | None
+    alpha2: float | None
+    presliding_velocity_bound: dict
+    discrete_pole_radii: dict
+    conditions: tuple[Condition, ...]
+    warnings: tuple[str, ...] = field(default=())
+
+    @property
+    def all_hold(self) -> bool:
+        """True when every condition holds (``obsdesign check`` exits 0)."""
+        return all(c.holds for c in self.conditions)
+
+    def failed(self) -> tuple[str, ...]:
+        """Names of the conditions that do not hold."""
+        return tuple(c.name for c in self.conditions if not c.holds)
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (the keys of ``obsdesign check --json``)."""
+        return {
+            "L1": self.design.L1, "L2": self.design.L2, "stable": self.stable,
+            "eigenvalues_real": self.eigenvalues_real, "observable": self.observable,
+            "dominant_pole": self.dominant_pole, "fastest_pole": self.fastest_pole,
+            "alpha1": self.alpha1, "alpha2": self.alpha2,
+            "presliding_velocity_bound": self.presliding_velocity_bound,
+            "discrete_pole_radii": {str(k): v for k, v in self.discrete_pole_radii.items()},
+            "conditions": [c.to_dict() for c in self.conditions], "warnings": list(self.warnings),
+        }
+
+    def _rows(self):
+        d = self.design
+        return d._rows() + [
+            ("stable", self.stable), ("eigenvalues real", self.eigenvalues_real),
+            ("observable", self.observable), ("dominant pole [1/s]", self.dominant_pole),
+            ("fastest pole [1/s]", self.fastest_pole), ("Ignatyev alpha1", self.alpha1),
+            ("Ignatyev alpha2", self.alpha2),
+            ("pre-sliding |v| bound for (ii), D=2 [m/s]", self.presliding_velocity_bound.get("D=2")),
+            ("pre-sliding |v| bound for (ii), D=1 [m/s]", self.presliding_velocity_bound.get("D=1")),
+        ]
+
+    def _conditions(self):
+        return self.conditions
+
+
+def _presliding_velocity_bound(d: ObserverDesign, a0_ends: tuple[float, float], a1: float, D: float) -> float | None:
+    """Largest |x'| with a0' + 2 a0 a1 > 0 along k(z) = -s Cf D ln z, k in [0, kappa].
+
+    With a0' = (da0/dk) dk/dt and dk/dt = -s^2 Cf D x' exp(k / (s Cf D)), condition (ii)
+    reads ``|x'| < 2 a1 a0(k) exp(-k/(s Cf D)) / ((da0/dk) s^2 Cf D)``. ``a0`` is affine
+    in k, so ``a0(k) exp(-k/c)`` is unimodal and its minimum on [0, kappa] is at an end.
+    """
+    if not (a1 > 0 and min(a0_ends) > 0):
+        return None
+    slope = (a0_ends[1] - a0_ends[0]) / d.kappa
+    c = d.s * d.Cf * D
+    worst = min(a0_ends[0], a0_ends[1] * math.exp(-d.kappa / c))
+    return 2.0 * a1 * worst / (slope * d.s * c)
+
+
+def check_stability(cfg: Config, *, rho: float | None = None, kappa: float | None = None,
+                    variant: str | None = None) -> StabilityReport:
+    """Check an observer design over the whole stiffness range [0, kappa].
+
+    The characteristic polynomial ``lambda^2 + a1 lambda + a0(k)`` has ``a1``
+    constant and ``a0`` affine in ``k`` (proved symbolically), so the
+    discriminant is affine in ``k`` too: checking the two ends of the interval
+    is exact for realness and for negativity of both eigenvalues.
+
+    Parameters
+    ----------
+    cfg : Config
+    rho, kappa, variant : optional
+        Overrides of the config's values.
+
+    Returns
+    -------
+    StabilityReport
+        Emits a ``UserWarning`` when the fastest pole times ``dt`` exceeds 1.
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> rep = check_stability(od.load_preset("vcm"))
+    >>> rep.all_hold, round(rep.fastest_pole, 1)
+    (True, -609.7)
+    """
+    d = design_observer(cfg, rho=rho, kappa=kappa, variant=variant)
+    ends = (0.0, d.kappa)
+    a0_ends = tuple(d.coefficients(k)[0] for k in ends)
+    a1 = d.coefficients(0.0)[1]
+    eig = {k: d.eigenvalues(k) for k in ends}
+    conditions: list[Condition] = []
+
+    # Proposition 1.
+    bounds = compiled(d.variant, "stability_bounds")(**d._values(0.0))
+    prop_ok = True
+    for rel, bound in zip(derive(d.variant).stability_conditions, bounds):
+        value = d.L1 if rel.lhs == derive(d.variant).symbols["L1"] else d.L2
+        holds = bool(value > bound) if rel.rel_op == ">" else bool(value < bound)
+        prop_ok &= holds
+        conditions.append(Condition(f"Proposition 1: {sp.sstr(rel)}", holds,
+                                    f"{rel.lhs} = {value:.6g} (needs {rel.rel_op} {float(bound):.6g})"))
+
+    # Eigenvalues over [0, kappa] (exact: discriminant affine in k).
+    disc = [a1 * a1 - 4.0 * a0 for a0 in a0_ends]
+    real_ok = all(x >= -DISCRIMINANT_RTOL * a1 * a1 for x in disc)
+    conditions.append(Condition("eigenvalues real on [0, kappa]", real_ok,
+                                f"discriminant a1^2 - 4 a0 = {disc[0]:.6g} at k = 0, {disc[1]:.6g} at k = kappa"))
+    neg_ok = a1 > 0 and min(a0_ends) > 0
+    conditions.append(Condition("eigenvalues negative on [0, kappa]", neg_ok,
+                                f"a1 = {a1:.6g}, a0 = {a0_ends[0]:.6g} at k = 0, {a0_ends[1]:.6g} at k = kappa"))
+
+    # Ignatyev's theorem with kdot = 0 (gross sliding and stiffness held at its bound).
+    alpha1 = abs(a1)
+    alpha2 = 2.0 * a1 * min(a0_ends)
+    conditions.append(Condition("Ignatyev (i) at kdot = 0", True, f"|a0'| + |a1| <= alpha1 = {alpha1:.6g}"))
+    ig2 = alpha2 > 0
+    conditions.append(Condition("Ignatyev (ii) at kdot = 0", ig2, f"min 2 a0 a1 = {alpha2:.6g} (needs > 0)"))
+    velocity_bound = {f"D={D:g}": _presliding_velocity_bound(d, a0_ends, a1, D) for D in (2.0, 1.0)}
+
+    # Observability (python-control obsv) at both ends.
+    observable = True
+    for k in ends:
+        sysk = d.to_statespace(k).plant
+        rank = int(np.linalg.matrix_rank(ct.obsv(sysk.A, sysk.C)))
+        observable &= rank == 3
+        conditions.append(Condition(f"observable at k = {k:g}", rank == 3, f"rank of obsv(A, C) = {rank} (needs 3)"))
+
+    # Discrete-time view: exact discretization of the observer at dt.
+    radii = {k: np.abs(np.linalg.eigvals(scipy.linalg.expm(d.matrices(k)[0] * d.dt))) for k in ends}
+    rmax = max(float(r.max()) for r in radii.values())
+    conditions.append(Condition("discrete poles inside unit circle", rmax < 1.0,
+                                f"largest pole radius at dt = {d.dt:g} s: {rmax:.6g}"))
+
+    reals = np.concatenate([e.real for e in eig.values()])
+    dominant, fastest = float(reals.max()), float(reals.min())
+    notes = []
+    if abs(fastest) * d.dt > 1.0:
+        notes.append(
+            f"fastest observer pole {fastest:.4g} 1/s times dt = {d.dt:g} s is {abs(fastest) * d.dt:.3g} > 1: "
+            "the observer is faster than the sampling; use an exact (not Euler) discretization "
+            "and expect noise amplification"
+        )
+        warnings.warn(notes[-1], UserWarning, stacklevel=2)
+    return StabilityReport(
+        design=d, stable=bool(prop_ok and neg_ok and ig2), eigenvalues_real=bool(real_ok),
+        observable=bool(observable), dominant_pole=dominant, fastest_pole=fastest,
+        eigenvalues_at_ends=eig, alpha1=alpha1, alpha2=alpha2 if ig2 else None,
+        presliding_velocity_bound=velocity_bound,
+        discrete_pole_radii={k: tuple(float(x) for x in r) for k, r in radii.items()},
+        conditions=tuple(conditions), warnings=tuple(notes),
+    )

@@ -1,0 +1,193 @@
+"""Sensitivity-based PID design of section 4.1, verified with python-control.
+
+The plant is approximated by ``H = phi / (lambda (tau lambda + 1))``
+(eq:linplant) and the controller is ``C = k (tau lambda + 1)(T_I lambda + 1) /
+(T_I lambda)`` (eq:Cpid), whose zero cancels the plant pole. The design rule:
+``k = 1 / max|S|`` (eq:pidGain), ``T_I`` from the phase margin (eq:pidTime),
+parallel gains (eq:PIDparams). At the crossover ``|C H| = 1`` and the phase
+``pi + arg(C H) = atan(T_I omega_s)``, so ``omega_s = tan(Phi) / T_I``.
+
+Examples
+--------
+>>> import obsdesign as od
+>>> pid = od.pid_from_config(od.load_preset("vcm"))
+>>> round(pid.kp, 1), round(pid.ki), pid.kd
+(429.0, 4341, 2.67)
+>>> pid.max_S_achieved <= 1 / pid.k
+True
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import control as ct
+import numpy as np
+import scipy.optimize
+
+from ..params import Config, _Range
+from .results import ResultDisplay
+
+__all__ = ["PIDDesign", "design_pid", "pid_from_config", "pid_from_gains"]
+
+_POS = _Range(low=0.0)
+_PHASE = _Range(low=0.0, high=90.0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class PIDDesign(ResultDisplay):
+    """A sensitivity-based PID and its verification by python-control.
+
+    Attributes
+    ----------
+    k, T_I, tau, phi : float
+        Total gain [V/m], integrator time [s], plant time constant [s], plant gain [m/(V s)].
+    kp, ki, kd : float
+        Parallel gains of eq:PIDparallel [V/m, V/(m s), V s/m].
+    phase_margin_deg : float
+        Design phase margin Phi [deg].
+    omega_s : float
+        Crossover frequency [rad/s] from the design rule.
+    max_S_achieved, omega_peak : float
+        Peak of |S(j omega)| over frequency [m/V] and where it occurs [rad/s].
+    phase_margin_achieved_deg, gain_margin, omega_crossover : float
+        From ``control.stability_margins(C H)``: phase margin, gain margin (``inf``
+        for this loop, whose phase never reaches -180 deg) and gain crossover.
+    closed_loop_stable : bool
+        All poles of S in the open left half-plane.
+    H, C, S : control.TransferFunction
+        Plant, controller and input disturbance sensitivity ``H / (1 + H C)`` (eq:Syd).
+    """
+
+    _title = "Sensitivity-based PID"
+    k: float
+    T_I: float
+    tau: float
+    phi: float
+    kp: float
+    ki: float
+    kd: float
+    phase_margin_deg: float
+    omega_s: float
+    max_S_achieved: float
+    omega_peak: float
+    phase_margin_achieved_deg: float
+    gain_margin: float
+    omega_crossover: float
+    closed_loop_stable: bool
+    H: ct.TransferFunction = field(repr=False, compare=False)
+    C: ct.TransferFunction = field(repr=False, compare=False)
+    S: ct.TransferFunction = field(repr=False, compare=False)
+
+    def to_dict(self) -> dict:
+        """JSON-ready values (the keys of ``obsdesign pid --json`` and more)."""
+        keys = ("k", "T_I", "kp", "ki", "kd", "omega_s", "max_S_achieved", "phase_margin_deg", "tau", "phi",
+                "omega_peak", "phase_margin_achieved_deg", "gain_margin", "omega_crossover", "closed_loop_stable")
+        return {key: getattr(self, key) for key in keys}
+
+    def _rows(self):
+        return [("k = 1/max|S| [V/m]", self.k), ("T_I [s]", self.T_I), ("tau [s]", self.tau),
+                ("phi [m/(V s)]", self.phi), ("kp [V/m]", self.kp), ("ki [V/(m s)]", self.ki),
+                ("kd [V s/m]", self.kd), ("phase margin (design) [deg]", self.phase_margin_deg),
+                ("omega_s [rad/s]", self.omega_s), ("max|S| achieved [m/V]", self.max_S_achieved),
+                ("at omega [rad/s]", self.omega_peak),
+                ("phase margin (python-control) [deg]", self.phase_margin_achieved_deg),
+                ("crossover (python-control) [rad/s]", self.omega_crossover),
+                ("closed loop stable", self.closed_loop_stable)]
+
+
+def _peak(sys: ct.TransferFunction) -> tuple[float, float]:
+    """Peak magnitude over frequency: dense log grid, then a bounded refinement."""
+    w = np.logspace(-4, 6, 4001)
+    mag = np.abs(ct.frequency_response(sys, w).complex.ravel())
+    i = int(mag.argmax())
+    lo, hi = np.log10(w[max(i - 1, 0)]), np.log10(w[min(i + 1, w.size - 1)])
+    res = scipy.optimize.minimize_scalar(
+        lambda lw: -abs(complex(sys(1j * 10.0**lw))), bounds=(lo, hi), method="bounded",
+        options={"xatol": 1e-10},
+    )
+    best = -float(res.fun)
+    return (best, float(10.0**res.x)) if best >= mag[i] else (float(mag[i]), float(w[i]))
+
+
+def _build(k: float, T_I: float, tau: float, phi: float, phase_margin_deg: float) -> PIDDesign:
+    H = ct.tf([phi], [tau, 1.0, 0.0])
+    C = ct.tf([k * tau * T_I, k * (tau + T_I), k], [T_I, 0.0])
+    S = ct.feedback(H, C)  # H / (1 + H C), eq:Syd
+    peak, w_peak = _peak(S)
+    gm, pm, _, _, wgc, _ = ct.stability_margins(C * H)
+    stable = bool(np.all(np.real(ct.poles(S)) < 0))
+    return PIDDesign(
+        k=k, T_I=T_I, tau=tau, phi=phi, kp=k * (T_I + tau) / T_I, ki=k / T_I, kd=k * tau,
+        phase_margin_deg=phase_margin_deg, omega_s=math.tan(math.radians(phase_margin_deg)) / T_I,
+        max_S_achieved=peak, omega_peak=w_peak, phase_margin_achieved_deg=float(pm),
+        gain_margin=float(gm), omega_crossover=float(wgc), closed_loop_stable=stable, H=H, C=C, S=S,
+    )
+
+
+def design_pid(*, phi: float, tau: float, max_S: float, phase_margin_deg: float) -> PIDDesign:
+    """Design the PID from the plant (phi, tau) and the specification (max|S|, Phi).
+
+    Parameters
+    ----------
+    phi : float
+        Plant gain of eq:linplant [m/(V s)].
+    tau : float
+        Plant time constant [s].
+    max_S : float
+        Bound of the input disturbance sensitivity [m/V]; ``k = 1/max_S`` (eq:pidGain).
+    phase_margin_deg : float
+        Phase margin Phi at the crossover, in (0, 90) degrees (eq:pidTime, eq:L_omegas).
+
+    Returns
+    -------
+    PIDDesign
+
+    Examples
+    --------
+    >>> pid = design_pid(phi=0.0407, tau=0.006675, max_S=1/400, phase_margin_deg=60.0)
+    >>> round(pid.T_I, 5), round(pid.phase_margin_achieved_deg, 6)
+    (0.09214, 60.0)
+    """
+    phi = _POS.check("phi", phi)
+    tau = _POS.check("tau", tau)
+    max_S = _POS.check("max_S", max_S)
+    pm = _PHASE.check("phase_margin_deg", phase_margin_deg)
+    k = 1.0 / max_S
+    t2 = math.tan(math.radians(pm)) ** 2
+    T_I = t2 / (k * phi * math.sqrt(1.0 + t2))  # eq:pidTime
+    return _build(k, T_I, tau, phi, pm)
+
+
+def pid_from_config(cfg: Config) -> PIDDesign:
+    """:func:`design_pid` with the config's PID section (``phi`` defaults to ``K tau / m``)."""
+    if not isinstance(cfg, Config):
+        raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
+    return design_pid(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S, phase_margin_deg=cfg.pid.phase_margin_deg)
+
+
+def pid_from_gains(*, kp: float, ki: float, kd: float, phi: float) -> PIDDesign:
+    """Recover ``k, T_I, tau`` and the phase margin from parallel gains and phi.
+
+    From eq:PIDparams, ``kd = k tau`` and ``ki = k / T_I`` give
+    ``kp = k + kd ki / k``, i.e. ``k^2 - kp k + kd ki = 0``. Its two roots swap
+    the roles of ``tau`` and ``T_I``; the larger ``k`` (``T_I >= tau``: the
+    integrator slower than the plant pole) is returned. The phase margin solves
+    eq:pidTime: ``tan^2(Phi) / sqrt(1 + tan^2(Phi)) = k phi T_I``.
+
+    Examples
+    --------
+    >>> pid = pid_from_gains(kp=429, ki=4348, kd=2.67, phi=3.28 * 0.006675 / 0.538)
+    >>> round(pid.k, 1), round(pid.tau, 6), round(pid.phase_margin_deg, 2)
+    (400.0, 0.006675, 59.96)
+    """
+    kp, ki, kd, phi = (_POS.check(n, v) for n, v in (("kp", kp), ("ki", ki), ("kd", kd), ("phi", phi)))
+    disc = kp * kp - 4.0 * kd * ki
+    if disc < 0:
+        raise ValueError(f"gains: expected kp^2 >= 4 kd ki for a real k, found kp^2 - 4 kd ki = {disc:.6g}")
+    k = (kp + math.sqrt(disc)) / 2.0
+    tau, T_I = kd / k, k / ki
+    c = k * phi * T_I  # = t / sqrt(1 + t) with t = tan^2(Phi)
+    t = (c * c + math.sqrt(c**4 + 4.0 * c * c)) / 2.0
+    return _build(k, T_I, tau, phi, math.degrees(math.atan(math.sqrt(t))))
