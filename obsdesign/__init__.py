@@ -20,6 +20,8 @@ from .params import SensorSpec as SensorSpec
 from .params import load_config as load_config
 from .params import load_preset as load_preset
 from .params import preset_names as preset_names
+from .sim import SimResult as SimResult
+from .sim import simulate as simulate
 from .symbolic import Derivation as Derivation
 from .symbolic import derive as derive
 
@@ -43,4 +45,6 @@ __all__ = [
     "noise_analysis",
     "pid_from_config",
     "pid_from_gains",
+    "SimResult",
+    "simulate",
 ]

@@ -147,6 +147,7 @@ class PlantParams:
     m: float = _param(_POSITIVE, "kg", "moving mass")
     K: float = _param(_POSITIVE, "N/V", "actuator force constant")
     G: float = _param(_FINITE, "N", "known load force, pre-compensated", 0.0)
+    u_max: float = _param(_POSITIVE, "V", "actuator voltage limit (saturation)", 10.0)
 
     def __post_init__(self) -> None:
         _validate_fields(self)
@@ -239,6 +240,9 @@ class PIDSpec:
     phi: float | None = _param(
         _Range(low=0.0, optional=True), "m/(V s)", "plant gain of eq:linplant (default K tau / m)", None
     )
+    derivative_N: float = _param(
+        _POSITIVE, "-", "derivative filter: time constant (kd/kp)/N in simulations", 10.0
+    )
 
     def __post_init__(self) -> None:
         _validate_fields(self)
@@ -308,7 +312,7 @@ class Config:
         >>> load_preset("table1").override(mass=1.0)
         Traceback (most recent call last):
         ...
-        ValueError: override: unknown parameter 'mass'; expected one of Cf, G, K, beta, dt, kappa, m, max_S, noise_bandwidth, noise_rms, omega_co, phase_margin_deg, phi, quantization, rho, s, sigma, tau, variant
+        ValueError: override: unknown parameter 'mass'; expected one of Cf, G, K, beta, derivative_N, dt, kappa, m, max_S, noise_bandwidth, noise_rms, omega_co, phase_margin_deg, phi, quantization, rho, s, sigma, tau, u_max, variant
         """
         changes: dict[str, dict[str, Any]] = {}
         for name, value in values.items():

@@ -83,7 +83,7 @@ def _toml_with(section, line):
 @pytest.mark.parametrize(
     "text, exc, match",
     [
-        (_toml_with("plant", "mass = 1.0"), ValueError, r"plant\.mass: unknown key; expected one of G, K, m"),
+        (_toml_with("plant", "mass = 1.0"), ValueError, r"plant\.mass: unknown key; expected one of G, K, m, u_max"),
         ('bogus = 1\n' + od.load_preset("vcm").to_toml(), ValueError, r"unknown key 'bogus'"),
         (od.load_preset("vcm").to_toml().replace("rho = 4.0", 'rho = "4"'), TypeError, r"observer\.rho: .*found str '4'"),
         (od.load_preset("vcm").to_toml().replace("rho = 4.0", "rho = nan"), ValueError, r"observer\.rho: .*found nan"),
