@@ -17,8 +17,12 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 import bench_derive  # noqa: E402
+import bench_sim  # noqa: E402
 
-SUITES = {"Symbolic derivation (issue 2)": bench_derive.run}
+SUITES = {
+    "Symbolic derivation (issue 2)": bench_derive.run,
+    "Closed-loop simulator (issue 4)": bench_sim.run,
+}
 
 
 def machine() -> str:

@@ -135,6 +135,49 @@ def _cmd_noise(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from .sim import simulate
+
+    for flag, path, exts in (("--out", args.out, (".csv", ".npz")), ("--plot", args.plot, (".svg", ".png"))):
+        if path is not None:
+            p = Path(path)
+            if p.suffix.lower() not in exts:
+                raise UsageError(f"obsdesign simulate: argument {flag}: expected a file ending in "
+                                 f"{' or '.join(exts)}, found {path!r}")
+            if not p.parent.is_dir():
+                raise UsageError(f"obsdesign simulate: argument {flag}: directory {str(p.parent)!r} does not exist")
+    if args.config is None and args.preset is None:
+        args.preset = "table1" if args.scenario in ("excitation", "constant") else "vcm"
+    cfg = _load(args)
+    res = simulate(
+        cfg, args.scenario, controller=args.controller, variant=args.variant, rho=args.rho, kappa=args.kappa,
+        stiffness=args.stiffness, plant=args.plant, noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
+        quantization=args.quantization, input_force=args.input_force, duration=args.duration, dt=args.dt,
+        seed=args.seed, step_size=args.step_size, step_up=args.step_up, step_down=args.step_down,
+        settle_tol=args.settle_tol, keep_trace=bool(args.out or args.plot),
+    )
+    if args.out:
+        (res.to_npz if args.out.lower().endswith(".npz") else res.to_csv)(args.out)
+    if args.plot:
+        from .report.figures import save_trace_figure
+
+        save_trace_figure(res, args.plot)
+    _emit(args, res, res.metrics)
+    return 0
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, found {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, found {text!r}")
+    return value
+
+
 def _cmd_derive(args: argparse.Namespace) -> int:
     from .symbolic import derive
     from .symbolic.printing import derivation_json, derivation_latex, derivation_text
@@ -185,6 +228,34 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--stiffness", type=_NONNEGATIVE, default=0.0, help="constant stiffness k [N/m] (default 0)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(run=_cmd_noise)
+
+    from .sim.scenarios import SCENARIOS
+
+    p = sub.add_parser("simulate", help="closed-loop simulation of a scenario")
+    p.add_argument("scenario", choices=SCENARIOS)
+    _add_config_flags(p, default_preset="table1 for excitation/constant, vcm otherwise")
+    p.add_argument("--controller", choices=("open-loop", "pid", "pid+observer"))
+    p.add_argument("--variant", choices=VARIANTS, help="override the config's model variant")
+    p.add_argument("--rho", type=_POSITIVE, help="gain parameter rho (> 0)")
+    p.add_argument("--kappa", type=_POSITIVE, help="stiffness bound kappa [N/m] (> 0)")
+    p.add_argument("--stiffness", choices=("estimated", "true", "constant"), default="estimated",
+                   help="observer stiffness schedule (default: estimated)")
+    p.add_argument("--plant", choices=("physical", "model"), default="physical")
+    p.add_argument("--noise-rms", type=_NONNEGATIVE, help="measurement noise RMS [m]")
+    p.add_argument("--noise-bandwidth", type=_POSITIVE, help="measurement noise bandwidth [Hz]")
+    p.add_argument("--quantization", type=_NONNEGATIVE, help="encoder resolution [m] (0: none)")
+    p.add_argument("--input-force", type=_number(_Range()), help="open-loop force [N] (constant, or RMS of the excitation)")
+    p.add_argument("--duration", type=_POSITIVE, help="length [s]")
+    p.add_argument("--dt", type=_POSITIVE, help="sample time [s]")
+    p.add_argument("--seed", type=_seed, default=0, help="noise seed (integer >= 0)")
+    p.add_argument("--step-size", type=_number(_Range()), help="positioning step [m] (default 1e-3)")
+    p.add_argument("--step-up", type=_NONNEGATIVE, help="time of the step up [s] (default 0.5)")
+    p.add_argument("--step-down", type=_NONNEGATIVE, help="time of the step back [s] (default 3.0)")
+    p.add_argument("--settle-tol", type=_POSITIVE, default=2e-6, help="settling band [m] (default 2e-6)")
+    p.add_argument("--out", metavar="FILE", help="write the trace to FILE.csv or FILE.npz")
+    p.add_argument("--plot", metavar="FILE", help="write a figure to FILE.svg or FILE.png")
+    p.add_argument("--json", action="store_true", help="print the metrics as one JSON object")
+    p.set_defaults(run=_cmd_simulate)
     return parser
 
 

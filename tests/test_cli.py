@@ -150,3 +150,48 @@ def test_bad_toml_values_exit_2(tmp_path):
     path.write_text(od.load_preset("vcm").to_toml().replace("rho = 4.0", "rho = -4.0"))
     proc = run("check", "--config", str(path))
     assert proc.returncode == 2 and proc.stderr.strip() == "obsdesign: error: observer.rho: expected a finite number > 0, found -4.0"
+
+
+def test_simulate_json_and_exports(tmp_path):
+    out, plot = tmp_path / "trace.npz", tmp_path / "trace.svg"
+    code, doc = run_json("simulate", "positioning", "--preset", "vcm", "--duration", "1.0", "--step-down", "0.8",
+                         "--out", str(out), "--plot", str(plot), "--json")
+    assert code == 0
+    assert {"rms_error", "max_error", "settling_time", "steady_state_error", "observer_rms_error_v",
+            "observer_rms_error_f", "diverged", "sim_wall_s"} <= set(doc)
+    assert len(doc["settling_time"]) == 2 and doc["diverged"] is False
+    import numpy as np
+
+    with np.load(out) as z:
+        assert z.files == ["t", "x", "x_meas", "v", "f", "v_hat", "f_hat", "f_hat_filtered", "u", "x_ref", "e"]
+        assert doc["max_error"] == pytest.approx(np.max(np.abs(z["e"])))
+    assert plot.read_text().rstrip().endswith("</svg>")
+
+
+def test_simulate_csv(tmp_path):
+    out = tmp_path / "c.csv"
+    code, doc = run_json("simulate", "constant", "--duration", "0.05", "--out", str(out), "--json")
+    assert code == 0 and out.read_text().splitlines()[0] == "t,x,x_meas,v,f,v_hat,f_hat,f_hat_filtered,u,x_ref,e"
+    assert len(out.read_text().splitlines()) == 501
+
+
+@pytest.mark.parametrize(
+    "args, match",
+    [
+        (["simulate", "walk"], "argument scenario: invalid choice: 'walk'"),
+        (["simulate", "tracking", "--out", "t.txt"], "argument --out: expected a file ending in .csv or .npz, found 't.txt'"),
+        (["simulate", "tracking", "--plot", "t.pdf"], "argument --plot: expected a file ending in .svg or .png"),
+        (["simulate", "tracking", "--out", "/no/such/dir/t.csv"], "argument --out: directory '/no/such/dir' does not exist"),
+        (["simulate", "tracking", "--dt", "0"], "argument --dt: expected a finite number > 0, found '0'"),
+        (["simulate", "tracking", "--seed", "1.5"], "argument --seed: expected an integer >= 0, found '1.5'"),
+        (["simulate", "tracking", "--stiffness", "guess"], "argument --stiffness: invalid choice: 'guess'"),
+        (["simulate", "constant", "--controller", "pid"], "controller: scenario 'constant' needs 'open-loop', found 'pid'"),
+        (["simulate", "positioning", "--step-up", "4"], "step_down: expected step_up < step_down < duration"),
+    ],
+)
+def test_simulate_rejects_bad_input(args, match, tmp_path):
+    proc = run(*args)
+    assert proc.returncode == 2 and proc.stdout == ""
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and match in lines[0]
+    assert list(tmp_path.iterdir()) == []

@@ -1,5 +1,6 @@
 """Simulator: friction closed forms, integrator order, exact observer discretization, closed loop."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -10,7 +11,7 @@ import obsdesign as od
 from obsdesign.sim import kernel
 from obsdesign.sim.discretize import coefficient_matrices, step_matrices
 from obsdesign.sim.friction import coulomb, coulomb_normalized, presliding_shape, stiffness, track_reversal
-from obsdesign.sim.simulate import COLUMNS, _lowpass_arrays, observer_arrays
+from obsdesign.sim.simulate import COLUMNS
 
 TABLE1 = od.load_preset("table1")
 VCM = od.load_preset("vcm")
@@ -62,17 +63,14 @@ def test_reversal_memory():
     assert track_reversal(0.0, 5.0, d, xr, fr, S) == (d, xr, fr)
 
 
-def _open_loop(u_open, *, dt=1e-4, substeps=10, cfg=VCM, mode=kernel.PLANT_PHYSICAL, schedule="true"):
-    design, A0, A1, b0, b1, g0, g1 = observer_arrays(cfg)
+def _open_loop(u_open, *, substeps=10, cfg=VCM):
+    """Run the kernel on an arbitrary open-loop force sequence (dt 1e-4 s)."""
     n = len(u_open)
+    loop = od.simulate(cfg, "constant", duration=n * cfg.observer.dt, substeps=substeps, stiffness="true",
+                       quantization=0.0, _return_inputs=True)
+    loop = dataclasses.replace(loop, u_open=np.asarray(u_open, float))
     out = kernel.empty_outputs(n)
-    fr, pl = cfg.friction, cfg.plant
-    lp = _lowpass_arrays(cfg.observer.omega_co, dt)
-    nw = kernel.run_loop(dt, substeps, mode, cfg.observer.variant == "lag", pl.m, pl.K, pl.G, fr.Cf, fr.s, fr.sigma,
-                         fr.beta or 0.0, fr.kappa, A0, A1, b0, b1, g0, g1, design.L1, design.L2,
-                         kernel.SCHEDULES[schedule], 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0.0, 1e9, *lp,
-                         np.zeros(n), np.asarray(u_open, float), np.zeros(n), 0.0, *out.values())
-    assert nw == n
+    assert kernel.run_loop(*loop.args(), *out.values()) == n
     return out
 
 
@@ -83,7 +81,7 @@ def test_free_motion_stops_in_finite_time():
     dt, n, push = 1e-4, 15000, 500
     u = np.zeros(n)
     u[:push] = 1.0  # 50 ms push of 1 N reaches gross sliding
-    out = _open_loop(u, dt=dt)
+    out = _open_loop(u)
     v, x = out["v"][push:], out["x"][push:]
     m, sigma = 0.538, 21.1
     t_star = m / sigma * math.log(1 + sigma * v[0] / CF)

@@ -12,6 +12,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import io
 import math
@@ -135,6 +136,52 @@ def _atomic_write(path: str | os.PathLike, data: bytes) -> None:
         raise
 
 
+@dataclass(frozen=True, eq=False)
+class LoopInputs:
+    """Every input of :func:`obsdesign.sim.kernel.run_loop`, in its argument order."""
+
+    dt: float
+    n_sub: int
+    mode: int
+    lag_model: bool
+    m: float
+    K: float
+    G: float
+    Cf: float
+    s: float
+    sigma: float
+    beta: float
+    kappa: float
+    A0: np.ndarray
+    A1: np.ndarray
+    b0: np.ndarray
+    b1: np.ndarray
+    g0: np.ndarray
+    g1: np.ndarray
+    L1: float
+    L2: float
+    schedule: int
+    v_hat0: float
+    f_hat0: float
+    controller: int
+    kp: float
+    ki: float
+    kd: float
+    tau_d: float
+    u_max: float
+    lp_phi: np.ndarray
+    lp_g0: np.ndarray
+    lp_g1: np.ndarray
+    x_ref: np.ndarray
+    u_open: np.ndarray
+    noise: np.ndarray
+    quantization: float
+
+    def args(self) -> tuple:
+        """The positional arguments of ``run_loop`` before its output arrays."""
+        return tuple(getattr(self, f.name) for f in dataclasses.fields(self))
+
+
 @functools.lru_cache(maxsize=None)
 def _check_affine(variant: str) -> None:
     d = derive(variant)
@@ -236,6 +283,7 @@ def simulate(
     initial_estimate: tuple[float, float] = (0.0, 0.0),
     substeps: int = 10,
     keep_trace: bool = True,
+    _return_inputs: bool = False,
 ) -> SimResult:
     """Simulate plant, sensor, observer, filter and controller at the sampling rate.
 
@@ -302,8 +350,7 @@ def simulate(
     lp_phi, lp_g0, lp_g1 = _lowpass_arrays(cfg.observer.omega_co, dt)
     n = len(sc.x_ref)
     sensor = cfg.sensor
-    noise_seed = np.random.SeedSequence(seed).spawn(2)[0]
-    noise = band_limited_noise(n, dt, sensor.noise_rms, sensor.noise_bandwidth, noise_seed)
+    noise = band_limited_noise(n, dt, sensor.noise_rms, sensor.noise_bandwidth, np.random.SeedSequence(seed).spawn(2)[0])
     if controller == "open-loop":
         kp = ki = kd = tau_d = 0.0
     else:
@@ -311,18 +358,20 @@ def simulate(
         kp, ki, kd = pid.kp, pid.ki, pid.kd
         tau_d = kd / kp / cfg.pid.derivative_N
     fr, pl = cfg.friction, cfg.plant
-    beta = fr.beta if fr.beta is not None else 0.0
+    loop = LoopInputs(
+        dt=dt, n_sub=substeps, mode=kernel.PLANT_MODEL if plant == "model" else kernel.PLANT_PHYSICAL,
+        lag_model=cfg.observer.variant == "lag", m=pl.m, K=pl.K, G=pl.G, Cf=fr.Cf, s=fr.s, sigma=fr.sigma,
+        beta=fr.beta if fr.beta is not None else 0.0, kappa=fr.kappa, A0=A0, A1=A1, b0=b0, b1=b1, g0=g0, g1=g1,
+        L1=design.L1, L2=design.L2, schedule=kernel.SCHEDULES[stiffness], v_hat0=v_hat0, f_hat0=f_hat0,
+        controller=kernel.CONTROLLERS[controller], kp=kp, ki=ki, kd=kd, tau_d=tau_d, u_max=pl.u_max,
+        lp_phi=lp_phi, lp_g0=lp_g0, lp_g1=lp_g1, x_ref=sc.x_ref, u_open=sc.u_open, noise=noise,
+        quantization=sensor.quantization,
+    )
+    if _return_inputs:
+        return loop
     out = kernel.empty_outputs(n)
     t0 = time.perf_counter()
-    n_written = kernel.run_loop(
-        dt, substeps, kernel.PLANT_MODEL if plant == "model" else kernel.PLANT_PHYSICAL,
-        cfg.observer.variant == "lag", pl.m, pl.K, pl.G, fr.Cf, fr.s, fr.sigma, beta, fr.kappa,
-        A0, A1, b0, b1, g0, g1, design.L1, design.L2, kernel.SCHEDULES[stiffness], v_hat0, f_hat0,
-        kernel.CONTROLLERS[controller], kp, ki, kd, tau_d, pl.u_max, lp_phi, lp_g0, lp_g1,
-        sc.x_ref, sc.u_open, noise, sensor.quantization,
-        out["x"], out["x_meas"], out["v"], out["f"], out["v_hat"], out["f_hat"], out["f_hat_filtered"],
-        out["u"], out["stiffness"],
-    )
+    n_written = kernel.run_loop(*loop.args(), *out.values())
     wall = time.perf_counter() - t0
     e = sc.x_ref - out["x"]
     metrics = _metrics(sc, out, e, n_written, settle_tol, wall, dt)

@@ -1,0 +1,160 @@
+/* Reference for the simulator benchmark: the closed loop of obsdesign.sim.kernel.run_loop
+ * written as a plain C loop doing the same work per sample (plant with Heun substeps and
+ * pre-sliding friction, exact observer recursion recomputed when the stiffness changes,
+ * low-pass filter, PID). Built with -O2 and called through ctypes by bench_sim.py, which
+ * also checks that its outputs equal the numba kernel's. Not part of the package. */
+#include <math.h>
+#include <stddef.h>
+
+static double shape(double z) { return z == 0.0 ? 0.0 : z * (1.0 - log(fabs(z))); }
+
+static double coulomb_n(double x, double dir, double xr, double fr, double s) {
+    if (dir == 0.0) return fr;
+    double z = s * (x - xr);
+    if (dir * z >= 1.0) return dir;
+    double fp = fabs(dir - fr) * shape(z) + fr;
+    return fp > 1.0 ? 1.0 : (fp < -1.0 ? -1.0 : fp);
+}
+
+static double stiff(double x, double dir, double xr, double fr, double Cf, double s, double kappa) {
+    if (dir == 0.0) return kappa;
+    double z = s * (x - xr);
+    if (dir * z >= 1.0) return 0.0;
+    if (z == 0.0) return kappa;
+    double k = -s * Cf * fabs(dir - fr) * log(fabs(z));
+    return k > kappa ? kappa : (k < 0.0 ? 0.0 : k);
+}
+
+static void track(double v, double x, double *dir, double *xr, double *fr, double s) {
+    if ((v > 0.0 && *dir != 1.0) || (v < 0.0 && *dir != -1.0)) {
+        double f = coulomb_n(x, *dir, *xr, *fr, s);
+        *dir = v > 0.0 ? 1.0 : -1.0; *xr = x; *fr = f;
+    }
+}
+
+static void mul(const double a[4], const double b[4], double r[4]) {
+    double r0 = a[0] * b[0] + a[1] * b[2], r1 = a[0] * b[1] + a[1] * b[3];
+    double r2 = a[2] * b[0] + a[3] * b[2], r3 = a[2] * b[1] + a[3] * b[3];
+    r[0] = r0; r[1] = r1; r[2] = r2; r[3] = r3;
+}
+
+/* Phi, Gamma0, Gamma1 (row-major 2x2 each) by balancing, scaling and squaring, Taylor. */
+static void coefficients(double a11, double a12, double a21, double a22, double h, double c12[12]) {
+    double c = 1.0;
+    if (a12 != 0.0 && a21 != 0.0) c = sqrt(fabs(a21 / a12));
+    double b[4] = {a11, a12 * c, a21 / c, a22};
+    double n1 = fabs(b[0]) + fabs(b[2]), n2 = fabs(b[1]) + fabs(b[3]);
+    double norm = (n1 > n2 ? n1 : n2) * h;
+    int s = 0;
+    if (norm > 0.5) s = (int)ceil(log2(norm / 0.5));
+    double hs = h / pow(2.0, s);
+    for (int i = 0; i < 4; i++) b[i] *= hs;
+    double fact = 1.0;
+    for (int j = 2; j < 18; j++) fact *= j;
+    double p[4] = {1.0 / fact, 0.0, 0.0, 1.0 / fact};
+    for (int j = 15; j > 0; j--) {
+        fact /= j + 2;
+        mul(b, p, p);
+        p[0] += 1.0 / fact; p[3] += 1.0 / fact;
+    }
+    double q[4], e[4];
+    mul(b, p, q); q[0] += 1.0; q[3] += 1.0;
+    mul(b, q, e); e[0] += 1.0; e[3] += 1.0;
+    double g[4], J[4];
+    for (int i = 0; i < 4; i++) { g[i] = q[i] * hs; J[i] = p[i] * hs * hs; }
+    double hc = hs;
+    for (int it = 0; it < s; it++) {
+        double ip[4] = {e[0] + 1.0, e[1], e[2], e[3] + 1.0}, n[4];
+        mul(ip, J, n);
+        for (int i = 0; i < 4; i++) J[i] = n[i] + hc * g[i];
+        mul(ip, g, g);
+        mul(e, e, e);
+        hc *= 2.0;
+    }
+    double ih = 1.0 / h;
+    double r[12] = {e[0], e[1] / c, e[2] * c, e[3], g[0], g[1] / c, g[2] * c, g[3],
+                    J[0] * ih, J[1] / c * ih, J[2] * c * ih, J[3] * ih};
+    for (int i = 0; i < 12; i++) c12[i] = r[i];
+}
+
+static void rhs(double x, double v, double w, double u, double dir, double xr, double fr, int model, int lag,
+                double m, double Cf, double s, double sigma, double beta, double kappa, double *dv, double *dw) {
+    if (model) {
+        double k = stiff(x, dir, xr, fr, Cf, s, kappa);
+        if (lag) { *dv = (u - w) / m; *dw = (k + sigma / beta) * v; }
+        else { *dv = (u - sigma * v - w) / m; *dw = k * v; }
+        return;
+    }
+    double fc = Cf * coulomb_n(x, dir, xr, fr, s);
+    if (beta > 0.0) { *dv = (u - fc - w) / m; *dw = (sigma * v - w) / beta; }
+    else { *dv = (u - fc - sigma * v) / m; *dw = 0.0; }
+}
+
+long run_loop(long n_samples, double dt, long n_sub, int model, int lag, double m, double K, double G, double Cf,
+              double s, double sigma, double beta, double kappa, const double *A0, const double *A1,
+              const double *b0, const double *b1, const double *g0, const double *g1, double L1, double L2,
+              int schedule, int controller, double kp, double ki, double kd, double tau_d, double u_max,
+              const double *lp_phi, const double *lp_g0, const double *lp_g1, const double *x_ref,
+              const double *u_open, const double *noise, double quant, double *out_x, double *out_fh,
+              double *out_ff, double *out_u) {
+    double h = dt / n_sub, x = 0, v = 0, w = 0;
+    double pd = 0, pxr = 0, pfr = 0, ed = 0, exr = 0, efr = 0;
+    double y1 = 0, y2 = 0, zf1 = 0, zf2 = 0, fh_prev = 0, xm_prev = 0, u_prev = 0;
+    double integ = 0, deriv = 0, e_prev = 0, alpha = tau_d > 0 ? exp(-dt / tau_d) : 0.0;
+    double k_coef = -1.0, c[12] = {0}, bu1 = 0, bu2 = 0, gx01 = 0, gx02 = 0, gx11 = 0, gx12 = 0, k_now = kappa;
+    for (long n = 0; n < n_samples; n++) {
+        double xm = x + noise[n];
+        if (quant > 0.0) xm = quant * floor(xm / quant + 0.5);
+        if (n == 0) { y1 = -L1 * xm; y2 = -L2 * xm; }
+        else {
+            double t1 = c[0] * y1 + c[1] * y2 + bu1 * u_prev + gx01 * xm_prev + gx11 * xm;
+            double t2 = c[2] * y1 + c[3] * y2 + bu2 * u_prev + gx02 * xm_prev + gx12 * xm;
+            y1 = t1; y2 = t2;
+        }
+        double vh = y1 + L1 * xm, fh = y2 + L2 * xm;
+        if (n > 0) {
+            double t1 = lp_phi[0] * zf1 + lp_phi[1] * zf2 + lp_g0[0] * fh_prev + lp_g1[0] * fh;
+            double t2 = lp_phi[2] * zf1 + lp_phi[3] * zf2 + lp_g0[1] * fh_prev + lp_g1[1] * fh;
+            zf1 = t1; zf2 = t2;
+        }
+        double ff = zf1;
+        if (schedule == 0) { track(vh, xm, &ed, &exr, &efr, s); k_now = stiff(xm, ed, exr, efr, Cf, s, kappa); }
+        else if (schedule == 1) k_now = stiff(x, pd, pxr, pfr, Cf, s, kappa);
+        else k_now = kappa;
+        if (k_now != k_coef) {
+            k_coef = k_now;
+            coefficients(A0[0] + k_now * A1[0], A0[1] + k_now * A1[1], A0[2] + k_now * A1[2], A0[3] + k_now * A1[3], dt, c);
+            double bb1 = b0[0] + k_now * b1[0], bb2 = b0[1] + k_now * b1[1];
+            double gg1 = g0[0] + k_now * g1[0], gg2 = g0[1] + k_now * g1[1];
+            bu1 = c[4] * bb1 + c[5] * bb2; bu2 = c[6] * bb1 + c[7] * bb2;
+            gx11 = c[8] * gg1 + c[9] * gg2; gx12 = c[10] * gg1 + c[11] * gg2;
+            gx01 = c[4] * gg1 + c[5] * gg2 - gx11; gx02 = c[6] * gg1 + c[7] * gg2 - gx12;
+        }
+        double u_volt;
+        if (controller == 0) u_volt = u_open[n] / K;
+        else {
+            double e = x_ref[n] - xm;
+            if (n == 0) e_prev = e;
+            deriv = alpha * deriv + (1.0 - alpha) * (e - e_prev) / dt;
+            double integ_new = integ + e * dt;
+            u_volt = kp * e + ki * integ_new + kd * deriv;
+            if (controller == 2) u_volt += ff / K;
+            if (fabs(u_volt + G / K) <= u_max) integ = integ_new;
+            e_prev = e;
+        }
+        double total = u_volt + G / K;
+        if (total > u_max) total = u_max; else if (total < -u_max) total = -u_max;
+        double u = K * total - G;
+        out_x[n] = x; out_fh[n] = fh; out_ff[n] = ff; out_u[n] = u;
+        for (long i = 0; i < n_sub; i++) {
+            double k1v, k1w, k2v, k2w;
+            rhs(x, v, w, u, pd, pxr, pfr, model, lag, m, Cf, s, sigma, beta, kappa, &k1v, &k1w);
+            double xp = x + h * v, vp = v + h * k1v, wp = w + h * k1w;
+            rhs(xp, vp, wp, u, pd, pxr, pfr, model, lag, m, Cf, s, sigma, beta, kappa, &k2v, &k2w);
+            x += 0.5 * h * (v + vp); v += 0.5 * h * (k1v + k2v); w += 0.5 * h * (k1w + k2w);
+            track(v, x, &pd, &pxr, &pfr, s);
+        }
+        fh_prev = fh; xm_prev = xm; u_prev = u;
+    }
+    return n_samples;
+}

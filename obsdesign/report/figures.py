@@ -1,0 +1,83 @@
+"""Matplotlib figures of simulation results (non-interactive Agg backend).
+
+Examples
+--------
+>>> import obsdesign as od, io
+>>> res = od.simulate(od.load_preset("vcm"), "positioning", duration=1.0, step_down=0.8)
+>>> svg = trace_figure_svg(res)
+>>> svg.startswith("<?xml") and "</svg>" in svg
+True
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import tempfile
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+__all__ = ["trace_figure", "save_figure", "save_trace_figure", "trace_figure_svg", "figure_svg"]
+
+
+def trace_figure(res):
+    """Displacement, error, friction and force of a :class:`~obsdesign.sim.SimResult`."""
+    t = res.t
+    fig, axes = plt.subplots(4, 1, figsize=(8, 9), sharex=True, constrained_layout=True)
+    ax = axes[0]
+    ax.plot(t, res.x * 1e3, label="x")
+    if res.scenario in ("positioning", "tracking"):
+        ax.plot(t, res.x_ref * 1e3, "--", label="x_ref")
+    ax.set_ylabel("displacement [mm]")
+    ax.legend(loc="best")
+    axes[1].plot(t, res.e * 1e6)
+    axes[1].set_ylabel("error x_ref - x [um]")
+    ax = axes[2]
+    ax.plot(t, res.f_hat, lw=0.5, alpha=0.6, label="f_hat (raw)")
+    ax.plot(t, res.f_hat_filtered, label="f_hat filtered")
+    ax.plot(t, res.f, "k", lw=1, label="f (plant)")
+    ax.set_ylabel("friction state [N]")
+    ax.legend(loc="best")
+    axes[3].plot(t, res.u)
+    axes[3].set_ylabel("force u [N]")
+    axes[3].set_xlabel("time [s]")
+    fig.suptitle(f"{res.scenario}: {res.controller}, variant {res.config.observer.variant}, "
+                 f"rho {res.config.observer.rho:g}")
+    return fig
+
+
+def save_figure(fig, path: str | os.PathLike) -> None:
+    """Save a figure atomically (format from the suffix) and close it."""
+    target = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=target.suffix)
+    os.close(fd)
+    try:
+        fig.savefig(tmp, format=target.suffix.lstrip(".").lower())
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    finally:
+        plt.close(fig)
+
+
+def save_trace_figure(res, path: str | os.PathLike) -> None:
+    """Write :func:`trace_figure` of a result to an SVG or PNG file."""
+    save_figure(trace_figure(res), path)
+
+
+def figure_svg(fig) -> str:
+    """A figure as an SVG string (for inline HTML), closing the figure."""
+    buf = io.StringIO()
+    fig.savefig(buf, format="svg")
+    plt.close(fig)
+    return buf.getvalue()
+
+
+def trace_figure_svg(res) -> str:
+    """:func:`trace_figure` as an SVG string."""
+    return figure_svg(trace_figure(res))
