@@ -156,6 +156,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         stiffness=args.stiffness, plant=args.plant, noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
         quantization=args.quantization, input_force=args.input_force, duration=args.duration, dt=args.dt,
         seed=args.seed, step_size=args.step_size, step_up=args.step_up, step_down=args.step_down,
+        excitation_bandwidth=args.excitation_bandwidth,
         settle_tol=args.settle_tol, keep_trace=bool(args.out or args.plot),
     )
     if args.out:
@@ -251,6 +252,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--step-size", type=_number(_Range()), help="positioning step [m] (default 1e-3)")
     p.add_argument("--step-up", type=_NONNEGATIVE, help="time of the step up [s] (default 0.5)")
     p.add_argument("--step-down", type=_NONNEGATIVE, help="time of the step back [s] (default 3.0)")
+    p.add_argument("--excitation-bandwidth", type=_POSITIVE, help="bandwidth of the excitation force [Hz] (default 5)")
     p.add_argument("--settle-tol", type=_POSITIVE, default=2e-6, help="settling band [m] (default 2e-6)")
     p.add_argument("--out", metavar="FILE", help="write the trace to FILE.csv or FILE.npz")
     p.add_argument("--plot", metavar="FILE", help="write a figure to FILE.svg or FILE.png")

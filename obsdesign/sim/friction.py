@@ -26,9 +26,10 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
-__all__ = ["presliding_shape", "coulomb_normalized", "coulomb", "stiffness", "track_reversal"]
+__all__ = ["presliding_shape", "coulomb_normalized", "coulomb", "stiffness", "track_reversal", "coulomb_along"]
 
 
 @njit(cache=True, error_model="numpy")
@@ -89,3 +90,18 @@ def track_reversal(v: float, x: float, direction: float, x_r: float, f_r: float,
         f_new = coulomb_normalized(x, direction, x_r, f_r, s)
         return (1.0 if v > 0.0 else -1.0), x, f_new
     return direction, x_r, f_r
+
+
+@njit(cache=True, error_model="numpy")
+def coulomb_along(x, v, Cf, s):
+    """Coulomb friction [N] of the model driven by displacement and velocity traces.
+
+    Reversals are taken from sign changes of ``v``; used to compute the
+    model's friction from measured or estimated signals (Fig. frictionloops).
+    """
+    out = np.empty(x.shape[0])
+    direction, x_r, f_r = 0.0, x[0], 0.0
+    for i in range(x.shape[0]):
+        direction, x_r, f_r = track_reversal(v[i], x[i], direction, x_r, f_r, s)
+        out[i] = Cf * coulomb_normalized(x[i], direction, x_r, f_r, s)
+    return out

@@ -4,7 +4,8 @@
 scenario       loop         signal
 =============  ===========  ============================================================
 excitation     open loop    band-limited random force, RMS ``input_force`` (default 1 N),
-                            bandwidth 5 Hz (the paper's numerical illustration)
+                            bandwidth ``excitation_bandwidth`` (default 5 Hz): the paper's
+                            numerical illustration
 constant       open loop    constant force ``input_force`` (default 1 N)
 positioning    closed loop  steps ``0 -> step_size`` at ``step_up``, back to 0 at
                             ``step_down`` (defaults 1 mm, 0.5 s, 3.0 s, end 6.0 s),
@@ -110,7 +111,7 @@ def chirp_frequency(t: np.ndarray, duration: float) -> np.ndarray:
 
 def build_scenario(name: str, *, dt: float, duration: float | None = None, input_force: float | None = None,
                    step_size: float | None = None, step_up: float | None = None, step_down: float | None = None,
-                   seed=0) -> Scenario:
+                   excitation_bandwidth: float | None = None, seed=0) -> Scenario:
     """Sample the signals of a scenario.
 
     Raises
@@ -131,7 +132,8 @@ def build_scenario(name: str, *, dt: float, duration: float | None = None, input
         return Scenario(name, dt, duration, zeros, np.full(n, force))
     if name == "excitation":
         force = 1.0 if input_force is None else _NONNEG.check("input_force", input_force)
-        return Scenario(name, dt, duration, zeros, band_limited_noise(n, dt, force, EXCITATION_BANDWIDTH, seed))
+        band = EXCITATION_BANDWIDTH if excitation_bandwidth is None else _POS.check("excitation_bandwidth", excitation_bandwidth)
+        return Scenario(name, dt, duration, zeros, band_limited_noise(n, dt, force, band, seed))
     if name == "positioning":
         size = 1e-3 if step_size is None else _FINITE.check("step_size", step_size)
         up = 0.5 if step_up is None else _NONNEG.check("step_up", step_up)

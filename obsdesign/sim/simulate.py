@@ -279,6 +279,7 @@ def simulate(
     step_size: float | None = None,
     step_up: float | None = None,
     step_down: float | None = None,
+    excitation_bandwidth: float | None = None,
     settle_tol: float = 2e-6,
     initial_estimate: tuple[float, float] = (0.0, 0.0),
     substeps: int = 10,
@@ -311,6 +312,8 @@ def simulate(
         Seed of the measurement noise and the excitation (``numpy.random.SeedSequence``).
     step_size, step_up, step_down : float, optional
         Positioning steps [m, s, s].
+    excitation_bandwidth : float, optional
+        Bandwidth [Hz] of the ``excitation`` force (default 5 Hz).
     settle_tol : float
         Band [m] for the settling time (default 2 um).
     initial_estimate : (float, float)
@@ -332,7 +335,7 @@ def simulate(
     plant = _choice("plant", plant, PLANTS)
     dt = cfg.observer.dt
     sc = build_scenario(scenario, dt=dt, duration=duration, input_force=input_force, step_size=step_size,
-                        step_up=step_up, step_down=step_down, seed=np.random.SeedSequence(seed).spawn(2)[1])
+                        step_up=step_up, step_down=step_down, excitation_bandwidth=excitation_bandwidth, seed=np.random.SeedSequence(seed).spawn(2)[1])
     if controller is None:
         controller = "open-loop" if sc.open_loop else "pid+observer"
     controller = _choice("controller", controller, tuple(kernel.CONTROLLERS))

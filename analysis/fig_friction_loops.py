@@ -1,0 +1,14 @@
+"""Fig. frictionloops: friction estimate vs displacement against the model's f and Fc.
+
+Asserts: the filtered estimate stays within 10 % of Cf (RMS) of the plant's Coulomb friction.
+"""
+
+from _common import parse_out, report, require
+
+from obsdesign.report import paper
+
+if __name__ == "__main__":
+    out = parse_out(__doc__)
+    study = paper.friction_loops_study()
+    report(study.claims, paper.friction_loops_figure(study), out / "fig_friction_loops.png")
+    require(study.claims, 0)
