@@ -3,14 +3,16 @@
 Implements M. Ruderman, "Reduced-order asymptotic observer of nonlinear
 friction for precise motion control": symbolic derivation, numeric design and
 stability verdicts, simulation and reports.
+
+``import obsdesign`` loads only the parameters and the symbolic engine; the
+numeric design (python-control) and the simulator (numba) are imported on
+first use of their names.
 """
 
-from .design import check_stability as check_stability
-from .design import design_observer as design_observer
-from .design import design_pid as design_pid
-from .design import noise_analysis as noise_analysis
-from .design import pid_from_config as pid_from_config
-from .design import pid_from_gains as pid_from_gains
+from __future__ import annotations
+
+import importlib
+
 from .params import Config as Config
 from .params import FrictionParams as FrictionParams
 from .params import ObserverSpec as ObserverSpec
@@ -20,12 +22,22 @@ from .params import SensorSpec as SensorSpec
 from .params import load_config as load_config
 from .params import load_preset as load_preset
 from .params import preset_names as preset_names
-from .sim import SimResult as SimResult
-from .sim import simulate as simulate
 from .symbolic import Derivation as Derivation
 from .symbolic import derive as derive
 
 __version__ = "0.1.0"
+
+#: Public names provided by subpackages that are imported lazily.
+_LAZY = {
+    "check_stability": "design",
+    "design_observer": "design",
+    "design_pid": "design",
+    "noise_analysis": "design",
+    "pid_from_config": "design",
+    "pid_from_gains": "design",
+    "SimResult": "sim",
+    "simulate": "sim",
+}
 
 __all__ = [
     "Config",
@@ -39,12 +51,19 @@ __all__ = [
     "preset_names",
     "Derivation",
     "derive",
-    "check_stability",
-    "design_observer",
-    "design_pid",
-    "noise_analysis",
-    "pid_from_config",
-    "pid_from_gains",
-    "SimResult",
-    "simulate",
+    *_LAZY,
 ]
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    if name in ("design", "sim", "report", "symbolic", "params", "cli"):
+        return importlib.import_module(f".{name}", __name__)
+    raise AttributeError(f"module 'obsdesign' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
