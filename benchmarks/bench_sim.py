@@ -66,7 +66,8 @@ def _compile_time() -> tuple[float, float]:
 
 def _c_library() -> ctypes.CDLL:
     build = Path(tempfile.mkdtemp()) / "closed_loop.so"
-    subprocess.run(["gcc", "-O2", "-std=c99", "-shared", "-fPIC", "-o", str(build),
+    include = Path(od.__file__).parent / "export" / "c"
+    subprocess.run(["gcc", "-O2", "-std=c99", "-shared", "-fPIC", f"-I{include}", "-o", str(build),
                     str(HERE / "c" / "closed_loop.c"), "-lm"], check=True)
     lib = ctypes.CDLL(str(build))
     lib.run_loop.restype = ctypes.c_long

@@ -169,6 +169,23 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_export(args: argparse.Namespace) -> int:
+    from .export import export
+
+    paths = export(_load(args), args.format, args.output, variant=args.variant, rho=args.rho, dt=args.dt)
+    for path in paths:
+        print(path)
+    return 0
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from .report.html import write_report
+
+    write_report(_load(args), args.output, progress=not args.quiet)
+    print(args.output)
+    return 0
+
+
 def _seed(text: str) -> int:
     try:
         value = int(text)
@@ -258,6 +275,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", metavar="FILE", help="write a figure to FILE.svg or FILE.png")
     p.add_argument("--json", action="store_true", help="print the metrics as one JSON object")
     p.set_defaults(run=_cmd_simulate)
+
+    p = sub.add_parser("export", help="export the derivation or the designed observer as code")
+    p.add_argument("--format", required=True, choices=("latex", "python", "c", "octave", "js"))
+    _add_config_flags(p, default_preset="vcm")
+    p.add_argument("--variant", choices=VARIANTS, help="override the config's model variant")
+    p.add_argument("--rho", type=_POSITIVE, help="gain parameter rho (> 0)")
+    p.add_argument("--dt", type=_POSITIVE, help="sample time [s] of the discrete observer")
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder")
+    p.set_defaults(run=_cmd_export)
+
+    p = sub.add_parser("report", help="self-contained HTML design report")
+    _add_config_flags(p, default_preset="vcm")
+    p.add_argument("-o", "--output", default="report.html", metavar="FILE", help="output file (default report.html)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(run=_cmd_report)
     return parser
 
 

@@ -6,86 +6,17 @@
 #include <math.h>
 #include <stddef.h>
 
-static double shape(double z) { return z == 0.0 ? 0.0 : z * (1.0 - log(fabs(z))); }
-
-static double coulomb_n(double x, double dir, double xr, double fr, double s) {
-    if (dir == 0.0) return fr;
-    double z = s * (x - xr);
-    if (dir * z >= 1.0) return dir;
-    double fp = fabs(dir - fr) * shape(z) + fr;
-    return fp > 1.0 ? 1.0 : (fp < -1.0 ? -1.0 : fp);
-}
-
-static double stiff(double x, double dir, double xr, double fr, double Cf, double s, double kappa) {
-    if (dir == 0.0) return kappa;
-    double z = s * (x - xr);
-    if (dir * z >= 1.0) return 0.0;
-    if (z == 0.0) return kappa;
-    double k = -s * Cf * fabs(dir - fr) * log(fabs(z));
-    return k > kappa ? kappa : (k < 0.0 ? 0.0 : k);
-}
-
-static void track(double v, double x, double *dir, double *xr, double *fr, double s) {
-    if ((v > 0.0 && *dir != 1.0) || (v < 0.0 && *dir != -1.0)) {
-        double f = coulomb_n(x, *dir, *xr, *fr, s);
-        *dir = v > 0.0 ? 1.0 : -1.0; *xr = x; *fr = f;
-    }
-}
-
-static void mul(const double a[4], const double b[4], double r[4]) {
-    double r0 = a[0] * b[0] + a[1] * b[2], r1 = a[0] * b[1] + a[1] * b[3];
-    double r2 = a[2] * b[0] + a[3] * b[2], r3 = a[2] * b[1] + a[3] * b[3];
-    r[0] = r0; r[1] = r1; r[2] = r2; r[3] = r3;
-}
-
-/* Phi, Gamma0, Gamma1 (row-major 2x2 each) by balancing, scaling and squaring, Taylor. */
-static void coefficients(double a11, double a12, double a21, double a22, double h, double c12[12]) {
-    double c = 1.0;
-    if (a12 != 0.0 && a21 != 0.0) c = sqrt(fabs(a21 / a12));
-    double b[4] = {a11, a12 * c, a21 / c, a22};
-    double n1 = fabs(b[0]) + fabs(b[2]), n2 = fabs(b[1]) + fabs(b[3]);
-    double norm = (n1 > n2 ? n1 : n2) * h;
-    int s = 0;
-    if (norm > 0.5) s = (int)ceil(log2(norm / 0.5));
-    double hs = h / pow(2.0, s);
-    for (int i = 0; i < 4; i++) b[i] *= hs;
-    double fact = 1.0;
-    for (int j = 2; j < 18; j++) fact *= j;
-    double p[4] = {1.0 / fact, 0.0, 0.0, 1.0 / fact};
-    for (int j = 15; j > 0; j--) {
-        fact /= j + 2;
-        mul(b, p, p);
-        p[0] += 1.0 / fact; p[3] += 1.0 / fact;
-    }
-    double q[4], e[4];
-    mul(b, p, q); q[0] += 1.0; q[3] += 1.0;
-    mul(b, q, e); e[0] += 1.0; e[3] += 1.0;
-    double g[4], J[4];
-    for (int i = 0; i < 4; i++) { g[i] = q[i] * hs; J[i] = p[i] * hs * hs; }
-    double hc = hs;
-    for (int it = 0; it < s; it++) {
-        double ip[4] = {e[0] + 1.0, e[1], e[2], e[3] + 1.0}, n[4];
-        mul(ip, J, n);
-        for (int i = 0; i < 4; i++) J[i] = n[i] + hc * g[i];
-        mul(ip, g, g);
-        mul(e, e, e);
-        hc *= 2.0;
-    }
-    double ih = 1.0 / h;
-    double r[12] = {e[0], e[1] / c, e[2] * c, e[3], g[0], g[1] / c, g[2] * c, g[3],
-                    J[0] * ih, J[1] / c * ih, J[2] * c * ih, J[3] * ih};
-    for (int i = 0; i < 12; i++) c12[i] = r[i];
-}
+#include "obsdesign_core.inc" /* obsdesign/export/c: friction branch, exact discretization */
 
 static void rhs(double x, double v, double w, double u, double dir, double xr, double fr, int model, int lag,
                 double m, double Cf, double s, double sigma, double beta, double kappa, double *dv, double *dw) {
     if (model) {
-        double k = stiff(x, dir, xr, fr, Cf, s, kappa);
+        double k = od_stiffness(x, dir, xr, fr, Cf, s, kappa);
         if (lag) { *dv = (u - w) / m; *dw = (k + sigma / beta) * v; }
         else { *dv = (u - sigma * v - w) / m; *dw = k * v; }
         return;
     }
-    double fc = Cf * coulomb_n(x, dir, xr, fr, s);
+    double fc = Cf * od_coulomb_n(x, dir, xr, fr, s);
     if (beta > 0.0) { *dv = (u - fc - w) / m; *dw = (sigma * v - w) / beta; }
     else { *dv = (u - fc - sigma * v) / m; *dw = 0.0; }
 }
@@ -118,12 +49,12 @@ long run_loop(long n_samples, double dt, long n_sub, int model, int lag, double 
             zf1 = t1; zf2 = t2;
         }
         double ff = zf1;
-        if (schedule == 0) { track(vh, xm, &ed, &exr, &efr, s); k_now = stiff(xm, ed, exr, efr, Cf, s, kappa); }
-        else if (schedule == 1) k_now = stiff(x, pd, pxr, pfr, Cf, s, kappa);
+        if (schedule == 0) { od_track(vh, xm, &ed, &exr, &efr, s); k_now = od_stiffness(xm, ed, exr, efr, Cf, s, kappa); }
+        else if (schedule == 1) k_now = od_stiffness(x, pd, pxr, pfr, Cf, s, kappa);
         else k_now = kappa;
         if (k_now != k_coef) {
             k_coef = k_now;
-            coefficients(A0[0] + k_now * A1[0], A0[1] + k_now * A1[1], A0[2] + k_now * A1[2], A0[3] + k_now * A1[3], dt, c);
+            od_coefficients(A0[0] + k_now * A1[0], A0[1] + k_now * A1[1], A0[2] + k_now * A1[2], A0[3] + k_now * A1[3], dt, c);
             double bb1 = b0[0] + k_now * b1[0], bb2 = b0[1] + k_now * b1[1];
             double gg1 = g0[0] + k_now * g1[0], gg2 = g0[1] + k_now * g1[1];
             bu1 = c[4] * bb1 + c[5] * bb2; bu2 = c[6] * bb1 + c[7] * bb2;
@@ -152,7 +83,7 @@ long run_loop(long n_samples, double dt, long n_sub, int model, int lag, double 
             double xp = x + h * v, vp = v + h * k1v, wp = w + h * k1w;
             rhs(xp, vp, wp, u, pd, pxr, pfr, model, lag, m, Cf, s, sigma, beta, kappa, &k2v, &k2w);
             x += 0.5 * h * (v + vp); v += 0.5 * h * (k1v + k2v); w += 0.5 * h * (k1w + k2w);
-            track(v, x, &pd, &pxr, &pfr, s);
+            od_track(v, x, &pd, &pxr, &pfr, s);
         }
         fh_prev = fh; xm_prev = xm; u_prev = u;
     }
