@@ -197,7 +197,7 @@ def run() -> list[dict]:
     n = len(loop.x_ref)
     t_numba, out = _numba(loop)
     t_c, out_c = _c(loop)
-    scale = np.max(np.abs(out["f_hat"]))
+    np.max(np.abs(out["f_hat"]))
     same = max(np.max(np.abs(out_c[k] - out[k])) / max(np.max(np.abs(out[k])), 1e-300) for k in out_c)
     _numba(_inputs(0.2))
     t_py = _plain_python(_inputs(0.2)) / 2000

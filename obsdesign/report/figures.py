@@ -13,10 +13,11 @@ from __future__ import annotations
 
 import io
 import os
-import tempfile
 from pathlib import Path
 
-import matplotlib
+from .._io import atomic_path
+
+import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -52,15 +53,9 @@ def trace_figure(res):
 
 def save_figure(fig, path: str | os.PathLike) -> None:
     """Save a figure atomically (format from the suffix) and close it."""
-    target = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=target.suffix)
-    os.close(fd)
     try:
-        fig.savefig(tmp, format=target.suffix.lstrip(".").lower())
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, format=Path(path).suffix.lstrip(".").lower())
     finally:
         plt.close(fig)
 

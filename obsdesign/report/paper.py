@@ -105,7 +105,7 @@ def convergence_study(cfg: Config | None = None, *, seeds: int = 5, duration: fl
         Claim("sec:3:3", "rho = 0.98 diverges after some seconds, rho = 1.02 does not (slow 0.2 Hz excitation, "
               "static variant, physical plant)", "4.3 s",
               f"rho 0.98: {len(slow_div)} of {seeds} seeds, at "
-              + ", ".join(f"{t:.1f}" for t in sorted(slow_div)) + f" s; rho 1.02: "
+              + ", ".join(f"{t:.1f}" for t in sorted(slow_div)) + " s; rho 1.02: "
               + ("none" if slow_ok else "some") + f" within {duration:g} s",
               len(slow_div) == seeds and slow_ok),
     )

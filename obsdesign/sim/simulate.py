@@ -15,18 +15,15 @@ from __future__ import annotations
 import dataclasses
 import functools
 import io
-import math
 import os
-import tempfile
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import sympy as sp
 
-from ..design.numeric import compiled
+from .._io import atomic_write
 from ..design.observer import design_observer
 from ..design.pid import pid_from_config
 from ..params import Config, _Range
@@ -97,13 +94,13 @@ class SimResult:
         data = np.column_stack(list(self.columns().values()))
         buf = io.StringIO()
         np.savetxt(buf, data, delimiter=",", header=",".join(COLUMNS), comments="", fmt="%.17g")
-        _atomic_write(path, buf.getvalue().encode())
+        atomic_write(path, buf.getvalue().encode())
 
     def to_npz(self, path: str | os.PathLike) -> None:
         """Write the trace as a NumPy ``.npz`` archive, atomically."""
         buf = io.BytesIO()
         np.savez(buf, **self.columns())
-        _atomic_write(path, buf.getvalue())
+        atomic_write(path, buf.getvalue())
 
     def _repr_html_(self) -> str:
         from ..design.results import fmt
@@ -122,18 +119,6 @@ class SimResult:
             shown = "[" + ", ".join(fmt(v) for v in value) + "]" if isinstance(value, list) else fmt(value)
             lines.append(f"  {key}: {shown}")
         return "\n".join(lines)
-
-
-def _atomic_write(path: str | os.PathLike, data: bytes) -> None:
-    target = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 @dataclass(frozen=True, eq=False)
