@@ -18,7 +18,7 @@ test: $(STAMP)
 	$(PY) -m pytest
 
 report: $(STAMP)
-	$(VENV)/bin/obsdesign derive --variant lag
+	$(VENV)/bin/obsdesign report --preset vcm -o report.html
 
 bench: $(STAMP)
 	$(PY) benchmarks/run.py --write

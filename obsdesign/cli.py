@@ -179,9 +179,16 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
     from .report.html import write_report
 
-    write_report(_load(args), args.output, progress=not args.quiet)
+    out = Path(args.output)
+    if not out.parent.is_dir():
+        raise UsageError(f"obsdesign report: argument -o/--output: directory {str(out.parent)!r} does not exist")
+    cfg = _load(args)
+    label = f"config file {args.config}" if args.config else f"preset {cfg.name}"
+    write_report(cfg, out, source_label=label, progress=not args.quiet)
     print(args.output)
     return 0
 

@@ -219,3 +219,7 @@ def test_steps_are_ordered_and_labelled(variant):
         assert needed in labels
     assert labels.index("eq:3:1") < labels.index("eq:3:1:1") < labels.index("eq:3:3:3") < labels.index("eq:3:4:4")
     assert all(isinstance(e, sp.Basic) for _, _, e in steps)
+    # No step may have collapsed to a truth value (an Eq of a symbol with a matrix evaluates to False).
+    assert not [title for _, title, e in steps if isinstance(e, sp.logic.boolalg.BooleanAtom)]
+    eig = dict(((t, e) for _, t, e in steps))["Designed eigenvalues"]
+    assert [same(rel.rhs, ref) for rel, ref in zip(eig, DESIGNED)] == [True, True]

@@ -46,7 +46,7 @@ PARAMETER_SOURCES = {
     },
     "vcm": {
         "plant.m": _S4, "plant.K": _S4, "plant.G": _S4, "friction.Cf": _S4, "friction.sigma": _S4,
-        "friction.s": _S4, "friction.kappa": "section 4 prints '8000 s'; read as 8000 N/m (docs/parameters.md)",
+        "friction.s": _S4, "friction.beta": "none: section 4 neglects the lag", "friction.kappa": "section 4 prints '8000 s'; read as 8000 N/m (docs/parameters.md)",
         "sensor.quantization": "1 um encoder (our assumption)", "observer.rho": "section 4.2",
         "observer.omega_co": "section 4.2 (40 Hz)", "observer.variant": "section 4 adjustment (beta -> 0)",
         "observer.dt": "10 kHz (section 4)", "pid.max_S": _DERIVED, "pid.phase_margin_deg": _DERIVED,
@@ -73,8 +73,10 @@ def _sources(cfg: Config, source_label: str) -> dict[str, str]:
 
 
 def _svg(fig) -> str:
+    """Inline SVG of a figure: no XML prolog, no RDF metadata block."""
     text = figure_svg(fig)
-    return text[text.index("<svg"):]
+    text = text[text.index("<svg"):]
+    return re.sub(r"<metadata>.*?</metadata>", "", text, flags=re.S)
 
 
 def _eigen_figure(design):

@@ -178,6 +178,11 @@ def regular_form(A, B, C):
     }
 
 
+def _pair(name: str, values) -> sp.Tuple:
+    """``(name_1 = v1, name_2 = v2)`` for the steps (an ``Eq`` with a matrix would evaluate to False)."""
+    return sp.Tuple(*(sp.Eq(sp.Symbol(f"{name}_{i}"), v, evaluate=False) for i, v in enumerate(values, 1)))
+
+
 def _linear_bound(expr: sp.Expr, var: sp.Symbol) -> sp.Rel:
     """Solve ``expr > 0`` for ``var`` when ``expr`` is linear in ``var``."""
     slope = sp.diff(expr, var)
@@ -250,7 +255,7 @@ def _derive(variant: str) -> Derivation:
         ("eq:3:2:2", "Characteristic polynomial", sp.Eq(sp.Symbol("chi"), charpoly)),
         ("eq:3:2:3", "Coefficient a0", sp.Eq(sp.Symbol("a_0"), a0)),
         ("eq:3:2:4", "Coefficient a1", sp.Eq(sp.Symbol("a_1"), a1)),
-        ("eq:3:3:1", "Eigenvalues", sp.Eq(sp.Symbol("lambda_12"), sp.ImmutableMatrix(eigenvalues))),
+        ("eq:3:3:1", "Eigenvalues", _pair("lambda", eigenvalues)),
     ]
 
     # 5. Ignatyev's theorem and Proposition 1.
@@ -295,7 +300,7 @@ def _derive(variant: str) -> Derivation:
         ("prop:2", "Design condition: double pole at k = kappa", design_conditions[1]),
         ("eq:3:3:3", "Gain L1", sp.Eq(L1, gain_rule[L1])),
         ("eq:3:3:4", "Gain L2", sp.Eq(L2, gain_rule[L2])),
-        ("eq:3:3:7", "Designed eigenvalues", sp.Eq(sp.Symbol("lambda_12"), sp.ImmutableMatrix(designed))),
+        ("eq:3:3:7", "Designed eigenvalues", _pair("lambda", designed)),
         ("eq:3:3:2", "Dominant pole (gross sliding, k = 0)", sp.Eq(sp.Symbol("lambda_max"), dominant)),
     ]
 

@@ -1,0 +1,110 @@
+"""The HTML report: self-contained, escaped, and its explorer works in a real browser."""
+
+import os
+import re
+import shutil
+from pathlib import Path
+
+import pytest
+
+import obsdesign as od
+from obsdesign.cli import main
+from obsdesign.report.html import render_report, write_report
+
+
+@pytest.fixture(scope="module")
+def report_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("report") / "report.html"
+    write_report(od.load_preset("vcm"), path)
+    return path
+
+
+def test_report_is_self_contained(report_file):
+    html = report_file.read_text()
+    assert "<script src" not in html and "<link" not in html and "<img" not in html
+    refs = re.findall(r'(?:src|href)="([^"]*)"', html)
+    assert refs and all(r.startswith("#") for r in refs)  # only in-document references (SVG glyphs)
+    urls = set(re.findall(r"https?://[^\s\"'<>]+", html))
+    # XML namespace names only: identifiers, never fetched
+    assert urls <= {"http://www.w3.org/1998/Math/MathML", "http://www.w3.org/2000/svg", "http://www.w3.org/1999/xlink"}
+
+
+def test_report_contents(report_file):
+    html = report_file.read_text()
+    assert html.count("<svg") >= 7  # eigenvalues, |S|, noise, convergence, experiments, loops, explorer
+    assert html.count("<math") >= 20  # the derivation as MathML
+    for needle in ("eq:3:3:7", "Proposition 1: L_1 &gt; -sigma/m", "PID gain kp", "reproduced", "function gains(m, sigma, kappa, rho)"):
+        assert needle in html
+    pid = od.pid_from_config(od.load_preset("vcm"))
+    assert f"{pid.kp:.6g}" in html
+
+
+def test_values_from_a_config_are_escaped():
+    cfg = od.load_preset("table1").override(rho=1.5)
+    import dataclasses
+
+    evil = dataclasses.replace(cfg, name='<script>alert("x")</script>')
+    html = render_report(evil, source_label="config <b>file</b>")
+    assert '<script>alert("x")</script>' not in html
+    assert "&lt;script&gt;alert(&#34;x&#34;)&lt;/script&gt;" in html and "config &lt;b&gt;file&lt;/b&gt;" in html
+
+
+def test_report_cli_bad_output(tmp_path, capsys):
+    assert main(["report", "-o", str(tmp_path / "missing" / "r.html"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "argument -o/--output: directory" in err[0]
+    assert list(tmp_path.iterdir()) == []
+
+
+CHROMIUM, DRIVER = shutil.which("chromium"), shutil.which("chromedriver")
+
+
+def _browser():
+    try:
+        from selenium import webdriver
+        from selenium.webdriver.chrome.service import Service
+    except ImportError:
+        return None
+    if not (CHROMIUM and DRIVER):
+        return None
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = CHROMIUM
+    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                 "--host-resolver-rules=MAP * ~NOTFOUND", "--window-size=1280,900"):
+        opts.add_argument(flag)
+    return webdriver.Chrome(service=Service(DRIVER), options=opts)
+
+
+@pytest.mark.skipif(not (CHROMIUM and DRIVER) and os.environ.get("CI") != "true",
+                    reason="headless Chromium not installed (CI installs it)")
+def test_explorer_in_headless_chromium(report_file, tmp_path):
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+
+    driver = _browser()
+    assert driver is not None, "Chromium, chromedriver and selenium are required in CI"
+    try:
+        driver.get(report_file.as_uri())
+        shot = Path(os.environ.get("OBSDESIGN_SCREENSHOT", tmp_path / "report.png"))
+        driver.save_screenshot(str(shot))
+        assert shot.stat().st_size > 10_000
+        verdict = driver.find_element(By.ID, "verdict")
+        slider = driver.find_element(By.ID, "s-rho")
+        assert verdict.text == "stable"  # rho = 4
+        driver.execute_script("arguments[0].scrollIntoView();", slider)
+        slider.send_keys(Keys.HOME)  # drag to the minimum, rho = 0.5
+        assert driver.find_element(By.ID, "o-rho").text.startswith("0.5")
+        assert verdict.text == "unstable"
+        for value, expected in (("1.02", "stable"), ("0.98", "unstable"), ("1.1", "stable")):
+            driver.execute_script("arguments[0].value = arguments[1];"
+                                  "arguments[0].dispatchEvent(new Event('input'));", slider, value)
+            assert verdict.text == expected, value
+        failing = [li.text for li in driver.find_elements(By.CSS_SELECTOR, "#verdicts li.fail")]
+        assert failing == []
+        slider.send_keys(Keys.HOME)
+        failing = [li.text for li in driver.find_elements(By.CSS_SELECTOR, "#verdicts li.fail")]
+        assert any("Proposition 1: L2 <" in t for t in failing)
+        assert driver.get_log("browser") == [] if hasattr(driver, "get_log") else True
+    finally:
+        driver.quit()
