@@ -102,22 +102,29 @@ class SimResult:
         np.savez(buf, **self.columns())
         atomic_write(path, buf.getvalue())
 
-    def _repr_html_(self) -> str:
+    def _metric_rows(self) -> list[tuple[str, str]]:
         from ..design.results import fmt
 
-        rows = "".join(f"<tr><th>{k}</th><td>{fmt(v)}</td></tr>" for k, v in self.metrics.items()
-                       if not isinstance(v, (list, dict)))
-        return (f"<table class='obsdesign-result'><caption>simulation: {self.scenario}, {self.controller}"
-                f"</caption>{rows}</table>")
+        rows = []
+        for key, value in self.metrics.items():
+            if isinstance(value, list):
+                value = "[" + ", ".join(fmt(v) for v in value) + "]"
+            elif isinstance(value, dict):
+                value = ", ".join(f"{k}: {fmt(v)}" for k, v in value.items())
+            rows.append((key, fmt(value)))
+        return rows
+
+    def _repr_html_(self) -> str:
+        import html
+
+        rows = "".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(v)}</td></tr>" for k, v in self._metric_rows())
+        return (f"<table class='obsdesign-result'><caption>simulation: {html.escape(self.scenario)}, "
+                f"{html.escape(self.controller)}</caption>{rows}</table>")
 
     def __str__(self) -> str:
-        from ..design.results import fmt
-
         lines = [f"Simulation: {self.scenario} ({self.controller}, plant {self.plant}, "
                  f"stiffness {self.stiffness_schedule}, variant {self.config.observer.variant})"]
-        for key, value in self.metrics.items():
-            shown = "[" + ", ".join(fmt(v) for v in value) + "]" if isinstance(value, list) else fmt(value)
-            lines.append(f"  {key}: {shown}")
+        lines += [f"  {key}: {value}" for key, value in self._metric_rows()]
         return "\n".join(lines)
 
 
