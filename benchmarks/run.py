@@ -17,10 +17,12 @@ sys.path.insert(0, str(HERE))
 
 import bench_derive  # noqa: E402
 import bench_sim  # noqa: E402
+import bench_sweep  # noqa: E402
 
 SUITES = {
     "Symbolic derivation (issue 2)": bench_derive.run,
     "Closed-loop simulator (issue 4)": bench_sim.run,
+    "Sweeps (issue 6)": bench_sweep.run,
 }
 
 

@@ -37,6 +37,8 @@ _LAZY = {
     "pid_from_gains": "design",
     "SimResult": "sim",
     "simulate": "sim",
+    "sweep": "sim",
+    "SweepResult": "sim",
 }
 
 __all__ = [

@@ -193,6 +193,62 @@ def _cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    import json
+    from pathlib import Path
+
+    from .report.figures import save_figure
+    from .report.sweep_figures import sweep_distribution_figure, sweep_map_figure
+    from .sim.sweep import parse_uncertain, parse_vary, sweep
+
+    vary = parse_vary(args.vary or [])
+    uncertain = parse_uncertain(args.uncertain or [])
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"obsdesign sweep: argument --out: expected a directory, found the file {args.out!r}")
+    if args.resume and not (out / "results.csv").exists():
+        raise UsageError(f"obsdesign sweep: argument --resume: no results.csv in {args.out!r} to resume")
+    cfg = _load(args)
+    client = None
+    if args.scheduler:
+        try:
+            from distributed import Client
+        except ImportError:
+            raise UsageError("obsdesign sweep: argument --scheduler: needs dask[distributed] "
+                             "(pip install 'obsdesign[distributed]')") from None
+        try:
+            client = Client(args.scheduler, timeout="10s")
+        except OSError as e:
+            raise UsageError(f"obsdesign sweep: argument --scheduler: cannot reach {args.scheduler!r} ({e})") from None
+    try:
+        res = sweep(cfg, args.scenario, vary=vary, uncertain=uncertain, samples=args.samples, seed=args.seed,
+                    executor=client, workers=args.workers, out_dir=out, resume=args.resume,
+                    progress=sys.stderr.isatty(), duration=args.duration, variant=args.variant)
+    except KeyboardInterrupt:
+        print(f"obsdesign sweep: interrupted; finished runs are in {str(out / 'results.csv')!r}, "
+              "continue with --resume", file=sys.stderr)
+        return 130
+    finally:
+        if client is not None:
+            client.close()
+    counts = {s: sum(r["status"] == s for r in res.rows) for s in ("ok", "diverged", "failed")}
+    summary = {"runs": len(res.rows), **counts, "resumed_runs": res.skipped, "wall_s": res.wall_s,
+               "metric": args.metric, "best": {}}
+    if res.rows and args.metric not in res.columns:
+        raise UsageError(f"obsdesign sweep: argument --metric: expected one of "
+                         f"{', '.join(c for c in res.columns if c not in ('status', 'error'))}, found {args.metric!r}")
+    for name in vary:
+        value, score = res.best(name, args.metric)
+        summary["best"][name] = {"value": value, "mean_metric": score if math.isfinite(score) else None}
+    save_figure(sweep_map_figure(res, list(vary), args.metric), out / "summary_map.svg")
+    save_figure(sweep_distribution_figure(res, args.metric), out / "summary_distributions.svg")
+    from ._io import atomic_write
+
+    atomic_write(out / "summary.json", json.dumps(summary, indent=1))
+    print(json.dumps(summary))
+    return 0
+
+
 def _seed(text: str) -> int:
     try:
         value = int(text)
@@ -200,6 +256,16 @@ def _seed(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected an integer >= 0, found {text!r}") from None
     if value < 0:
         raise argparse.ArgumentTypeError(f"expected an integer >= 0, found {text!r}")
+    return value
+
+
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, found {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, found {text!r}")
     return value
 
 
@@ -282,6 +348,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", metavar="FILE", help="write a figure to FILE.svg or FILE.png")
     p.add_argument("--json", action="store_true", help="print the metrics as one JSON object")
     p.set_defaults(run=_cmd_simulate)
+
+    p = sub.add_parser("sweep", help="design sweep with Monte-Carlo draws, locally or on Dask")
+    _add_config_flags(p, default_preset="vcm")
+    p.add_argument("--scenario", required=True, choices=SCENARIOS)
+    p.add_argument("--vary", action="append", metavar="NAME=LO:HI:N", help="grid axis (repeatable)")
+    p.add_argument("--uncertain", action="append", metavar="NAME=LO:HI", help="uniform draw (repeatable)")
+    p.add_argument("--samples", type=_count, default=1, help="draws per grid point (default 1)")
+    p.add_argument("--duration", type=_POSITIVE, help="simulated time per run [s]")
+    p.add_argument("--variant", choices=VARIANTS)
+    p.add_argument("--seed", type=_seed, default=0)
+    p.add_argument("--out", required=True, metavar="DIR", help="folder for results.csv and the summary")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://127.0.0.1:8786")
+    p.add_argument("--workers", type=_count, help="local processes (default: all cores)")
+    p.add_argument("--resume", action="store_true", help="finish an interrupted sweep in --out")
+    p.add_argument("--metric", default="rms_error", help="metric for the best design (default rms_error)")
+    p.set_defaults(run=_cmd_sweep)
 
     p = sub.add_parser("export", help="export the derivation or the designed observer as code")
     p.add_argument("--format", required=True, choices=("latex", "python", "c", "octave", "js"))

@@ -12,6 +12,7 @@ Examples
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -32,12 +33,14 @@ __all__ = [
     "StabilityReport",
     "design_observer",
     "check_stability",
+    "is_stable",
 ]
 
 #: Relative tolerance on the discriminant at k = kappa, where the design puts a double pole.
 DISCRIMINANT_RTOL = 1e-9
 
 
+@functools.lru_cache(maxsize=None)
 def _affine_in_stiffness(variant: str) -> None:
     """The interval checks rely on a0 affine and a1 constant in k; prove it once."""
     d = derive(variant)
@@ -269,6 +272,37 @@ def _presliding_velocity_bound(d: ObserverDesign, a0_ends: tuple[float, float], 
     return 2.0 * a1 * worst / (slope * d.s * c)
 
 
+def _interval_verdicts(d: ObserverDesign) -> tuple[list[Condition], tuple[float, float], float]:
+    """Proposition 1 and real/negative eigenvalues on [0, kappa] (exact: a0 affine, a1 constant in k)."""
+    a0_ends = (d.coefficients(0.0)[0], d.coefficients(d.kappa)[0])
+    a1 = d.coefficients(0.0)[1]
+    conditions: list[Condition] = []
+    bounds = compiled(d.variant, "stability_bounds")(**d._values(0.0))
+    for rel, bound in zip(derive(d.variant).stability_conditions, bounds):
+        value = d.L1 if rel.lhs == derive(d.variant).symbols["L1"] else d.L2
+        holds = bool(value > bound) if rel.rel_op == ">" else bool(value < bound)
+        conditions.append(Condition(f"Proposition 1: {sp.sstr(rel)}", holds,
+                                    f"{rel.lhs} = {value:.6g} (needs {rel.rel_op} {float(bound):.6g})"))
+    disc = [a1 * a1 - 4.0 * a0 for a0 in a0_ends]
+    conditions.append(Condition("eigenvalues real on [0, kappa]", all(x >= -DISCRIMINANT_RTOL * a1 * a1 for x in disc),
+                                f"discriminant a1^2 - 4 a0 = {disc[0]:.6g} at k = 0, {disc[1]:.6g} at k = kappa"))
+    conditions.append(Condition("eigenvalues negative on [0, kappa]", bool(a1 > 0 and min(a0_ends) > 0),
+                                f"a1 = {a1:.6g}, a0 = {a0_ends[0]:.6g} at k = 0, {a0_ends[1]:.6g} at k = kappa"))
+    return conditions, a0_ends, a1
+
+
+def is_stable(cfg: Config) -> bool:
+    """The ``stable`` verdict of :func:`check_stability` alone (Proposition 1 and negative
+    eigenvalues on [0, kappa]), without observability or discretization checks; for sweeps.
+
+    >>> import obsdesign as od
+    >>> is_stable(od.load_preset("table1")), is_stable(od.load_preset("table1").override(rho=0.98))
+    (True, False)
+    """
+    conditions, _, _ = _interval_verdicts(design_observer(cfg))
+    return conditions[0].holds and conditions[1].holds and conditions[3].holds
+
+
 def check_stability(cfg: Config, *, rho: float | None = None, kappa: float | None = None,
                     variant: str | None = None) -> StabilityReport:
     """Check an observer design over the whole stiffness range [0, kappa].
@@ -298,29 +332,10 @@ def check_stability(cfg: Config, *, rho: float | None = None, kappa: float | Non
     """
     d = design_observer(cfg, rho=rho, kappa=kappa, variant=variant)
     ends = (0.0, d.kappa)
-    a0_ends = tuple(d.coefficients(k)[0] for k in ends)
-    a1 = d.coefficients(0.0)[1]
+    conditions, a0_ends, a1 = _interval_verdicts(d)
+    prop_ok = conditions[0].holds and conditions[1].holds
+    real_ok, neg_ok = conditions[2].holds, conditions[3].holds
     eig = {k: d.eigenvalues(k) for k in ends}
-    conditions: list[Condition] = []
-
-    # Proposition 1.
-    bounds = compiled(d.variant, "stability_bounds")(**d._values(0.0))
-    prop_ok = True
-    for rel, bound in zip(derive(d.variant).stability_conditions, bounds):
-        value = d.L1 if rel.lhs == derive(d.variant).symbols["L1"] else d.L2
-        holds = bool(value > bound) if rel.rel_op == ">" else bool(value < bound)
-        prop_ok &= holds
-        conditions.append(Condition(f"Proposition 1: {sp.sstr(rel)}", holds,
-                                    f"{rel.lhs} = {value:.6g} (needs {rel.rel_op} {float(bound):.6g})"))
-
-    # Eigenvalues over [0, kappa] (exact: discriminant affine in k).
-    disc = [a1 * a1 - 4.0 * a0 for a0 in a0_ends]
-    real_ok = all(x >= -DISCRIMINANT_RTOL * a1 * a1 for x in disc)
-    conditions.append(Condition("eigenvalues real on [0, kappa]", real_ok,
-                                f"discriminant a1^2 - 4 a0 = {disc[0]:.6g} at k = 0, {disc[1]:.6g} at k = kappa"))
-    neg_ok = a1 > 0 and min(a0_ends) > 0
-    conditions.append(Condition("eigenvalues negative on [0, kappa]", neg_ok,
-                                f"a1 = {a1:.6g}, a0 = {a0_ends[0]:.6g} at k = 0, {a0_ends[1]:.6g} at k = kappa"))
 
     # Ignatyev's theorem with kdot = 0 (gross sliding and stiffness held at its bound).
     alpha1 = abs(a1)

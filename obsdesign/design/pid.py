@@ -29,7 +29,7 @@ import scipy.optimize
 from ..params import Config, _Range
 from .results import ResultDisplay
 
-__all__ = ["PIDDesign", "design_pid", "pid_from_config", "pid_from_gains"]
+__all__ = ["PIDDesign", "design_pid", "pid_gains", "pid_from_config", "pid_from_gains"]
 
 _POS = _Range(low=0.0)
 _PHASE = _Range(low=0.0, high=90.0)
@@ -119,7 +119,7 @@ def _build(k: float, T_I: float, tau: float, phi: float, phase_margin_deg: float
     gm, pm, _, _, wgc, _ = ct.stability_margins(C * H)
     stable = bool(np.all(np.real(ct.poles(S)) < 0))
     return PIDDesign(
-        k=k, T_I=T_I, tau=tau, phi=phi, kp=k * (T_I + tau) / T_I, ki=k / T_I, kd=k * tau,
+        k=k, T_I=T_I, tau=tau, phi=phi, kp=k * (T_I + tau) / T_I, ki=k / T_I, kd=k * tau,  # eq:PIDparams
         phase_margin_deg=phase_margin_deg, omega_s=math.tan(math.radians(phase_margin_deg)) / T_I,
         max_S_achieved=peak, omega_peak=w_peak, phase_margin_achieved_deg=float(pm),
         gain_margin=float(gm), omega_crossover=float(wgc), closed_loop_stable=stable, H=H, C=C, S=S,
@@ -150,14 +150,24 @@ def design_pid(*, phi: float, tau: float, max_S: float, phase_margin_deg: float)
     >>> round(pid.T_I, 5), round(pid.phase_margin_achieved_deg, 6)
     (0.09214, 60.0)
     """
+    k, T_I, _, _, _ = pid_gains(phi=phi, tau=tau, max_S=max_S, phase_margin_deg=phase_margin_deg)
+    return _build(k, T_I, float(tau), float(phi), float(phase_margin_deg))
+
+
+def pid_gains(*, phi: float, tau: float, max_S: float, phase_margin_deg: float) -> tuple[float, ...]:
+    """``(k, T_I, kp, ki, kd)`` of the design rule alone, without the python-control verification.
+
+    >>> [round(x, 4) for x in pid_gains(phi=0.0407, tau=0.006675, max_S=1/400, phase_margin_deg=60.0)]
+    [400.0, 0.0921, 428.9767, 4341.4669, 2.67]
+    """
     phi = _POS.check("phi", phi)
     tau = _POS.check("tau", tau)
     max_S = _POS.check("max_S", max_S)
     pm = _PHASE.check("phase_margin_deg", phase_margin_deg)
-    k = 1.0 / max_S
+    k = 1.0 / max_S  # eq:pidGain
     t2 = math.tan(math.radians(pm)) ** 2
     T_I = t2 / (k * phi * math.sqrt(1.0 + t2))  # eq:pidTime
-    return _build(k, T_I, tau, phi, pm)
+    return k, T_I, k * (T_I + tau) / T_I, k / T_I, k * tau  # eq:PIDparams
 
 
 def pid_from_config(cfg: Config) -> PIDDesign:

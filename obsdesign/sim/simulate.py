@@ -25,7 +25,7 @@ import sympy as sp
 
 from .._io import atomic_write
 from ..design.observer import design_observer
-from ..design.pid import pid_from_config
+from ..design.pid import pid_gains
 from ..params import Config, _Range
 from ..symbolic import derive
 from . import kernel
@@ -349,8 +349,8 @@ def simulate(
     if controller == "open-loop":
         kp = ki = kd = tau_d = 0.0
     else:
-        pid = pid_from_config(cfg)
-        kp, ki, kd = pid.kp, pid.ki, pid.kd
+        _, _, kp, ki, kd = pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
+                                     phase_margin_deg=cfg.pid.phase_margin_deg)
         tau_d = kd / kp / cfg.pid.derivative_N
     fr, pl = cfg.friction, cfg.plant
     loop = LoopInputs(

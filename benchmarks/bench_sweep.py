@@ -1,0 +1,77 @@
+"""Benchmark: sweep throughput on 1 and 2 local cores and on a local Dask cluster.
+
+A fixed sweep (``vcm``, ``positioning``, 6 s per run, rho on a grid, Cf drawn) runs on
+worker pools that are started and warmed first, so the rates are steady-state runs per
+second; start-up is reported apart. The per-run overhead is the in-process wall time of
+the sweep minus the simulation kernels' own time, divided by the number of runs.
+Targets (issue 6): >= 1.8x speed-up on 2 cores; overhead < 5 ms per run.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import multiprocessing
+import time
+
+import obsdesign as od
+
+CFG = od.load_preset("vcm")
+SWEEP = dict(vary={"rho": (1.5, 4.0, 24)}, uncertain={"Cf": (0.3, 0.4)}, samples=8, seed=0)
+
+
+def _timed(**kw):
+    t0 = time.perf_counter()
+    res = od.sweep(CFG, "positioning", **SWEEP, **kw)
+    return time.perf_counter() - t0, res
+
+
+def _warm(**kw):
+    od.sweep(CFG, "positioning", vary={"rho": (2.0, 3.0, 4)}, samples=1, chunk=1, **kw)
+
+
+def run() -> list[dict]:
+    n = 24 * 8
+    _warm(workers=1)
+    t_in, res_in = _timed(workers=1)
+    rows = []
+    rates = {}
+    for workers in (1, 2):
+        ctx = multiprocessing.get_context("spawn")
+        t0 = time.perf_counter()
+        with concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+            _warm(executor=pool)
+            startup = time.perf_counter() - t0
+            wall, _ = _timed(executor=pool, chunk=4)
+        rates[workers] = n / wall
+        rows.append({"benchmark": f"sweep of {n} runs (6 s positioning each), {workers} local process(es)",
+                     "value": f"{rates[workers]:.1f} runs/s", "reference": f"pool start-up {startup:.1f} s",
+                     "ratio": "", "target": "", "ok": True})
+    speedup = rates[2] / rates[1]
+    rows.append({"benchmark": "  speed-up on 2 cores", "value": f"{speedup:.2f}x",
+                 "reference": f"1 process: {rates[1]:.1f} runs/s", "ratio": f"{speedup:.2f}", "target": ">= 1.8",
+                 "ok": speedup >= 1.8})
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        rows.append({"benchmark": "local Dask cluster", "value": "not installed", "reference": "", "ratio": "",
+                     "target": "", "ok": True})
+    else:
+        t0 = time.perf_counter()
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                          dashboard_address=None) as cluster, Client(cluster) as client:
+            _warm(executor=client)
+            startup = time.perf_counter() - t0
+            wall, _ = _timed(executor=client, chunk=4)
+        rows.append({"benchmark": "  local Dask cluster, 2 workers", "value": f"{n / wall:.1f} runs/s",
+                     "reference": f"1 process: {rates[1]:.1f} runs/s (cluster start-up {startup:.1f} s)",
+                     "ratio": f"{n / wall / rates[1]:.2f}", "target": "", "ok": True})
+    kernel = t_in - res_in.run_overhead_s * n
+    rows.append({"benchmark": "per-run overhead beyond the simulation (in process)",
+                 "value": f"{res_in.run_overhead_s * 1e3:.2f} ms", "reference": f"simulation kernel: {kernel / n * 1e3:.1f} ms/run",
+                 "ratio": "", "target": "< 5 ms", "ok": res_in.run_overhead_s < 5e-3})
+    return rows
+
+
+if __name__ == "__main__":
+    for row in run():
+        print(row)
