@@ -3,7 +3,6 @@
 import contextlib
 import csv
 import json
-import os
 import signal
 import subprocess
 import sys

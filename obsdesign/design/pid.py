@@ -158,7 +158,7 @@ def pid_gains(*, phi: float, tau: float, max_S: float, phase_margin_deg: float) 
     """``(k, T_I, kp, ki, kd)`` of the design rule alone, without the python-control verification.
 
     >>> [round(x, 4) for x in pid_gains(phi=0.0407, tau=0.006675, max_S=1/400, phase_margin_deg=60.0)]
-    [400.0, 0.0921, 428.9767, 4341.4669, 2.67]
+    [400.0, 0.0921, 428.9784, 4341.3333, 2.67]
     """
     phi = _POS.check("phi", phi)
     tau = _POS.check("tau", tau)
