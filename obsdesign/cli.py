@@ -68,6 +68,15 @@ def _add_config_flags(p: argparse.ArgumentParser, *, default_preset: str) -> Non
     p.set_defaults(default_preset=default_preset)
 
 
+def _add_design_flags(p: argparse.ArgumentParser, *, json_flag: str | None = "print one JSON object") -> None:
+    """The observer overrides shared by check, noise and simulate (and --json)."""
+    p.add_argument("--variant", choices=VARIANTS, help="override the config's model variant")
+    p.add_argument("--rho", type=_POSITIVE, help="override the gain parameter rho (> 0)")
+    p.add_argument("--kappa", type=_POSITIVE, help="override the stiffness bound kappa [N/m] (> 0)")
+    if json_flag:
+        p.add_argument("--json", action="store_true", help=json_flag)
+
+
 def _load(args: argparse.Namespace):
     if getattr(args, "config", None):
         return load_config(args.config)
@@ -294,10 +303,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("check", help="stability verdicts of an observer design (exit 1 if one fails)")
     _add_config_flags(p, default_preset="table1")
-    p.add_argument("--variant", choices=VARIANTS, help="override the config's model variant")
-    p.add_argument("--rho", type=_POSITIVE, help="override the gain parameter rho (> 0)")
-    p.add_argument("--kappa", type=_POSITIVE, help="override the stiffness bound kappa [N/m] (> 0)")
-    p.add_argument("--json", action="store_true", help="print one JSON object")
+    _add_design_flags(p)
     p.set_defaults(run=_cmd_check)
 
     p = sub.add_parser("pid", help="sensitivity-based PID design (section 4.1)")
@@ -311,13 +317,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("noise", help="measurement noise in the friction estimate (section 3.4)")
     _add_config_flags(p, default_preset="vcm")
-    p.add_argument("--variant", choices=VARIANTS, help="override the config's model variant")
-    p.add_argument("--rho", type=_POSITIVE, help="override the gain parameter rho (> 0)")
-    p.add_argument("--kappa", type=_POSITIVE, help="override the stiffness bound kappa [N/m] (> 0)")
+    _add_design_flags(p)
     p.add_argument("--noise-rms", type=_NONNEGATIVE, help="noise RMS [m] (>= 0)")
     p.add_argument("--noise-bandwidth", type=_POSITIVE, help="noise bandwidth [Hz] (> 0)")
     p.add_argument("--stiffness", type=_NONNEGATIVE, default=0.0, help="constant stiffness k [N/m] (default 0)")
-    p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(run=_cmd_noise)
 
     from .sim.scenarios import SCENARIOS
@@ -326,9 +329,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scenario", choices=SCENARIOS)
     _add_config_flags(p, default_preset="table1 for excitation/constant, vcm otherwise")
     p.add_argument("--controller", choices=("open-loop", "pid", "pid+observer"))
-    p.add_argument("--variant", choices=VARIANTS, help="override the config's model variant")
-    p.add_argument("--rho", type=_POSITIVE, help="gain parameter rho (> 0)")
-    p.add_argument("--kappa", type=_POSITIVE, help="stiffness bound kappa [N/m] (> 0)")
+    _add_design_flags(p, json_flag="print the metrics as one JSON object")
     p.add_argument("--stiffness", choices=("estimated", "true", "constant"), default="estimated",
                    help="observer stiffness schedule (default: estimated)")
     p.add_argument("--plant", choices=("physical", "model"), default="physical")
@@ -346,7 +347,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--settle-tol", type=_POSITIVE, default=2e-6, help="settling band [m] (default 2e-6)")
     p.add_argument("--out", metavar="FILE", help="write the trace to FILE.csv or FILE.npz")
     p.add_argument("--plot", metavar="FILE", help="write a figure to FILE.svg or FILE.png")
-    p.add_argument("--json", action="store_true", help="print the metrics as one JSON object")
     p.set_defaults(run=_cmd_simulate)
 
     p = sub.add_parser("sweep", help="design sweep with Monte-Carlo draws, locally or on Dask")

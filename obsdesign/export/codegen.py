@@ -13,12 +13,11 @@ import inspect
 from dataclasses import dataclass
 from importlib import resources
 
-import numpy as np
 import sympy as sp
 
 from ..params import Config
 from ..sim import discretize, friction
-from ..sim.simulate import observer_arrays
+from ..sim.simulate import ObserverArrays, observer_arrays
 from ..symbolic import derive
 from ..symbolic.printing import derivation_latex
 
@@ -31,28 +30,23 @@ _ARG_ORDER = ("m", "sigma", "beta", "kappa", "rho")
 
 @dataclass(frozen=True, eq=False)
 class ExportSpec:
-    """A concrete observer to export: the config, its design and affine observer arrays."""
+    """A concrete observer to export: the config (with overrides) and its observer arrays."""
 
     cfg: Config
-    variant: str
-    rho: float
-    dt: float
-    L1: float
-    L2: float
-    A0: np.ndarray
-    A1: np.ndarray
-    b0: np.ndarray
-    b1: np.ndarray
-    g0: np.ndarray
-    g1: np.ndarray
+    arrays: ObserverArrays
+
+    variant = property(lambda self: self.arrays.design.variant)
+    rho = property(lambda self: self.arrays.design.rho)
+    dt = property(lambda self: self.cfg.observer.dt)
+    L1 = property(lambda self: self.arrays.design.L1)
+    L2 = property(lambda self: self.arrays.design.L2)
 
 
 def export_spec(cfg: Config, *, variant: str | None = None, rho: float | None = None,
                 dt: float | None = None) -> ExportSpec:
     """Design the observer to export (the config with overrides)."""
     cfg = cfg.override(variant=variant, rho=rho, dt=dt)
-    design, A0, A1, b0, b1, g0, g1 = observer_arrays(cfg)
-    return ExportSpec(cfg, design.variant, design.rho, cfg.observer.dt, design.L1, design.L2, A0, A1, b0, b1, g0, g1)
+    return ExportSpec(cfg, observer_arrays(cfg))
 
 
 def _symbols(variant: str) -> dict:
@@ -153,10 +147,10 @@ def observer_matrices({params}, {k}, {L1}, {L2}):
 
 
 L1, L2 = {_num(spec.L1)}, {_num(spec.L2)}
-_A0 = {tuple(float(x) for x in spec.A0.ravel())!r}
-_A1 = {tuple(float(x) for x in spec.A1.ravel())!r}
-_B0, _B1 = {tuple(float(x) for x in spec.b0)!r}, {tuple(float(x) for x in spec.b1)!r}
-_G0, _G1 = {tuple(float(x) for x in spec.g0)!r}, {tuple(float(x) for x in spec.g1)!r}
+_A0 = {tuple(float(x) for x in spec.arrays.A0.ravel())!r}
+_A1 = {tuple(float(x) for x in spec.arrays.A1.ravel())!r}
+_B0, _B1 = {tuple(float(x) for x in spec.arrays.b0)!r}, {tuple(float(x) for x in spec.arrays.b1)!r}
+_G0, _G1 = {tuple(float(x) for x in spec.arrays.g0)!r}, {tuple(float(x) for x in spec.arrays.g1)!r}
 
 
 {helpers}
@@ -263,9 +257,9 @@ def c_files(spec: ExportSpec) -> dict[str, str]:
     fr = spec.cfg.friction
     consts = {
         "L1": spec.L1, "L2": spec.L2, "DT": spec.dt, "CF": fr.Cf, "S": fr.s, "KAPPA": fr.kappa,
-        **{f"A0_{i}": v for i, v in enumerate(spec.A0.ravel())}, **{f"A1_{i}": v for i, v in enumerate(spec.A1.ravel())},
-        **{f"B0_{i}": v for i, v in enumerate(spec.b0)}, **{f"B1_{i}": v for i, v in enumerate(spec.b1)},
-        **{f"G0_{i}": v for i, v in enumerate(spec.g0)}, **{f"G1_{i}": v for i, v in enumerate(spec.g1)},
+        **{f"A0_{i}": v for i, v in enumerate(spec.arrays.A0.ravel())}, **{f"A1_{i}": v for i, v in enumerate(spec.arrays.A1.ravel())},
+        **{f"B0_{i}": v for i, v in enumerate(spec.arrays.b0)}, **{f"B1_{i}": v for i, v in enumerate(spec.arrays.b1)},
+        **{f"G0_{i}": v for i, v in enumerate(spec.arrays.g0)}, **{f"G1_{i}": v for i, v in enumerate(spec.arrays.g1)},
     }
     sym = _symbols(spec.variant)
     gains = _formulas(spec.variant)["gains"]

@@ -183,18 +183,31 @@ def _check_affine(variant: str) -> None:
             raise NotImplementedError(f"{name} of variant {variant!r} is not affine in the stiffness")
 
 
-def observer_arrays(cfg: Config, rho: float | None = None, kappa: float | None = None, variant: str | None = None):
-    """Affine-in-stiffness observer arrays ``A0, A1, b0, b1, g0, g1`` and the design.
+@dataclass(frozen=True, eq=False)
+class ObserverArrays:
+    """A designed observer in the affine-in-stiffness form the kernel uses.
 
-    ``A(k) = A0 + k A1`` is the observer matrix of the symbolic derivation (likewise
-    the input vector ``b`` and the measurement gain ``g``).
+    ``A(k) = A0 + k A1`` is the observer matrix of the symbolic derivation; likewise the
+    input vector ``b`` and the measurement gain ``g``.
     """
-    d = design_observer(cfg, rho=rho, kappa=kappa, variant=variant)
+
+    design: Any
+    A0: np.ndarray
+    A1: np.ndarray
+    b0: np.ndarray
+    b1: np.ndarray
+    g0: np.ndarray
+    g1: np.ndarray
+
+
+def observer_arrays(cfg: Config) -> ObserverArrays:
+    """The config's observer as :class:`ObserverArrays` (affinity in k is checked symbolically)."""
+    d = design_observer(cfg)
     _check_affine(d.variant)
     at0, at1 = d.matrices(0.0), d.matrices(1.0)
     A0, b0, g0 = at0
     A1, b1, g1 = (np.asarray(x1) - np.asarray(x0) for x0, x1 in zip(at0, at1))
-    return d, np.ascontiguousarray(A0), np.ascontiguousarray(A1), b0, b1, g0, g1
+    return ObserverArrays(d, np.ascontiguousarray(A0), np.ascontiguousarray(A1), b0, b1, g0, g1)
 
 
 def _lowpass_arrays(omega_co: float, dt: float):
@@ -341,7 +354,7 @@ def simulate(
     if plant == "model" and cfg.observer.variant == "lag" and cfg.friction.beta is None:
         raise ValueError("plant: the 'model' plant of variant 'lag' needs friction.beta")
 
-    design, A0, A1, b0, b1, g0, g1 = observer_arrays(cfg)
+    obs = observer_arrays(cfg)
     lp_phi, lp_g0, lp_g1 = _lowpass_arrays(cfg.observer.omega_co, dt)
     n = len(sc.x_ref)
     sensor = cfg.sensor
@@ -356,8 +369,8 @@ def simulate(
     loop = LoopInputs(
         dt=dt, n_sub=substeps, mode=kernel.PLANT_MODEL if plant == "model" else kernel.PLANT_PHYSICAL,
         lag_model=cfg.observer.variant == "lag", m=pl.m, K=pl.K, G=pl.G, Cf=fr.Cf, s=fr.s, sigma=fr.sigma,
-        beta=fr.beta if fr.beta is not None else 0.0, kappa=fr.kappa, A0=A0, A1=A1, b0=b0, b1=b1, g0=g0, g1=g1,
-        L1=design.L1, L2=design.L2, schedule=kernel.SCHEDULES[stiffness], v_hat0=v_hat0, f_hat0=f_hat0,
+        beta=fr.beta if fr.beta is not None else 0.0, kappa=fr.kappa, A0=obs.A0, A1=obs.A1, b0=obs.b0, b1=obs.b1,
+        g0=obs.g0, g1=obs.g1, L1=obs.design.L1, L2=obs.design.L2, schedule=kernel.SCHEDULES[stiffness], v_hat0=v_hat0, f_hat0=f_hat0,
         controller=kernel.CONTROLLERS[controller], kp=kp, ki=ki, kd=kd, tau_d=tau_d, u_max=pl.u_max,
         lp_phi=lp_phi, lp_g0=lp_g0, lp_g1=lp_g1, x_ref=sc.x_ref, u_open=sc.u_open, noise=noise,
         quantization=sensor.quantization,

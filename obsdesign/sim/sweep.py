@@ -70,6 +70,14 @@ def _number(text: str, what: str) -> float:
     return value
 
 
+def _split(item: str, flag: str, syntax: str, n_parts: int) -> tuple[str, list[str]]:
+    name, sep, rest = item.partition("=")
+    parts = rest.split(":")
+    if not sep or not name or len(parts) != n_parts:
+        raise ValueError(f"{flag}: expected {syntax}, found {item!r}")
+    return name, parts
+
+
 def parse_vary(items: list[str]) -> dict[str, tuple[float, float, int]]:
     """Parse ``NAME=LO:HI:N`` items.
 
@@ -82,15 +90,9 @@ def parse_vary(items: list[str]) -> dict[str, tuple[float, float, int]]:
     """
     out = {}
     for item in items:
-        name, sep, rest = item.partition("=")
-        parts = rest.split(":")
-        if not sep or len(parts) != 3 or not name:
-            raise ValueError(f"--vary: expected NAME=LO:HI:N, found {item!r}")
+        name, parts = _split(item, "--vary", "NAME=LO:HI:N", 3)
         lo, hi = (_number(p, f"--vary {name}") for p in parts[:2])
-        try:
-            n = int(parts[2])
-        except ValueError:
-            raise ValueError(f"--vary {name}: expected an integer N >= 1, found {parts[2]!r}") from None
+        n = int(parts[2]) if parts[2].strip().isdigit() else 0
         if n < 1:
             raise ValueError(f"--vary {name}: expected an integer N >= 1, found {parts[2]!r}")
         out[name] = (lo, hi, n)
@@ -105,10 +107,7 @@ def parse_uncertain(items: list[str]) -> dict[str, tuple[float, float]]:
     """
     out = {}
     for item in items:
-        name, sep, rest = item.partition("=")
-        parts = rest.split(":")
-        if not sep or len(parts) != 2 or not name:
-            raise ValueError(f"--uncertain: expected NAME=LO:HI, found {item!r}")
+        name, parts = _split(item, "--uncertain", "NAME=LO:HI", 2)
         lo, hi = (_number(p, f"--uncertain {name}") for p in parts)
         if hi < lo:
             raise ValueError(f"--uncertain {name}: expected LO <= HI, found {lo:g} > {hi:g}")
