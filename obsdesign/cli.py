@@ -237,6 +237,12 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         print(f"obsdesign sweep: interrupted; finished runs are in {str(out / 'results.csv')!r}, "
               "continue with --resume", file=sys.stderr)
         return 130
+    except Exception as e:  # a worker process died (BrokenProcessPool, dask KilledWorker, lost connection)
+        if not _is_worker_failure(e):
+            raise
+        print(f"obsdesign sweep: a worker failed ({type(e).__name__}); finished runs are in "
+              f"{str(out / 'results.csv')!r}, continue with --resume", file=sys.stderr)
+        return 1
     finally:
         if client is not None:
             client.close()
@@ -256,6 +262,14 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     atomic_write(out / "summary.json", json.dumps(summary, indent=1))
     print(json.dumps(summary))
     return 0
+
+
+def _is_worker_failure(e: BaseException) -> bool:
+    import concurrent.futures
+
+    if isinstance(e, concurrent.futures.BrokenExecutor):
+        return True
+    return type(e).__module__.startswith("distributed") or type(e).__name__ in ("KilledWorker", "CommClosedError")
 
 
 def _integer(minimum: int):

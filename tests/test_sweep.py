@@ -153,3 +153,40 @@ def test_bad_sweep_syntax_exits_2(args, match, tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and match in err[0]
     assert not (tmp_path / "o").exists()
+
+
+def test_killed_worker_is_reported_and_resumable(tmp_path, monkeypatch, capsys):
+    """A local worker process that dies ends the sweep with one line; --resume finishes it."""
+    import concurrent.futures
+
+    import importlib
+
+    sweep_mod = importlib.import_module("obsdesign.sim.sweep")  # the module (obsdesign.sim.sweep is the function)
+
+    args = ["sweep", "--scenario", "constant", "--duration", "0.2", "--vary", "rho=1.5:4:4", "--out", str(tmp_path)]
+    real = sweep_mod._run_batch
+    calls = {"n": 0}
+
+    def dying(cfg, scenario, batch, options):
+        calls["n"] += 1
+        if calls["n"] == 1:
+            raise concurrent.futures.process.BrokenProcessPool("a child process terminated abruptly")
+        return real(cfg, scenario, batch, options)
+
+    class InlinePool(concurrent.futures.Executor):  # runs tasks here, fails like a killed worker
+        def submit(self, fn, *a):
+            fut = concurrent.futures.Future()
+            try:
+                fut.set_result(fn(*a))
+            except BaseException as e:  # noqa: BLE001
+                fut.set_exception(e)
+            return fut
+
+    monkeypatch.setattr(sweep_mod, "_run_batch", dying)
+    monkeypatch.setattr(sweep_mod, "_executor", lambda executor, workers: (InlinePool(), False))
+    assert main([*args]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "a worker failed (BrokenProcessPool)" in err[0]
+    assert main([*args, "--resume"]) == 0
+    rows = list(csv.DictReader((tmp_path / "results.csv").read_text().splitlines()))
+    assert [int(r["run"]) for r in rows] == [0, 1, 2, 3] and {r["status"] for r in rows} == {"ok"}
