@@ -158,8 +158,8 @@ def test_bad_sweep_syntax_exits_2(args, match, tmp_path, capsys):
 def test_killed_worker_is_reported_and_resumable(tmp_path, monkeypatch, capsys):
     """A local worker process that dies ends the sweep with one line; --resume finishes it."""
     import concurrent.futures
-
     import importlib
+    from concurrent.futures.process import BrokenProcessPool
 
     sweep_mod = importlib.import_module("obsdesign.sim.sweep")  # the module (obsdesign.sim.sweep is the function)
 
@@ -170,7 +170,7 @@ def test_killed_worker_is_reported_and_resumable(tmp_path, monkeypatch, capsys):
     def dying(cfg, scenario, batch, options):
         calls["n"] += 1
         if calls["n"] == 1:
-            raise concurrent.futures.process.BrokenProcessPool("a child process terminated abruptly")
+            raise BrokenProcessPool("a child process terminated abruptly")
         return real(cfg, scenario, batch, options)
 
     class InlinePool(concurrent.futures.Executor):  # runs tasks here, fails like a killed worker
