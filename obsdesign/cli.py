@@ -197,7 +197,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
         raise UsageError(f"obsdesign report: argument -o/--output: directory {str(out.parent)!r} does not exist")
     cfg = _load(args)
     label = f"config file {args.config}" if args.config else f"preset {cfg.name}"
-    write_report(cfg, out, source_label=label, progress=not args.quiet)
+    write_report(cfg, out, source_label=label, progress=not args.quiet, sweep_dir=args.sweep)
     print(args.output)
     return 0
 
@@ -390,6 +390,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("report", help="self-contained HTML design report")
     _add_config_flags(p, default_preset="vcm")
     p.add_argument("-o", "--output", default="report.html", metavar="FILE", help="output file (default report.html)")
+    p.add_argument("--sweep", metavar="DIR", help="add the summary of an 'obsdesign sweep' folder")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(run=_cmd_report)
     return parser

@@ -108,3 +108,17 @@ def test_explorer_in_headless_chromium(report_file, tmp_path):
         assert driver.get_log("browser") == [] if hasattr(driver, "get_log") else True
     finally:
         driver.quit()
+
+
+def test_report_includes_a_sweep_summary(tmp_path, capsys):
+    sweep_dir = tmp_path / "sweep"
+    assert main(["sweep", "--scenario", "constant", "--duration", "0.2", "--vary", "rho=1.5:3:2", "--workers", "1",
+                 "--out", str(sweep_dir)]) == 0
+    html = render_report(od.load_preset("vcm"), sweep_dir=sweep_dir)
+    assert "Design sweep" in html and "2 runs: 2 ok, 0 diverged, 0 failed." in html
+    assert html.count("<svg") >= 9
+    capsys.readouterr()
+    assert main(["report", "--sweep", str(tmp_path), "-o", str(tmp_path / "r.html"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "sweep: expected a folder written by 'obsdesign sweep'" in err[0]
+    assert not (tmp_path / "r.html").exists()

@@ -26,6 +26,19 @@ def fmt(value: object) -> str:
     return str(value)
 
 
+_TEX = {"\\": "\\textbackslash{}", "&": "\\&", "%": "\\%", "$": "\\$", "#": "\\#", "_": "\\_",
+        "{": "\\{", "}": "\\}", "^": "\\^{}", "~": "\\~{}"}
+
+
+def _tex(text: str) -> str:
+    """Escape text for LaTeX (one pass, so replacements are not escaped again).
+
+    >>> print(_tex("a_1 & 50% \\\\x"))
+    a\\_1 \\& 50\\% \\textbackslash{}x
+    """
+    return "".join(_TEX.get(ch, ch) for ch in text)
+
+
 @dataclass(frozen=True)
 class Condition:
     """One verdict of a check: its name, whether it holds, and the numbers behind it."""
@@ -64,6 +77,13 @@ class ResultDisplay:
             lines += ["", f"{'condition'.ljust(w)}  verdict  detail"]
             lines += [f"{c.name.ljust(w)}  {'PASS' if c.holds else 'FAIL':7}  {c.detail}" for c in conds]
         return "\n".join(lines)
+
+    def _repr_latex_(self) -> str:
+        """A LaTeX tabular of the rows and verdicts (for notebooks and papers)."""
+        rows = [(label, fmt(value)) for label, value in self._rows()]
+        rows += [(c.name, "PASS" if c.holds else "FAIL") for c in self._conditions()]
+        body = " \\\\\n".join(f"{_tex(a)} & {_tex(b)}" for a, b in rows)
+        return f"\\begin{{tabular}}{{ll}}\n\\multicolumn{{2}}{{l}}{{{_tex(self._title)}}} \\\\ \\hline\n{body}\n\\end{{tabular}}"
 
     def _repr_html_(self) -> str:
         esc = html.escape

@@ -126,7 +126,31 @@ def _explorer_params(cfg: Config, variant: str) -> list[dict]:
     return rows
 
 
-def render_report(cfg: Config, *, source_label: str | None = None, progress: bool = False) -> str:
+def _sweep_section(sweep_dir) -> dict | None:
+    """The summary of an ``obsdesign sweep`` folder for the report."""
+    if sweep_dir is None:
+        return None
+    import json
+    from pathlib import Path
+
+    folder = Path(sweep_dir)
+    names = ("summary.json", "summary_map.svg", "summary_distributions.svg")
+    if not all((folder / n).is_file() for n in names):
+        raise ValueError(f"sweep: expected a folder written by 'obsdesign sweep' (with {', '.join(names)}), "
+                         f"found {str(folder)!r}")
+    summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+    svgs = []
+    for n in names[1:]:
+        text = (folder / n).read_text(encoding="utf-8")
+        text = re.sub(r"<metadata>.*?</metadata>", "", text[text.index("<svg"):], flags=re.S)
+        if re.search(r"<script|\bon\w+=|(?:href|src)=\"(?!#)", text):
+            raise ValueError(f"sweep: {str(folder / n)!r} is not a figure written by obsdesign")
+        svgs.append(text)
+    return {"summary": summary, "map_svg": svgs[0], "dist_svg": svgs[1], "folder": str(folder)}
+
+
+def render_report(cfg: Config, *, source_label: str | None = None, progress: bool = False,
+                  sweep_dir=None) -> str:
     """Render the report of a config as one HTML string.
 
     Parameters
@@ -136,10 +160,13 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
         Where the config came from (shown in the parameter table); default ``preset NAME``.
     progress : bool
         Show a progress bar (tqdm) on the terminal.
+    sweep_dir : path, optional
+        A folder written by ``obsdesign sweep``; its summary is added as a section.
     """
     from tqdm import tqdm
 
     source_label = source_label or f"preset {cfg.name}"
+    sweep_section = _sweep_section(sweep_dir)
     variant = cfg.observer.variant
     steps = ["derivation", "stability", "PID", "noise", "convergence (Table 1)", "experiments", "friction loops",
              "noise study", "render"]
@@ -213,6 +240,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     ctx["explorer_js"] = re.sub(r"^export ", "", module, flags=re.M)
     ctx["explorer_params"] = _explorer_params(cfg, variant)
     ctx["explorer_fixed"] = {"sigma": cfg.friction.sigma, "beta": cfg.friction.beta}
+    ctx["sweep"] = sweep_section
     ctx["elapsed"] = time.perf_counter() - t0
     env = Environment(loader=PackageLoader("obsdesign.report", "templates"), undefined=StrictUndefined,
                       autoescape=select_autoescape(default=True, default_for_string=True))
@@ -243,6 +271,6 @@ def _num(value) -> str:
 
 
 def write_report(cfg: Config, path: str | os.PathLike, *, source_label: str | None = None,
-                 progress: bool = False) -> None:
+                 progress: bool = False, sweep_dir=None) -> None:
     """Render and write the report atomically (temporary file, then rename)."""
-    atomic_write_text(path, render_report(cfg, source_label=source_label, progress=progress))
+    atomic_write_text(path, render_report(cfg, source_label=source_label, progress=progress, sweep_dir=sweep_dir))

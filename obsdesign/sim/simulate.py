@@ -114,6 +114,13 @@ class SimResult:
             rows.append((key, fmt(value)))
         return rows
 
+    def _repr_latex_(self) -> str:
+        from ..design.results import _tex
+
+        body = " \\\\\n".join(f"{_tex(k)} & {_tex(v)}" for k, v in self._metric_rows())
+        return (f"\\begin{{tabular}}{{ll}}\n\\multicolumn{{2}}{{l}}{{simulation: {_tex(self.scenario)}, "
+                f"{_tex(self.controller)}}} \\\\ \\hline\n{body}\n\\end{{tabular}}")
+
     def _repr_html_(self) -> str:
         import html
 
