@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: test report bench clean
+.PHONY: test report bench screenshot clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -22,6 +22,9 @@ report: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) benchmarks/run.py --write
+
+screenshot: $(STAMP)
+	OBSDESIGN_SCREENSHOT=docs/img/report.png $(PY) -m pytest -q tests/test_report.py -k chromium
 
 clean:
 	rm -rf $(VENV) build *.egg-info
