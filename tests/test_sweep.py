@@ -190,3 +190,15 @@ def test_killed_worker_is_reported_and_resumable(tmp_path, monkeypatch, capsys):
     assert main([*args, "--resume"]) == 0
     rows = list(csv.DictReader((tmp_path / "results.csv").read_text().splitlines()))
     assert [int(r["run"]) for r in rows] == [0, 1, 2, 3] and {r["status"] for r in rows} == {"ok"}
+
+
+def test_resume_refuses_other_settings(tmp_path, capsys):
+    base = ["sweep", "--scenario", "constant", "--duration", "0.2", "--vary", "rho=1.5:4:2", "--workers", "1",
+            "--out", str(tmp_path)]
+    assert main(base) == 0
+    before = (tmp_path / "results.csv").read_text()
+    capsys.readouterr()
+    assert main([*base, "--seed", "5", "--resume"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "resume: the sweep in" in err[0] and "different settings" in err[0]
+    assert (tmp_path / "results.csv").read_text() == before

@@ -206,6 +206,9 @@ class SweepResult:
         Runs taken from an earlier, interrupted sweep (``resume``).
     wall_s : float
         Wall time of this call.
+    run_overhead_s : float
+        Wall time per run beyond the simulation kernels (times the number of workers),
+        including pool start-up; the benchmark measures it in steady state.
     """
 
     rows: list
