@@ -206,7 +206,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
                                          ylabel="gain [N/m]"))
     bar.update()
 
-    claims = list(paper.pid_claims())
+    claims = list(paper.derivation_claims()) + list(paper.pid_claims())
     bar.set_postfix_str(steps[4])
     conv = paper.convergence_study(seeds=3)
     claims += conv.claims

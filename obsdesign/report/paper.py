@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+import sympy as sp
 
 from ..design.noise import noise_analysis
 from ..design.pid import pid_from_config
@@ -296,6 +297,32 @@ def pid_claims(cfg: Config | None = None) -> tuple:
     out.append(Claim("eq:pidGain", "max|S| <= 1/k", f"{1 / pid.k:.4g} m/V", f"{pid.max_S_achieved:.4g} m/V",
                      pid.max_S_achieved <= 1 / pid.k))
     return tuple(out)
+
+
+def derivation_claims() -> tuple:
+    """Statements of the derivation that the symbolic engine checks (table1 numbers)."""
+    from ..design.observer import check_stability
+    from ..symbolic import derive
+    from ..symbolic.derivation import EXTRA_SYMBOLS
+
+    d = derive("lag")
+    E = EXTRA_SYMBOLS
+    rate = float(d.stiffness_rate.subs({d.symbols["s"]: 3000, d.symbols["Cf"]: 0.35, E["D"]: 1, E["v_dot"]: 1, E["z"]: 0.5}))
+    rep = check_stability(load_preset("table1"))
+    bound = rep.presliding_velocity_bound["D=2"]
+    L2 = d.gain_rule[d.symbols["L2"]]
+    kap, rho = d.symbols["kappa"], d.symbols["rho"]
+    extra = sp.simplify(L2 - kap * (1 - rho**2))
+    cfg = load_preset("table1")
+    vals = {d.symbols["sigma"]: cfg.friction.sigma, d.symbols["beta"]: cfg.friction.beta, kap: cfg.friction.kappa, rho: 1.02}
+    return (
+        Claim("eq:3:2:7", "a0' = C1 s x'/z >= 0 after a reversal, so Ignatyev (ii) follows from Proposition 1",
+              ">= 0", f"dk/dt = {d.stiffness_rate} ({rate:.3g} at x' = 1, z = 0.5): negative; (ii) holds in "
+              f"pre-sliding only for |x'| < {bound * 1e3:.1f} mm/s (Table 1, reversal from sliding)", rate >= 0),
+        Claim("eq:3:4:3", "noise enters the friction estimate with -kappa (rho^2 - 1) (variant lag)",
+              "-kappa (rho^2 - 1)", f"L2 = {L2}; the extra {extra} is {float(extra.subs(vals)):.4g} N/m against "
+              f"{float((kap * (rho**2 - 1)).subs(vals)):.4g} N/m for Table 1", extra == 0),
+    )
 
 
 def band_names() -> list[str]:
