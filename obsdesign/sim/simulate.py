@@ -346,8 +346,10 @@ def simulate(
     stiffness = _choice("stiffness", stiffness, tuple(kernel.SCHEDULES))
     plant = _choice("plant", plant, PLANTS)
     dt = cfg.observer.dt
+    noise_seed, signal_seed = np.random.SeedSequence(seed).spawn(2)
     sc = build_scenario(scenario, dt=dt, duration=duration, input_force=input_force, step_size=step_size,
-                        step_up=step_up, step_down=step_down, excitation_bandwidth=excitation_bandwidth, seed=np.random.SeedSequence(seed).spawn(2)[1])
+                        step_up=step_up, step_down=step_down, excitation_bandwidth=excitation_bandwidth,
+                        seed=signal_seed)
     if controller is None:
         controller = "open-loop" if sc.open_loop else "pid+observer"
     controller = _choice("controller", controller, tuple(kernel.CONTROLLERS))
@@ -365,7 +367,7 @@ def simulate(
     lp_phi, lp_g0, lp_g1 = _lowpass_arrays(cfg.observer.omega_co, dt)
     n = len(sc.x_ref)
     sensor = cfg.sensor
-    noise = band_limited_noise(n, dt, sensor.noise_rms, sensor.noise_bandwidth, np.random.SeedSequence(seed).spawn(2)[0])
+    noise = band_limited_noise(n, dt, sensor.noise_rms, sensor.noise_bandwidth, noise_seed)
     if controller == "open-loop":
         kp = ki = kd = tau_d = 0.0
     else:
