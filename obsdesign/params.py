@@ -31,7 +31,7 @@ import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from ._io import atomic_write
 
@@ -254,6 +254,16 @@ class PIDSpec:
         return math.radians(self.phase_margin_deg)
 
 
+class FieldRow(NamedTuple):
+    """A parameter of a config: qualified name, value, unit, description, and whether it is the default."""
+
+    name: str
+    value: Any
+    unit: str
+    doc: str
+    is_default: bool
+
+
 _SECTIONS: dict[str, type] = {
     "plant": PlantParams,
     "friction": FrictionParams,
@@ -408,13 +418,19 @@ class Config:
         """Write :meth:`to_toml` atomically (temporary file, then rename)."""
         atomic_write_text(path, self.to_toml())
 
-    def describe_fields(self) -> list[tuple[str, Any, str, str]]:
-        """Rows ``(qualified name, value, unit, description)`` for tables."""
+    def describe_fields(self) -> list[FieldRow]:
+        """One :class:`FieldRow` per parameter, in section order, for tables.
+
+        >>> load_preset("vcm").describe_fields()[0]
+        FieldRow(name='plant.m', value=0.538, unit='kg', doc='moving mass', is_default=False)
+        """
         rows = []
         for key in _SECTIONS:
             section = getattr(self, key)
             for f in dataclasses.fields(section):
-                rows.append((f"{key}.{f.name}", getattr(section, f.name), f.metadata["unit"], f.metadata["doc"]))
+                value = getattr(section, f.name)
+                default = f.default is not dataclasses.MISSING and value == f.default
+                rows.append(FieldRow(f"{key}.{f.name}", value, f.metadata["unit"], f.metadata["doc"], default))
         return rows
 
 

@@ -9,7 +9,6 @@ Every value taken from a config is escaped (Jinja2 autoescape).
 
 from __future__ import annotations
 
-import dataclasses
 import datetime
 import math
 import os
@@ -23,7 +22,7 @@ from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescap
 from .. import __version__
 from ..design import check_stability, noise_analysis, pid_from_config
 from ..export.codegen import js_module
-from ..params import Config, atomic_write_text
+from ..params import Config, atomic_write_text, load_preset
 from ..symbolic import derive
 from ..symbolic.printing import derivation_html
 from . import paper
@@ -55,21 +54,12 @@ PARAMETER_SOURCES = {
 }
 
 
-def _sources(cfg: Config, source_label: str) -> dict[str, str]:
+def _source(row, cfg: Config, source_label: str) -> str:
+    """Where a parameter's value comes from: the preset's documented source, the default, or the config."""
     known = PARAMETER_SOURCES.get(cfg.name, {}) if source_label.startswith("preset") else {}
-    out = {}
-    for key, cls in (("plant", type(cfg.plant)), ("friction", type(cfg.friction)), ("sensor", type(cfg.sensor)),
-                     ("observer", type(cfg.observer)), ("pid", type(cfg.pid))):
-        for f in dataclasses.fields(cls):
-            name = f"{key}.{f.name}"
-            value = getattr(getattr(cfg, key), f.name)
-            if name in known:
-                out[name] = known[name]
-            elif f.default is not dataclasses.MISSING and value == f.default:
-                out[name] = "obsdesign default"
-            else:
-                out[name] = source_label
-    return out
+    if row.name in known:
+        return known[row.name]
+    return "obsdesign default" if row.is_default else source_label
 
 
 def _svg(fig) -> str:
@@ -177,9 +167,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     bar.set_postfix_str(steps[0])
     d = derive(variant)
     ctx["derivation_html"] = derivation_html(d)
-    rows = cfg.describe_fields()
-    src = _sources(cfg, source_label)
-    ctx["params"] = [(name, value, unit, doc, src[name]) for name, value, unit, doc in rows]
+    ctx["params"] = [(r.name, r.value, r.unit, r.doc, _source(r, cfg, source_label)) for r in cfg.describe_fields()]
     bar.update()
 
     bar.set_postfix_str(steps[1])
@@ -228,7 +216,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
 
     bar.set_postfix_str(steps[7])
     claims += paper.noise_study().claims
-    table1 = check_stability(_table1_like())
+    table1 = check_stability(load_preset("table1").override(rho=1.02))
     claims.insert(0, paper.Claim("eq:3:3:2", "Table 1, rho = 1.02: dominant pole -sqrt(kappa/m)(rho - 1)",
                                  "-2.44 1/s", f"{table1.dominant_pole:.4f} 1/s",
                                  abs(table1.dominant_pole + 2.44) < 0.005))
@@ -250,12 +238,6 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     bar.update()
     bar.close()
     return html
-
-
-def _table1_like() -> Config:
-    from ..params import load_preset
-
-    return load_preset("table1").override(rho=1.02)
 
 
 def _num(value) -> str:

@@ -18,7 +18,6 @@ from ..design.noise import noise_analysis
 from ..design.pid import pid_from_config
 from ..params import Config, load_preset
 from ..sim.friction import coulomb_along
-from ..sim.scenarios import CHIRP_BANDS
 from ..sim.simulate import simulate
 
 __all__ = ["Claim", "convergence_study", "experiments_study", "friction_loops_study", "noise_study", "pid_claims"]
@@ -323,7 +322,3 @@ def derivation_claims() -> tuple:
               "-kappa (rho^2 - 1)", f"L2 = {L2}; the extra {extra} is {float(extra.subs(vals)):.4g} N/m against "
               f"{float((kap * (rho**2 - 1)).subs(vals)):.4g} N/m for Table 1", extra == 0),
     )
-
-
-def band_names() -> list[str]:
-    return [f"{lo:g}-{hi:g} Hz" for lo, hi in zip(CHIRP_BANDS[:-1], CHIRP_BANDS[1:])]
