@@ -202,3 +202,13 @@ def test_resume_refuses_other_settings(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "resume: the sweep in" in err[0] and "different settings" in err[0]
     assert (tmp_path / "results.csv").read_text() == before
+
+
+def test_tracking_sweep_fills_every_band_column():
+    res = od.sweep(od.load_preset("vcm"), "tracking", vary={"rho": (2.0, 4.0, 2)}, duration=2.0, workers=1)
+    bands = [c for c in res.columns if c.startswith("rms_error_")]
+    assert len(bands) == 4
+    for row in res.rows:
+        sim = od.simulate(od.load_preset("vcm").override(rho=row["rho"]), "tracking", duration=2.0, seed=row["seed"],
+                          keep_trace=False).metrics["rms_error_per_band"]
+        assert [row[c] for c in bands] == list(sim.values())

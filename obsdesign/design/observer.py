@@ -299,7 +299,14 @@ def is_stable(cfg: Config) -> bool:
     >>> is_stable(od.load_preset("table1")), is_stable(od.load_preset("table1").override(rho=0.98))
     (True, False)
     """
-    conditions, _, _ = _interval_verdicts(design_observer(cfg))
+    return _stable(_interval_verdicts(design_observer(cfg))[0])
+
+
+def _stable(conditions: list[Condition]) -> bool:
+    """Proposition 1 (both inequalities) and negative eigenvalues on [0, kappa].
+
+    Ignatyev's (ii) at kdot = 0 follows: a1 > 0 and a0 > 0 give 2 a0 a1 > 0.
+    """
     return conditions[0].holds and conditions[1].holds and conditions[3].holds
 
 
@@ -333,8 +340,7 @@ def check_stability(cfg: Config, *, rho: float | None = None, kappa: float | Non
     d = design_observer(cfg, rho=rho, kappa=kappa, variant=variant)
     ends = (0.0, d.kappa)
     conditions, a0_ends, a1 = _interval_verdicts(d)
-    prop_ok = conditions[0].holds and conditions[1].holds
-    real_ok, neg_ok = conditions[2].holds, conditions[3].holds
+    stable, real_ok = _stable(conditions), conditions[2].holds
     eig = {k: d.eigenvalues(k) for k in ends}
 
     # Ignatyev's theorem with kdot = 0 (gross sliding and stiffness held at its bound).
@@ -370,7 +376,7 @@ def check_stability(cfg: Config, *, rho: float | None = None, kappa: float | Non
         )
         warnings.warn(notes[-1], UserWarning, stacklevel=2)
     return StabilityReport(
-        design=d, stable=bool(prop_ok and neg_ok and ig2), eigenvalues_real=bool(real_ok),
+        design=d, stable=bool(stable), eigenvalues_real=bool(real_ok),
         observable=bool(observable), dominant_pole=dominant, fastest_pole=fastest,
         eigenvalues_at_ends=eig, alpha1=alpha1, alpha2=alpha2 if ig2 else None,
         presliding_velocity_bound=velocity_bound,

@@ -33,7 +33,8 @@ import numpy as np
 
 from ..params import _Range
 
-__all__ = ["SCENARIOS", "Scenario", "build_scenario", "band_limited_noise", "chirp_frequency", "CHIRP_BANDS"]
+__all__ = ["SCENARIOS", "Scenario", "build_scenario", "band_limited_noise", "chirp_frequency", "CHIRP_BANDS",
+           "CHIRP_BAND_LABELS"]
 
 SCENARIOS = ("excitation", "constant", "positioning", "tracking")
 OPEN_LOOP = ("excitation", "constant")
@@ -42,6 +43,8 @@ EXCITATION_BANDWIDTH = 5.0  # Hz
 CHIRP_F0, CHIRP_F1, CHIRP_PEAK_VELOCITY = 0.01, 3.0, 0.1
 #: Edges [Hz] of the chirp-frequency bands in which tracking errors are reported.
 CHIRP_BANDS = (0.01, 0.1, 0.3, 1.0, 3.0)
+#: ``(label, low, high)`` of each band, e.g. ``("0.01-0.1 Hz", 0.01, 0.1)``.
+CHIRP_BAND_LABELS = tuple((f"{lo:g}-{hi:g} Hz", lo, hi) for lo, hi in zip(CHIRP_BANDS[:-1], CHIRP_BANDS[1:]))
 
 _POS = _Range(low=0.0)
 _NONNEG = _Range(low=0.0, low_inclusive=True)

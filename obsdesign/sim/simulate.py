@@ -30,7 +30,7 @@ from ..params import Config, _Range
 from ..symbolic import derive
 from . import kernel
 from .discretize import step_matrices
-from .scenarios import CHIRP_BANDS, band_limited_noise, build_scenario, chirp_frequency
+from .scenarios import CHIRP_BAND_LABELS, band_limited_noise, build_scenario, chirp_frequency
 
 __all__ = ["SimResult", "simulate", "COLUMNS", "PLANTS"]
 
@@ -266,7 +266,7 @@ def _metrics(sc, out, e, n_written, settle_tol, wall, dt) -> dict:
     if sc.name == "tracking":
         freq = chirp_frequency(t, sc.duration)
         m["rms_error_per_band"] = {
-            f"{lo:g}-{hi:g} Hz": _rms(e[(freq >= lo) & (freq < hi)]) for lo, hi in zip(CHIRP_BANDS[:-1], CHIRP_BANDS[1:])
+            label: _rms(e[(freq >= lo) & (freq < hi)]) for label, lo, hi in CHIRP_BAND_LABELS
         }
     return m
 

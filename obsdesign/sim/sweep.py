@@ -160,7 +160,7 @@ def run_one(cfg: Config, scenario: str, spec: RunSpec, options: dict) -> dict:
         for i, value in enumerate(m["steady_state_error"], 1):
             row[f"steady_state_error_{i}"] = value
         for band, value in m.get("rms_error_per_band", {}).items():
-            row[f"rms_error_{band.replace(' ', '').replace('-', '_')}"] = value
+            row[_band_column(band)] = value
         row["status"] = "diverged" if m["diverged"] else "ok"
         row["error"] = ""
         row["_wall"] = m["sim_wall_s"]
@@ -170,15 +170,20 @@ def run_one(cfg: Config, scenario: str, spec: RunSpec, options: dict) -> dict:
     return row
 
 
-def _metric_columns(scenario: str, cfg: Config, options: dict) -> list[str]:
-    """The metric columns a run of this scenario produces."""
+def _band_column(label: str) -> str:
+    """Column of a chirp band's RMS error: ``'0.01-0.1 Hz'`` -> ``'rms_error_0.01_0.1Hz'``."""
+    return "rms_error_" + label.replace(" ", "").replace("-", "_")
+
+
+def _metric_columns(scenario: str) -> list[str]:
+    """The metric columns a run of this scenario produces (as :func:`run_one` names them)."""
     cols = ["stable", *_METRIC_KEYS]
     if scenario == "positioning":
         cols += ["settling_time_1", "settling_time_2", "steady_state_error_1", "steady_state_error_2"]
     if scenario == "tracking":
-        from .scenarios import CHIRP_BANDS
+        from .scenarios import CHIRP_BAND_LABELS
 
-        cols += [f"rms_error_{lo:g}_{hi:g}Hz" for lo, hi in zip(CHIRP_BANDS[:-1], CHIRP_BANDS[1:])]
+        cols += [_band_column(label) for label, _, _ in CHIRP_BAND_LABELS]
     return cols
 
 
@@ -320,7 +325,7 @@ def sweep(cfg: Config, scenario: str, *, vary: dict | None = None, uncertain: di
 
     build_scenario(scenario, dt=cfg.observer.dt, duration=duration)  # bad scenario or duration: fail now
     plan = _plan(vary, uncertain, samples, seed)
-    columns = [*_FIXED_COLUMNS, *vary, *uncertain, *_metric_columns(scenario, cfg, options), *_TAIL_COLUMNS]
+    columns = [*_FIXED_COLUMNS, *vary, *uncertain, *_metric_columns(scenario), *_TAIL_COLUMNS]
     t0 = time.perf_counter()
 
     done: dict[int, dict] = {}
