@@ -8,12 +8,13 @@ whether the paper's "diverges after 4.3 s" appears under the 5 Hz random excitat
 
 from _common import parse_out, report, require
 
-from obsdesign.report import paper
+from obsdesign import studies as paper
+from obsdesign.report.study_figures import convergence_figure
 
 if __name__ == "__main__":
     out = parse_out(__doc__)
     study = paper.convergence_study()
-    report(study.claims, paper.convergence_figure(study), out / "fig_convergence.png")
+    report(study.claims, convergence_figure(study), out / "fig_convergence.png")
     print("excitation (rho, seed): (RMS error after 1 s [N], divergence time [s])")
     for key, value in study.excitation.items():
         print(f"    {key}: {value}")

@@ -6,12 +6,13 @@ RMS error in every chirp-frequency band. Reports the steady-state error per hold
 
 from _common import parse_out, report, require
 
-from obsdesign.report import paper
+from obsdesign import studies as paper
+from obsdesign.report.study_figures import experiments_figure
 
 if __name__ == "__main__":
     out = parse_out(__doc__)
     study = paper.experiments_study()
-    report(study.claims, paper.experiments_figure(study), out / "fig_experiments.png")
+    report(study.claims, experiments_figure(study), out / "fig_experiments.png")
     for ctrl in ("pid", "pid+observer"):
         p, t = study.positioning[ctrl], study.tracking[ctrl]
         print(f"{ctrl}: settling {p['settling_time']} s, steady-state error {p['steady_state_error']} m, "

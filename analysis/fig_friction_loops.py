@@ -5,10 +5,11 @@ Asserts: the filtered estimate stays within 10 % of Cf (RMS) of the plant's Coul
 
 from _common import parse_out, report, require
 
-from obsdesign.report import paper
+from obsdesign import studies as paper
+from obsdesign.report.study_figures import friction_loops_figure
 
 if __name__ == "__main__":
     out = parse_out(__doc__)
     study = paper.friction_loops_study()
-    report(study.claims, paper.friction_loops_figure(study), out / "fig_friction_loops.png")
+    report(study.claims, friction_loops_figure(study), out / "fig_friction_loops.png")
     require(study.claims, 0)

@@ -11,7 +11,7 @@ from _common import parse_out, report, require
 
 import control as ct
 import obsdesign as od
-from obsdesign.report import paper
+from obsdesign import studies as paper
 
 if __name__ == "__main__":
     out = parse_out(__doc__)

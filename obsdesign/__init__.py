@@ -37,8 +37,8 @@ _LAZY = {
     "pid_from_gains": "design",
     "SimResult": "sim",
     "simulate": "sim",
-    "sweep": "sim",
-    "SweepResult": "sim",
+    "sweep": "sweeps",
+    "SweepResult": "sweeps",
 }
 
 __all__ = [
@@ -62,7 +62,7 @@ def __getattr__(name: str):
         value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
         globals()[name] = value
         return value
-    if name in ("design", "sim", "report", "symbolic", "params", "cli"):
+    if name in ("design", "sim", "report", "symbolic", "params", "cli", "export", "friction", "studies", "sweeps"):
         return importlib.import_module(f".{name}", __name__)
     raise AttributeError(f"module 'obsdesign' has no attribute {name!r}")
 

@@ -31,9 +31,10 @@ import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any, Mapping, NamedTuple
 
 from ._io import atomic_write
+from ._validate import FINITE, NONNEGATIVE, POSITIVE, Choice, FrozenMap, Range, Text
 
 __all__ = [
     "PlantParams",
@@ -46,77 +47,14 @@ __all__ = [
     "load_config",
     "preset_names",
     "VARIANTS",
+    "PARAMETERS",
+    "FieldRow",
 ]
 
 VARIANTS = ("lag", "static")
 
 
-@dataclass(frozen=True)
-class _Range:
-    """Admissible range of a numeric field; ``None`` bounds are open-ended."""
-
-    low: float | None = None
-    high: float | None = None
-    low_inclusive: bool = False
-    high_inclusive: bool = False
-    optional: bool = False
-
-    def describe(self) -> str:
-        parts = []
-        if self.low is not None:
-            parts.append(f"{'>=' if self.low_inclusive else '>'} {self.low:g}")
-        if self.high is not None:
-            parts.append(f"{'<=' if self.high_inclusive else '<'} {self.high:g}")
-        text = "a finite number" + (" " + " and ".join(parts) if parts else "")
-        return text + (" (or omitted)" if self.optional else "")
-
-    def check(self, name: str, value: Any) -> float | None:
-        if value is None and self.optional:
-            return None
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise TypeError(
-                f"{name}: expected {self.describe()}, found {type(value).__name__} {value!r}"
-            )
-        number = float(value)
-        ok = math.isfinite(number)
-        if ok and self.low is not None:
-            ok = number >= self.low if self.low_inclusive else number > self.low
-        if ok and self.high is not None:
-            ok = number <= self.high if self.high_inclusive else number < self.high
-        if not ok:
-            raise ValueError(f"{name}: expected {self.describe()}, found {number!r}")
-        return number
-
-
-@dataclass(frozen=True)
-class _Choice:
-    options: tuple[str, ...]
-
-    def describe(self) -> str:
-        return "one of " + ", ".join(repr(o) for o in self.options)
-
-    def check(self, name: str, value: Any) -> str:
-        if not isinstance(value, str):
-            raise TypeError(f"{name}: expected {self.describe()}, found {type(value).__name__} {value!r}")
-        if value not in self.options:
-            raise ValueError(f"{name}: expected {self.describe()}, found {value!r}")
-        return value
-
-
-@dataclass(frozen=True)
-class _Text:
-    def describe(self) -> str:
-        return "a string"
-
-    def check(self, name: str, value: Any) -> str:
-        if not isinstance(value, str):
-            raise TypeError(f"{name}: expected a string, found {type(value).__name__} {value!r}")
-        return value
-
-
-_POSITIVE = _Range(low=0.0)
-_NONNEGATIVE = _Range(low=0.0, low_inclusive=True)
-_FINITE = _Range()
+_POSITIVE, _NONNEGATIVE, _FINITE = POSITIVE, NONNEGATIVE, FINITE
 
 
 def _param(check, unit: str, doc: str, default: Any = dataclasses.MISSING):
@@ -173,7 +111,7 @@ class FrictionParams:
     s: float = _param(_POSITIVE, "1/m", "pre-sliding distance scaling factor")
     kappa: float = _param(_POSITIVE, "N/m", "pre-sliding stiffness bound")
     beta: float | None = _param(
-        _Range(low=0.0, optional=True), "s", "viscous friction lag time constant", None
+        Range(low=0.0, optional=True), "s", "viscous friction lag time constant", None
     )
 
     def __post_init__(self) -> None:
@@ -212,7 +150,7 @@ class ObserverSpec:
     _section = "observer"
     rho: float = _param(_POSITIVE, "-", "gain design parameter (stable for rho > 1)")
     omega_co: float = _param(_POSITIVE, "rad/s", "cutoff of the low-pass filter eq:3:4:5", 2 * math.pi * 40)
-    variant: str = _param(_Choice(VARIANTS), "-", "model variant the observer is derived from", "lag")
+    variant: str = _param(Choice(VARIANTS), "-", "model variant the observer is derived from", "lag")
     dt: float = _param(_POSITIVE, "s", "controller sample time", 1e-4)
 
     def __post_init__(self) -> None:
@@ -235,11 +173,11 @@ class PIDSpec:
     _section = "pid"
     max_S: float = _param(_POSITIVE, "m/V", "upper bound of |S| (eq:pidGain)")
     phase_margin_deg: float = _param(
-        _Range(low=0.0, high=90.0), "deg", "phase margin Phi at crossover (eq:L_omegas)"
+        Range(low=0.0, high=90.0), "deg", "phase margin Phi at crossover (eq:L_omegas)"
     )
     tau: float = _param(_POSITIVE, "s", "plant time constant of eq:linplant")
     phi: float | None = _param(
-        _Range(low=0.0, optional=True), "m/(V s)", "plant gain of eq:linplant (default K tau / m)", None
+        Range(low=0.0, optional=True), "m/(V s)", "plant gain of eq:linplant (default K tau / m)", None
     )
     derivative_N: float = _param(
         _POSITIVE, "-", "derivative filter: time constant (kd/kp)/N in simulations", 10.0
@@ -285,15 +223,17 @@ class Config:
     """
 
     _section = "config"
-    name: str = _param(_Text(), "-", "name of the design", "custom")
+    name: str = _param(Text(), "-", "name of the design", "custom")
     plant: PlantParams
     friction: FrictionParams
     observer: ObserverSpec
     pid: PIDSpec
     sensor: SensorSpec = field(default_factory=SensorSpec)
+    sources: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         _validate_fields(self)
+        object.__setattr__(self, "sources", FrozenMap(_check_sources(self.sources)))
         for key, cls in _SECTIONS.items():
             value = getattr(self, key)
             if not isinstance(value, cls):
@@ -334,7 +274,9 @@ class Config:
             if value is not None:
                 changes.setdefault(_FIELD_SECTION[name], {})[name] = value
         sections = {key: dataclasses.replace(getattr(self, key), **kw) for key, kw in changes.items()}
-        return dataclasses.replace(self, **sections)
+        changed = {f"{key}.{name}" for key, kw in changes.items() for name in kw}
+        sources = {k: v for k, v in self.sources.items() if k not in changed}
+        return dataclasses.replace(self, **sections, sources=sources)
 
     # -- TOML ---------------------------------------------------------------
     @classmethod
@@ -350,7 +292,7 @@ class Config:
         """
         if not isinstance(data, dict):
             raise TypeError(f"{source}: expected a table, found {type(data).__name__}")
-        allowed = set(_SECTIONS) | {"name"}
+        allowed = set(_SECTIONS) | {"name", "sources"}
         unknown = sorted(set(data) - allowed)
         if unknown:
             raise ValueError(
@@ -359,6 +301,8 @@ class Config:
         kwargs: dict[str, Any] = {}
         if "name" in data:
             kwargs["name"] = data["name"]
+        if "sources" in data:
+            kwargs["sources"] = data["sources"]
         for key, section in _SECTIONS.items():
             table = data.get(key)
             if table is None:
@@ -392,6 +336,8 @@ class Config:
     def to_dict(self) -> dict[str, Any]:
         """Nested mapping of all set values (``None`` fields are left out)."""
         out: dict[str, Any] = {"name": self.name}
+        if self.sources:
+            out["sources"] = dict(self.sources)
         for key in _SECTIONS:
             section = getattr(self, key)
             out[key] = {
@@ -405,18 +351,31 @@ class Config:
         """Serialise to TOML; ``Config.from_toml(c.to_toml()) == c``."""
         lines = [f"name = {_toml_value(self.name)}"]
         for key, table in self.to_dict().items():
-            if key == "name":
+            if key in ("name", "sources"):
                 continue
             section = getattr(self, key)
             meta = {f.name: f.metadata for f in dataclasses.fields(section)}
             lines += ["", f"[{key}]"]
             for name, value in table.items():
                 lines.append(f"{name} = {_toml_value(value)}  # [{meta[name]['unit']}] {meta[name]['doc']}")
+        if self.sources:
+            lines += ["", "[sources]  # where each value comes from"]
+            lines += [f"{_toml_value(k)} = {_toml_value(v)}" for k, v in self.sources.items()]
         return "\n".join(lines) + "\n"
 
     def save(self, path: str | os.PathLike) -> None:
         """Write :meth:`to_toml` atomically (temporary file, then rename)."""
-        atomic_write_text(path, self.to_toml())
+        atomic_write(path, self.to_toml())
+
+    def source_of(self, name: str) -> str | None:
+        """Where the value of parameter ``name`` (``'section.field'``) comes from, if recorded.
+
+        >>> load_preset("vcm").source_of("plant.m")
+        'paper section 4'
+        >>> load_preset("vcm").override(m=1.0).source_of("plant.m") is None
+        True
+        """
+        return self.sources.get(name)
 
     def describe_fields(self) -> list[FieldRow]:
         """One :class:`FieldRow` per parameter, in section order, for tables.
@@ -437,17 +396,38 @@ class Config:
 _FIELD_SECTION: dict[str, str] = {
     f.name: key for key, cls in _SECTIONS.items() for f in dataclasses.fields(cls)
 }
+#: Every parameter :meth:`Config.override` accepts, mapped to its section.
+PARAMETERS: Mapping[str, str] = FrozenMap(dict(sorted(_FIELD_SECTION.items())))
+
+
+_PARAMETER_NAMES = frozenset(f"{key}.{f.name}" for key, cls in _SECTIONS.items() for f in dataclasses.fields(cls))
+
+
+def _check_sources(sources: Any) -> dict[str, str]:
+    """The ``[sources]`` table: parameter name (``'section.field'``) -> where its value comes from."""
+    if not isinstance(sources, Mapping):
+        raise TypeError(f"sources: expected a table of 'section.field' = \"text\", found {type(sources).__name__}")
+    for key, value in sources.items():
+        if key not in _PARAMETER_NAMES:
+            raise ValueError(f"sources: unknown parameter {key!r}; expected 'section.field' such as 'plant.m'")
+        if not isinstance(value, str):
+            raise TypeError(f"sources.{key}: expected a string, found {type(value).__name__} {value!r}")
+    return dict(sources)
 
 
 def _toml_value(value: Any) -> str:
+    """A TOML literal: strings as basic strings with every control character escaped."""
     if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        out = []
+        for ch in value:
+            if ch == "\\" or ch == '"':
+                out.append("\\" + ch)
+            elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+                out.append(f"\\u{ord(ch):04x}")
+            else:
+                out.append(ch)
+        return '"' + "".join(out) + '"'
     return repr(float(value))
-
-
-def atomic_write_text(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` via a temporary file and an atomic rename."""
-    atomic_write(path, text)
 
 
 def preset_names() -> tuple[str, ...]:
@@ -462,6 +442,11 @@ def preset_names() -> tuple[str, ...]:
 
 def load_preset(name: str) -> Config:
     """Load a shipped preset by name (``table1`` or ``vcm``).
+
+    Parameters
+    ----------
+    name : str
+        One of :func:`preset_names`.
 
     Raises
     ------
@@ -479,6 +464,11 @@ def load_preset(name: str) -> Config:
 
 def load_config(path: str | os.PathLike) -> Config:
     """Load a config from a TOML file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A TOML file (see :meth:`Config.to_toml`).
 
     Raises
     ------

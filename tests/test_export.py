@@ -37,8 +37,8 @@ def test_python_export_matches_the_package(cfg, tmp_path):
     for k in (0.0, 1234.0, d.kappa):
         np.testing.assert_allclose(mod.eigenvalues(*args, k, d.L1, d.L2), d.eigenvalues(k), rtol=1e-9, atol=1e-9)
     # Drive the exported observer with a simulated trace.
-    res = od.simulate(cfg.override(noise_rms=1e-6), "positioning" if cfg is VCM else "excitation", duration=1.0,
-                      step_down=0.8 if cfg is VCM else None, seed=2)
+    res = od.simulate(cfg.override(noise_rms=1e-6), od.sim.Positioning(step_down=0.8) if cfg is VCM else "excitation",
+                      duration=1.0, seed=2)
     obs = mod.Observer(res.x_meas[0])
     f_hat = [obs.friction]
     for k in range(1, len(res.t)):

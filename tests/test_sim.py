@@ -9,9 +9,9 @@ import scipy.linalg
 
 import obsdesign as od
 from obsdesign.sim import kernel
-from obsdesign.sim.discretize import coefficient_matrices, step_matrices
-from obsdesign.sim.friction import coulomb, coulomb_normalized, presliding_shape, stiffness, track_reversal
-from obsdesign.sim.simulate import COLUMNS
+from obsdesign.design.discretize import coefficient_matrices, step_matrices
+from obsdesign.friction.presliding import coulomb, coulomb_normalized, presliding_shape, stiffness, track_reversal
+from obsdesign.sim import COLUMNS
 
 TABLE1 = od.load_preset("table1")
 VCM = od.load_preset("vcm")
@@ -66,8 +66,8 @@ def test_reversal_memory():
 def _open_loop(u_open, *, substeps=10, cfg=VCM):
     """Run the kernel on an arbitrary open-loop force sequence (dt 1e-4 s)."""
     n = len(u_open)
-    loop = od.simulate(cfg, "constant", duration=n * cfg.observer.dt, substeps=substeps, stiffness="true",
-                       quantization=0.0, _return_inputs=True)
+    loop = od.sim.prepare(cfg.override(quantization=0.0), "constant", duration=n * cfg.observer.dt,
+                          substeps=substeps, stiffness="true")
     loop = dataclasses.replace(loop, u_open=np.asarray(u_open, float))
     out = kernel.empty_outputs(n)
     assert kernel.run_loop(*loop.args(), *out.values()) == n
@@ -133,7 +133,7 @@ def test_confluent_pole_needs_no_special_case():
 
 
 def test_steady_sliding_adds_no_bias():
-    res = od.simulate(VCM, "constant", input_force=1.0, quantization=0.0, stiffness="true")
+    res = od.simulate(VCM.override(quantization=0.0), od.sim.ConstantForce(force=1.0), stiffness="true")
     tail = slice(-1000, None)
     assert np.max(np.abs(res.f_hat[tail] - res.f[tail])) < 1e-9
     assert np.max(np.abs(res.v_hat[tail] - res.v[tail])) < 1e-12
@@ -143,7 +143,8 @@ def test_steady_sliding_adds_no_bias():
 @pytest.mark.parametrize("rho, sign", [(1.02, -1.0), (0.98, 1.0)])
 def test_error_in_steady_sliding_decays_or_grows_at_the_designed_eigenvalue(rho, sign):
     cfg = TABLE1.override(variant="static", noise_rms=0.0)
-    res = od.simulate(cfg, "constant", rho=rho, input_force=1.0, stiffness="true", initial_estimate=(0.0, 0.5))
+    res = od.simulate(cfg.override(rho=rho), od.sim.ConstantForce(force=1.0), stiffness="true",
+                      initial_estimate=(0.0, 0.5))
     t = res.t
     window = (t > 1.0) & (t < 3.0)
     err = np.abs(res.f_hat - res.f)[window]
@@ -156,13 +157,13 @@ def test_stiff_kappa_stays_stable_at_10_khz():
     cfg = VCM.override(kappa=2.4e7, quantization=0.0)
     with pytest.warns(UserWarning, match="faster than the sampling"):
         assert abs(od.check_stability(cfg).fastest_pole) * cfg.observer.dt > 3  # poles far beyond the sampling rate
-    res = od.simulate(cfg, "constant", rho=4.0, input_force=1.0)
+    res = od.simulate(cfg.override(rho=4.0), od.sim.ConstantForce(force=1.0))
     assert not res.metrics["diverged"]
     assert abs(res.f_hat[-1] - res.f[-1]) < 1e-6
 
 
 def test_divergence_is_reported_not_raised():
-    res = od.simulate(TABLE1.override(variant="static"), "constant", rho=0.5, input_force=1.0, duration=3.0)
+    res = od.simulate(TABLE1.override(variant="static", rho=0.5), od.sim.ConstantForce(force=1.0), duration=3.0)
     assert res.metrics["diverged"] is True
     assert np.isnan(res.x[-1]) and np.isfinite(res.x[0])
 
@@ -186,7 +187,8 @@ def test_observer_compensation_tracks_with_lower_rms():
 def test_noise_rms_matches_the_design_prediction():
     """Issue 3's RMS prediction against the simulator, in steady sliding (k = 0)."""
     eta, B = 1e-6, 1000.0
-    res = od.simulate(VCM, "constant", input_force=1.0, noise_rms=eta, noise_bandwidth=B, quantization=0.0, seed=3)
+    res = od.simulate(VCM.override(noise_rms=eta, noise_bandwidth=B, quantization=0.0), od.sim.ConstantForce(force=1.0),
+                      seed=3)
     pred = od.noise_analysis(VCM, noise_rms=eta, noise_bandwidth=B)
     keep = res.t > 0.5
     assert np.all(res.stiffness[keep] == 0.0)  # no spurious reversals
@@ -197,7 +199,7 @@ def test_noise_rms_matches_the_design_prediction():
 
 
 def test_trace_export(tmp_path):
-    res = od.simulate(VCM, "positioning", duration=1.0, step_down=0.8)
+    res = od.simulate(VCM, od.sim.Positioning(step_down=0.8), duration=1.0)
     res.to_csv(tmp_path / "trace.csv")
     res.to_npz(tmp_path / "trace.npz")
     data = np.genfromtxt(tmp_path / "trace.csv", delimiter=",", names=True)
@@ -237,8 +239,7 @@ def test_band_limited_noise_has_no_power_above_its_band():
         (dict(scenario="constant", stiffness="guess"), ValueError, r"stiffness: expected one of estimated, true, constant, found 'guess'"),
         (dict(scenario="constant", plant="real"), ValueError, r"plant: expected one of physical, model, found 'real'"),
         (dict(scenario="constant", duration=-1.0), ValueError, r"duration: expected a finite number > 0, found -1\.0"),
-        (dict(scenario="constant", rho=float("nan")), ValueError, r"observer\.rho: .*found nan"),
-        (dict(scenario="positioning", step_up=4.0), ValueError, r"step_down: expected step_up < step_down < duration"),
+        (dict(scenario=od.sim.Positioning(step_up=4.0)), ValueError, r"step_down: expected step_up < step_down < duration"),
         (dict(scenario="constant", substeps=0), ValueError, r"substeps: expected an integer >= 1, found 0"),
     ],
 )
@@ -246,3 +247,17 @@ def test_simulate_rejects_bad_input(kwargs, exc, match):
     scenario = kwargs.pop("scenario")
     with pytest.raises(exc, match=match):
         od.simulate(VCM, scenario, **kwargs)
+
+
+def test_overrides_go_through_the_config():
+    with pytest.raises(ValueError, match=r"observer\.rho: .*found nan"):
+        od.simulate(VCM.override(rho=float("nan")), "constant")
+
+
+def test_simulate_is_run_of_prepare():
+    loop = od.sim.prepare(TABLE1, "excitation", duration=0.5, seed=4)
+    a, b = od.sim.run(loop), od.simulate(TABLE1, "excitation", duration=0.5, seed=4)
+    for name in COLUMNS:
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert {k: v for k, v in a.metrics.items() if k != "sim_wall_s"} == \
+        {k: v for k, v in b.metrics.items() if k != "sim_wall_s"}

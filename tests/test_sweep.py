@@ -161,7 +161,7 @@ def test_killed_worker_is_reported_and_resumable(tmp_path, monkeypatch, capsys):
     import importlib
     from concurrent.futures.process import BrokenProcessPool
 
-    sweep_mod = importlib.import_module("obsdesign.sim.sweep")  # the module (obsdesign.sim.sweep is the function)
+    sweep_mod = importlib.import_module("obsdesign.sweeps.run")
 
     args = ["sweep", "--scenario", "constant", "--duration", "0.2", "--vary", "rho=1.5:4:4", "--out", str(tmp_path)]
     real = sweep_mod._run_batch
@@ -183,7 +183,8 @@ def test_killed_worker_is_reported_and_resumable(tmp_path, monkeypatch, capsys):
             return fut
 
     monkeypatch.setattr(sweep_mod, "_run_batch", dying)
-    monkeypatch.setattr(sweep_mod, "_executor", lambda executor, workers: (InlinePool(), False))
+    real_executor = sweep_mod._Executor
+    monkeypatch.setattr(sweep_mod, "_Executor", lambda executor, workers: real_executor(InlinePool(), None))
     assert main([*args]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "a worker failed (BrokenProcessPool)" in err[0]

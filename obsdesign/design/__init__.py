@@ -13,10 +13,12 @@ from .pid import PIDDesign as PIDDesign
 from .pid import design_pid as design_pid
 from .pid import pid_from_config as pid_from_config
 from .pid import pid_from_gains as pid_from_gains
-from .results import Condition as Condition
+from .._display import Condition as Condition
+from .observer import ObserverArrays as ObserverArrays
+from .observer import is_stable as is_stable
 
 __all__ = [
     "NoiseAnalysis", "band_limited_rms", "lowpass", "noise_analysis",
-    "FrozenSystems", "ObserverDesign", "StabilityReport", "check_stability", "design_observer",
+    "FrozenSystems", "ObserverArrays", "ObserverDesign", "is_stable", "StabilityReport", "check_stability", "design_observer",
     "PIDDesign", "design_pid", "pid_from_config", "pid_from_gains", "Condition",
 ]

@@ -29,19 +29,25 @@ import control as ct
 import numpy as np
 import scipy.integrate
 
-from ..params import Config, _Range
+from .._display import ResultDisplay
+from .._validate import NONNEGATIVE, POSITIVE, Range
+from ..params import Config
 from .numeric import poly_coeffs
 from .observer import design_observer
-from .results import ResultDisplay
 
 __all__ = ["NoiseAnalysis", "noise_analysis", "lowpass", "band_limited_rms"]
 
-_NONNEG = _Range(low=0.0, low_inclusive=True)
-_POS = _Range(low=0.0)
+_NONNEG = NONNEGATIVE
+_POS = POSITIVE
 
 
 def lowpass(omega_co: float) -> ct.TransferFunction:
     """The second-order low-pass filter of eq:3:4:5.
+
+    Parameters
+    ----------
+    omega_co : float
+        Cutoff [rad/s], > 0.
 
     >>> F = lowpass(10.0)
     >>> F.num[0][0], F.den[0][0]
@@ -53,6 +59,15 @@ def lowpass(omega_co: float) -> ct.TransferFunction:
 
 def band_limited_rms(G: ct.TransferFunction, noise_rms: float, bandwidth_hz: float) -> float:
     """RMS of ``G`` driven by band-limited white noise of RMS ``noise_rms`` over ``[0, B]`` Hz.
+
+    Parameters
+    ----------
+    G : control.TransferFunction
+        SISO transfer from the noise.
+    noise_rms : float
+        RMS of the noise, >= 0.
+    bandwidth_hz : float
+        Bandwidth B [Hz] of the flat one-sided spectrum, > 0.
 
     Examples
     --------
@@ -159,7 +174,7 @@ def noise_analysis(cfg: Config, *, rho: float | None = None, kappa: float | None
            else _NONNEG.check("noise_rms", noise_rms))
     B = sensor.noise_bandwidth if noise_bandwidth is None else _POS.check("noise_bandwidth", noise_bandwidth)
     k = _NONNEG.check("stiffness", stiffness)
-    values = design._values(k)
+    values = design.parameter_values(k)
     G_f = ct.tf(*poly_coeffs(design.variant, "friction")(**values))
     G_v = ct.tf(*poly_coeffs(design.variant, "velocity")(**values))
     F = lowpass(cfg.observer.omega_co)

@@ -34,7 +34,13 @@ _ARGS = tuple(SYMBOLS[n] for n in ARG_NAMES)
 
 
 def model_values(**values: float) -> dict[str, float]:
-    """Argument dict for a compiled function; unspecified names are NaN."""
+    """Argument dict for a compiled function; unspecified names are NaN.
+
+    Parameters
+    ----------
+    **values : float
+        Values by the names of :data:`ARG_NAMES`.
+    """
     unknown = set(values) - set(ARG_NAMES)
     if unknown:
         raise ValueError(f"model_values: unknown names {sorted(unknown)}; expected {ARG_NAMES}")

@@ -16,19 +16,21 @@ import functools
 import math
 import warnings
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import control as ct
 import numpy as np
 import scipy.linalg
 import sympy as sp
 
+from .._display import Condition, ResultDisplay
 from ..params import Config
 from ..symbolic import derive
 from .numeric import compiled, model_values
-from .results import Condition, ResultDisplay
 
 __all__ = [
     "ObserverDesign",
+    "ObserverArrays",
     "FrozenSystems",
     "StabilityReport",
     "design_observer",
@@ -42,9 +44,15 @@ DISCRIMINANT_RTOL = 1e-9
 
 @functools.lru_cache(maxsize=None)
 def _affine_in_stiffness(variant: str) -> None:
-    """The interval checks rely on a0 affine and a1 constant in k; prove it once."""
+    """Prove once, symbolically, what the numeric code relies on: the observer matrices are
+    affine in the stiffness k (so the kernel and the exports use ``A0 + k A1``), ``a0`` is affine
+    and ``a1`` constant in k (so the checks at the two ends of [0, kappa] are exact)."""
     d = derive(variant)
     k = d.symbols["k"]
+    for name in ("observer_matrix", "observer_input", "observer_output_gain"):
+        matrix = getattr(d, name)
+        if matrix.diff(k, 2) != sp.zeros(*matrix.shape):
+            raise NotImplementedError(f"{name} of variant {variant!r} is not affine in the stiffness")
     if sp.diff(d.a0, k, 2) != 0 or sp.diff(d.a1, k) != 0:
         raise NotImplementedError(f"variant {variant!r}: a0 must be affine and a1 constant in k")
 
@@ -89,7 +97,8 @@ class ObserverDesign(ResultDisplay):
     L2: float
     dt: float
 
-    def _values(self, stiffness: float) -> dict[str, float]:
+    def parameter_values(self, stiffness: float) -> dict[str, float]:
+        """Arguments of the compiled derivation functions (:mod:`obsdesign.design.numeric`) at stiffness k."""
         return model_values(
             m=self.m, sigma=self.sigma, beta=math.nan if self.beta is None else self.beta,
             Cf=self.Cf, s=self.s, kappa=self.kappa, rho=self.rho, k=stiffness, L1=self.L1, L2=self.L2,
@@ -97,7 +106,7 @@ class ObserverDesign(ResultDisplay):
 
     def coefficients(self, stiffness: float) -> tuple[float, float]:
         """``(a0, a1)`` of the characteristic polynomial (eq:3:2:3-4) at stiffness k."""
-        a0, a1 = compiled(self.variant, "coefficients")(**self._values(stiffness))
+        a0, a1 = compiled(self.variant, "coefficients")(**self.parameter_values(stiffness))
         return float(a0), float(a1)
 
     def eigenvalues(self, stiffness: float) -> np.ndarray:
@@ -113,7 +122,7 @@ class ObserverDesign(ResultDisplay):
 
     def matrices(self, stiffness: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(A22 - L A12, B2 - L B1, A21 - L A11 + A22 L - L A12 L)`` as arrays (eq:3:1:2)."""
-        v = self._values(stiffness)
+        v = self.parameter_values(stiffness)
         A_obs = np.asarray(compiled(self.variant, "observer_matrix")(**v), float)
         b_u = np.asarray(compiled(self.variant, "observer_input")(**v), float).ravel()
         g_x = np.asarray(compiled(self.variant, "observer_output_gain")(**v), float).ravel()
@@ -131,7 +140,7 @@ class ObserverDesign(ResultDisplay):
             math.isfinite(stiffness) and stiffness >= 0
         ):
             raise ValueError(f"stiffness: expected a finite number >= 0 [N/m], found {stiffness!r}")
-        v = self._values(float(stiffness))
+        v = self.parameter_values(float(stiffness))
         A, B, C = (np.asarray(compiled(self.variant, n)(**v), float) for n in ("A", "B", "C"))
         plant = ct.ss(A, B.reshape(3, 1), C.reshape(1, 3), 0.0, states=["x", "v", "f"], inputs=["u"], outputs=["x"])
         A_obs, b_u, g_x = self.matrices(float(stiffness))
@@ -141,9 +150,45 @@ class ObserverDesign(ResultDisplay):
         )
         return FrozenSystems(stiffness=float(stiffness), plant=plant, observer=observer)
 
+    def affine(self) -> "ObserverArrays":
+        """The observer in the affine-in-stiffness form the simulator and the exports use.
+
+        ``A(k) = A0 + k A1`` (eq:3:2:1), and likewise the input vector ``b`` and the measurement
+        gain ``g`` of eq:3:1:2; the affinity is proved symbolically once per variant.
+
+        >>> import obsdesign as od
+        >>> arr = design_observer(od.load_preset("vcm")).affine()
+        >>> arr.A1.tolist()  # only A(2,1) depends on k ...
+        [[0.0, 0.0], [1.0, 0.0]]
+        >>> float(arr.g1[0]), round(float(arr.g1[1] / arr.design.L1), 9)  # ... and g2, through A22 L = (., k L1)
+        (0.0, 1.0)
+        """
+        _affine_in_stiffness(self.variant)
+        at0, at1 = self.matrices(0.0), self.matrices(1.0)
+        A0, b0, g0 = at0
+        A1, b1, g1 = (np.asarray(x1) - np.asarray(x0) for x0, x1 in zip(at0, at1))
+        return ObserverArrays(self, np.ascontiguousarray(A0), np.ascontiguousarray(A1), b0, b1, g0, g1)
+
     def _rows(self):
         return [("variant", self.variant), ("rho", self.rho), ("kappa [N/m]", self.kappa),
                 ("L1 [1/s]", self.L1), ("L2 [N/m]", self.L2)]
+
+
+@dataclass(frozen=True, eq=False)
+class ObserverArrays:
+    """A designed observer in the affine-in-stiffness form: ``A(k) = A0 + k A1``, ``b(k) = b0 + k b1``,
+    ``g(k) = g0 + k g1`` (observer matrix, input vector and measurement gain of eq:3:1:2).
+
+    Built by :meth:`ObserverDesign.affine`.
+    """
+
+    design: ObserverDesign
+    A0: np.ndarray
+    A1: np.ndarray
+    b0: np.ndarray
+    b1: np.ndarray
+    g0: np.ndarray
+    g1: np.ndarray
 
 
 def design_observer(cfg: Config, *, rho: float | None = None, kappa: float | None = None,
@@ -154,6 +199,8 @@ def design_observer(cfg: Config, *, rho: float | None = None, kappa: float | Non
     ----------
     cfg : Config
         The design; ``rho``, ``kappa`` and ``variant`` override its values.
+    rho, kappa, variant : optional
+        Overrides of the config's values (None keeps them).
 
     Returns
     -------
@@ -272,42 +319,58 @@ def _presliding_velocity_bound(d: ObserverDesign, a0_ends: tuple[float, float], 
     return 2.0 * a1 * worst / (slope * d.s * c)
 
 
-def _interval_verdicts(d: ObserverDesign) -> tuple[list[Condition], tuple[float, float], float]:
+class IntervalVerdicts(NamedTuple):
+    """The verdicts over the stiffness range [0, kappa] that decide ``stable``, by name."""
+
+    proposition1_L1: Condition
+    proposition1_L2: Condition
+    eigenvalues_real: Condition
+    eigenvalues_negative: Condition
+
+    @property
+    def stable(self) -> bool:
+        """Proposition 1 (both inequalities) and negative eigenvalues on [0, kappa].
+
+        Ignatyev's (ii) at kdot = 0 follows: a1 > 0 and a0 > 0 give 2 a0 a1 > 0.
+        """
+        return self.proposition1_L1.holds and self.proposition1_L2.holds and self.eigenvalues_negative.holds
+
+
+def _interval_verdicts(d: ObserverDesign) -> tuple[IntervalVerdicts, tuple[float, float], float]:
     """Proposition 1 and real/negative eigenvalues on [0, kappa] (exact: a0 affine, a1 constant in k)."""
     a0_ends = (d.coefficients(0.0)[0], d.coefficients(d.kappa)[0])
     a1 = d.coefficients(0.0)[1]
-    conditions: list[Condition] = []
-    bounds = compiled(d.variant, "stability_bounds")(**d._values(0.0))
+    prop1: dict[str, Condition] = {}
+    bounds = compiled(d.variant, "stability_bounds")(**d.parameter_values(0.0))
+    symbols = derive(d.variant).symbols
     for rel, bound in zip(derive(d.variant).stability_conditions, bounds):
-        value = d.L1 if rel.lhs == derive(d.variant).symbols["L1"] else d.L2
+        gain = "L1" if rel.lhs == symbols["L1"] else "L2"
+        value = d.L1 if gain == "L1" else d.L2
         holds = bool(value > bound) if rel.rel_op == ">" else bool(value < bound)
-        conditions.append(Condition(f"Proposition 1: {sp.sstr(rel)}", holds,
-                                    f"{rel.lhs} = {value:.6g} (needs {rel.rel_op} {float(bound):.6g})"))
+        prop1[gain] = Condition(f"Proposition 1: {sp.sstr(rel)}", holds,
+                                f"{rel.lhs} = {value:.6g} (needs {rel.rel_op} {float(bound):.6g})")
     disc = [a1 * a1 - 4.0 * a0 for a0 in a0_ends]
-    conditions.append(Condition("eigenvalues real on [0, kappa]", all(x >= -DISCRIMINANT_RTOL * a1 * a1 for x in disc),
-                                f"discriminant a1^2 - 4 a0 = {disc[0]:.6g} at k = 0, {disc[1]:.6g} at k = kappa"))
-    conditions.append(Condition("eigenvalues negative on [0, kappa]", bool(a1 > 0 and min(a0_ends) > 0),
-                                f"a1 = {a1:.6g}, a0 = {a0_ends[0]:.6g} at k = 0, {a0_ends[1]:.6g} at k = kappa"))
-    return conditions, a0_ends, a1
+    real = Condition("eigenvalues real on [0, kappa]", all(x >= -DISCRIMINANT_RTOL * a1 * a1 for x in disc),
+                     f"discriminant a1^2 - 4 a0 = {disc[0]:.6g} at k = 0, {disc[1]:.6g} at k = kappa")
+    negative = Condition("eigenvalues negative on [0, kappa]", bool(a1 > 0 and min(a0_ends) > 0),
+                         f"a1 = {a1:.6g}, a0 = {a0_ends[0]:.6g} at k = 0, {a0_ends[1]:.6g} at k = kappa")
+    return IntervalVerdicts(prop1["L1"], prop1["L2"], real, negative), a0_ends, a1
 
 
 def is_stable(cfg: Config) -> bool:
     """The ``stable`` verdict of :func:`check_stability` alone (Proposition 1 and negative
     eigenvalues on [0, kappa]), without observability or discretization checks; for sweeps.
 
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+
     >>> import obsdesign as od
     >>> is_stable(od.load_preset("table1")), is_stable(od.load_preset("table1").override(rho=0.98))
     (True, False)
     """
-    return _stable(_interval_verdicts(design_observer(cfg))[0])
-
-
-def _stable(conditions: list[Condition]) -> bool:
-    """Proposition 1 (both inequalities) and negative eigenvalues on [0, kappa].
-
-    Ignatyev's (ii) at kdot = 0 follows: a1 > 0 and a0 > 0 give 2 a0 a1 > 0.
-    """
-    return conditions[0].holds and conditions[1].holds and conditions[3].holds
+    return _interval_verdicts(design_observer(cfg))[0].stable
 
 
 def check_stability(cfg: Config, *, rho: float | None = None, kappa: float | None = None,
@@ -339,8 +402,9 @@ def check_stability(cfg: Config, *, rho: float | None = None, kappa: float | Non
     """
     d = design_observer(cfg, rho=rho, kappa=kappa, variant=variant)
     ends = (0.0, d.kappa)
-    conditions, a0_ends, a1 = _interval_verdicts(d)
-    stable, real_ok = _stable(conditions), conditions[2].holds
+    verdicts, a0_ends, a1 = _interval_verdicts(d)
+    conditions = list(verdicts)
+    stable, real_ok = verdicts.stable, verdicts.eigenvalues_real.holds
     eig = {k: d.eigenvalues(k) for k in ends}
 
     # Ignatyev's theorem with kdot = 0 (gross sliding and stiffness held at its bound).

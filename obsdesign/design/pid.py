@@ -26,13 +26,14 @@ import control as ct
 import numpy as np
 import scipy.optimize
 
-from ..params import Config, _Range
-from .results import ResultDisplay
+from .._display import ResultDisplay
+from .._validate import NONNEGATIVE, POSITIVE, Range
+from ..params import Config
 
 __all__ = ["PIDDesign", "design_pid", "pid_gains", "pid_from_config", "pid_from_gains"]
 
-_POS = _Range(low=0.0)
-_PHASE = _Range(low=0.0, high=90.0)
+_POS = POSITIVE
+_PHASE = Range(low=0.0, high=90.0)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -157,6 +158,17 @@ def design_pid(*, phi: float, tau: float, max_S: float, phase_margin_deg: float)
 def pid_gains(*, phi: float, tau: float, max_S: float, phase_margin_deg: float) -> tuple[float, ...]:
     """``(k, T_I, kp, ki, kd)`` of the design rule alone, without the python-control verification.
 
+    Parameters
+    ----------
+    phi : float
+        Plant gain [m/(V s)].
+    tau : float
+        Plant time constant [s].
+    max_S : float
+        Bound of |S| [m/V].
+    phase_margin_deg : float
+        Phase margin [deg], in (0, 90).
+
     >>> [round(x, 4) for x in pid_gains(phi=0.0407, tau=0.006675, max_S=1/400, phase_margin_deg=60.0)]
     [400.0, 0.0921, 428.9784, 4341.3333, 2.67]
     """
@@ -171,7 +183,13 @@ def pid_gains(*, phi: float, tau: float, max_S: float, phase_margin_deg: float) 
 
 
 def pid_from_config(cfg: Config) -> PIDDesign:
-    """:func:`design_pid` with the config's PID section (``phi`` defaults to ``K tau / m``)."""
+    """:func:`design_pid` with the config's PID section (``phi`` defaults to ``K tau / m``).
+
+    Parameters
+    ----------
+    cfg : Config
+        The design; its ``pid`` section and ``phi``.
+    """
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
     return design_pid(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S, phase_margin_deg=cfg.pid.phase_margin_deg)
@@ -179,6 +197,13 @@ def pid_from_config(cfg: Config) -> PIDDesign:
 
 def pid_from_gains(*, kp: float, ki: float, kd: float, phi: float) -> PIDDesign:
     """Recover ``k, T_I, tau`` and the phase margin from parallel gains and phi.
+
+    Parameters
+    ----------
+    kp, ki, kd : float
+        Parallel gains [V/m, V/(m s), V s/m], > 0.
+    phi : float
+        Plant gain of eq:linplant [m/(V s)], > 0.
 
     From eq:PIDparams, ``kd = k tau`` and ``ki = k / T_I`` give
     ``kp = k + kd ki / k``, i.e. ``k^2 - kp k + kd ki = 0``. Its two roots swap

@@ -1,8 +1,14 @@
 """Export the derivation and a designed observer as LaTeX, Python, C, Octave or JavaScript.
 
+:func:`export` (in :mod:`~obsdesign.export.files`) writes one format's files;
+:mod:`~obsdesign.export.codegen` prints them from the symbolic derivation. The
+heavy modules load on first use, so the command line can read :data:`FORMATS`
+before it parses its arguments.
+
 Examples
 --------
->>> import obsdesign as od, tempfile, pathlib
+>>> import obsdesign as od, tempfile
+>>> from obsdesign.export import export
 >>> with tempfile.TemporaryDirectory() as tmp:
 ...     paths = export(od.load_preset("vcm"), "c", tmp)
 ...     sorted(p.name for p in paths)
@@ -11,51 +17,15 @@ Examples
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
-
-from ..params import Config, atomic_write_text
-from .codegen import FORMATS, c_files, export_spec, js_module, latex_document, octave_files, python_module
+#: The export formats, in the order the command line lists them.
+FORMATS = ("latex", "python", "c", "octave", "js")
 
 __all__ = ["export", "FORMATS"]
 
 
-def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, variant: str | None = None,
-           rho: float | None = None, dt: float | None = None) -> list[Path]:
-    """Write the export files of one format into ``out_dir`` (created if missing).
+def __getattr__(name: str):
+    if name == "export":
+        from .files import export
 
-    Parameters
-    ----------
-    cfg : Config
-    fmt : {'latex', 'python', 'c', 'octave', 'js'}
-    out_dir : path
-    variant, rho, dt : optional
-        Overrides of the config.
-
-    Returns
-    -------
-    list of Path
-        The files written (each through a temporary file and a rename).
-    """
-    if not isinstance(fmt, str) or fmt not in FORMATS:
-        raise ValueError(f"format: expected one of {', '.join(FORMATS)}, found {fmt!r}")
-    spec = export_spec(cfg, variant=variant, rho=rho, dt=dt)
-    if fmt == "latex":
-        files = {f"obsdesign_{spec.variant}.tex": latex_document(spec)}
-    elif fmt == "python":
-        files = {"obsdesign_observer.py": python_module(spec)}
-    elif fmt == "c":
-        files = c_files(spec)
-    elif fmt == "octave":
-        files = octave_files(spec)
-    else:
-        files = {"obsdesign_observer.mjs": js_module(spec.variant)}
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"output: expected a directory, found the file {str(out)!r}")
-    out.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for name, text in files.items():
-        atomic_write_text(out / name, text)
-        paths.append(out / name)
-    return paths
+        return export
+    raise AttributeError(f"module 'obsdesign.export' has no attribute {name!r}")

@@ -15,16 +15,15 @@ from importlib import resources
 
 import sympy as sp
 
+from .._format import code_literal
 from ..params import Config
-from ..sim import discretize, friction
-from ..sim.simulate import ObserverArrays, observer_arrays
+from ..design import discretize
+from ..design.observer import ObserverArrays, design_observer
+from ..friction import presliding as friction
 from ..symbolic import derive
 from ..symbolic.printing import derivation_latex
 
-__all__ = ["ExportSpec", "export_spec", "python_module", "octave_files", "js_module", "c_files", "latex_document",
-           "FORMATS"]
-
-FORMATS = ("latex", "python", "c", "octave", "js")
+__all__ = ["ExportSpec", "export_spec", "python_module", "octave_files", "js_module", "c_files", "latex_document"]
 _ARG_ORDER = ("m", "sigma", "beta", "kappa", "rho")
 
 
@@ -44,9 +43,17 @@ class ExportSpec:
 
 def export_spec(cfg: Config, *, variant: str | None = None, rho: float | None = None,
                 dt: float | None = None) -> ExportSpec:
-    """Design the observer to export (the config with overrides)."""
+    """Design the observer to export (the config with overrides).
+
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+    variant, rho, dt : optional
+        Overrides of the config.
+    """
     cfg = cfg.override(variant=variant, rho=rho, dt=dt)
-    return ExportSpec(cfg, observer_arrays(cfg))
+    return ExportSpec(cfg, design_observer(cfg).affine())
 
 
 def _symbols(variant: str) -> dict:
@@ -72,10 +79,6 @@ def _formulas(variant: str) -> dict:
     }
 
 
-def _num(x: float) -> str:
-    return repr(float(x))
-
-
 def _plain_source(func) -> str:
     """Source of a numba function as plain Python (decorator removed)."""
     lines = inspect.getsource(func.py_func).splitlines()
@@ -85,7 +88,13 @@ def _plain_source(func) -> str:
 # --------------------------------------------------------------------------------------------
 # Python
 def python_module(spec: ExportSpec) -> str:
-    """A dependency-free Python module (``math`` only) for the exported observer."""
+    """A dependency-free Python module (``math`` only) for the exported observer.
+
+    Parameters
+    ----------
+    spec : ExportSpec
+        The observer to export.
+    """
     f = _formulas(spec.variant)
     sym = _symbols(spec.variant)
     params = ", ".join(str(p) for p in _params(spec.variant))
@@ -111,10 +120,10 @@ import math
 __all__ = ["gains", "char_coefficients", "eigenvalues", "observer_matrices", "Observer", "L1", "L2"]
 
 _TERMS = {discretize._TERMS}
-DT = {_num(spec.dt)}
-CF = {_num(fr.Cf)}
-S = {_num(fr.s)}
-KAPPA = {_num(fr.kappa)}
+DT = {code_literal(spec.dt)}
+CF = {code_literal(fr.Cf)}
+S = {code_literal(fr.s)}
+KAPPA = {code_literal(fr.kappa)}
 
 
 def gains({params}):
@@ -146,7 +155,7 @@ def observer_matrices({params}, {k}, {L1}, {L2}):
     return A, b, g
 
 
-L1, L2 = {_num(spec.L1)}, {_num(spec.L2)}
+L1, L2 = {code_literal(spec.L1)}, {code_literal(spec.L2)}
 _A0 = {tuple(float(x) for x in spec.arrays.A0.ravel())!r}
 _A1 = {tuple(float(x) for x in spec.arrays.A1.ravel())!r}
 _B0, _B1 = {tuple(float(x) for x in spec.arrays.b0)!r}, {tuple(float(x) for x in spec.arrays.b1)!r}
@@ -201,7 +210,13 @@ class Observer:
 # --------------------------------------------------------------------------------------------
 # Octave
 def octave_files(spec: ExportSpec) -> dict[str, str]:
-    """``.m`` function files: gains, characteristic coefficients, observer matrices."""
+    """``.m`` function files: gains, characteristic coefficients, observer matrices.
+
+    Parameters
+    ----------
+    spec : ExportSpec
+        The observer to export.
+    """
     f = _formulas(spec.variant)
     sym = _symbols(spec.variant)
     params = ", ".join(str(p) for p in _params(spec.variant))
@@ -223,7 +238,13 @@ def octave_files(spec: ExportSpec) -> dict[str, str]:
 # --------------------------------------------------------------------------------------------
 # JavaScript
 def js_module(variant: str) -> str:
-    """An ES module with the gain rule, the coefficients and the Proposition 1 bounds."""
+    """An ES module with the gain rule, the coefficients and the Proposition 1 bounds.
+
+    Parameters
+    ----------
+    variant : {'lag', 'static'}
+        Model variant of the formulas.
+    """
     f = _formulas(variant)
     sym = _symbols(variant)
     params = ", ".join(str(p) for p in _params(variant))
@@ -249,7 +270,13 @@ def _c_core() -> str:
 
 
 def c_files(spec: ExportSpec) -> dict[str, str]:
-    """``obsdesign_observer.h`` and ``obsdesign_observer.c`` (C99, no allocation, no globals)."""
+    """``obsdesign_observer.h`` and ``obsdesign_observer.c`` (C99, no allocation, no globals).
+
+    Parameters
+    ----------
+    spec : ExportSpec
+        The observer to export.
+    """
     from jinja2 import Environment, PackageLoader, StrictUndefined
 
     env = Environment(loader=PackageLoader("obsdesign.export", "templates"), undefined=StrictUndefined,
@@ -274,5 +301,11 @@ def c_files(spec: ExportSpec) -> dict[str, str]:
 
 
 def latex_document(spec: ExportSpec) -> str:
-    """A standalone LaTeX document of the derivation."""
+    """A standalone LaTeX document of the derivation.
+
+    Parameters
+    ----------
+    spec : ExportSpec
+        The observer to export (its variant).
+    """
     return derivation_latex(derive(spec.variant), standalone=True)

@@ -3,7 +3,7 @@
 Examples
 --------
 >>> import obsdesign as od, io
->>> res = od.simulate(od.load_preset("vcm"), "positioning", duration=1.0, step_down=0.8)
+>>> res = od.simulate(od.load_preset("vcm"), od.sim.Positioning(step_down=0.8), duration=1.0)
 >>> svg = trace_figure_svg(res)
 >>> svg.startswith("<?xml") and "</svg>" in svg
 True
@@ -26,7 +26,13 @@ __all__ = ["trace_figure", "save_figure", "save_trace_figure", "trace_figure_svg
 
 
 def trace_figure(res):
-    """Displacement, error, friction and force of a :class:`~obsdesign.sim.SimResult`."""
+    """Displacement, error, friction and force of a :class:`~obsdesign.sim.SimResult`.
+
+    Parameters
+    ----------
+    res : SimResult
+        A run with its trace.
+    """
     t = res.t
     fig, axes = plt.subplots(4, 1, figsize=(8, 9), sharex=True, constrained_layout=True)
     ax = axes[0]
@@ -52,7 +58,15 @@ def trace_figure(res):
 
 
 def save_figure(fig, path: str | os.PathLike) -> None:
-    """Save a figure atomically (format from the suffix) and close it."""
+    """Save a figure atomically (format from the suffix) and close it.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure (closed afterwards).
+    path : str or os.PathLike
+        Output file; the suffix gives the format.
+    """
     try:
         with atomic_path(path) as tmp:
             fig.savefig(tmp, format=Path(path).suffix.lstrip(".").lower())
@@ -61,12 +75,26 @@ def save_figure(fig, path: str | os.PathLike) -> None:
 
 
 def save_trace_figure(res, path: str | os.PathLike) -> None:
-    """Write :func:`trace_figure` of a result to an SVG or PNG file."""
+    """Write :func:`trace_figure` of a result to an SVG or PNG file.
+
+    Parameters
+    ----------
+    res : SimResult
+        A run with its trace.
+    path : str or os.PathLike
+        Output file (.svg or .png).
+    """
     save_figure(trace_figure(res), path)
 
 
 def figure_svg(fig) -> str:
-    """A figure as an SVG string (for inline HTML), closing the figure."""
+    """A figure as an SVG string (for inline HTML), closing the figure.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure (closed afterwards).
+    """
     buf = io.StringIO()
     fig.savefig(buf, format="svg")
     plt.close(fig)
@@ -74,5 +102,11 @@ def figure_svg(fig) -> str:
 
 
 def trace_figure_svg(res) -> str:
-    """:func:`trace_figure` as an SVG string."""
+    """:func:`trace_figure` as an SVG string.
+
+    Parameters
+    ----------
+    res : SimResult
+        A run with its trace.
+    """
     return figure_svg(trace_figure(res))

@@ -10,55 +10,38 @@ Every value taken from a config is escaped (Jinja2 autoescape).
 from __future__ import annotations
 
 import datetime
+import json
 import math
 import os
 import re
 import time
+import warnings
+from pathlib import Path
 
 import control as ct
 import numpy as np
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
 
-from .. import __version__
+from .. import __version__, studies
+from .._format import report as report_number
+from .._io import atomic_write
 from ..design import check_stability, noise_analysis, pid_from_config
 from ..export.codegen import js_module
-from ..params import Config, atomic_write_text, load_preset
+from ..params import Config
+from ..sweeps.summary import check_summary
 from ..symbolic import derive
 from ..symbolic.printing import derivation_html
-from . import paper
 from .figures import figure_svg
+from .study_figures import convergence_figure, experiments_figure, friction_loops_figure
 
-__all__ = ["render_report", "write_report", "PARAMETER_SOURCES"]
-
-_T1, _S4 = "paper Table 1", "paper section 4"
-_DERIVED = "derived from the published PID gains (section 4.1)"
-#: Where each value of the shipped presets comes from.
-PARAMETER_SOURCES = {
-    "table1": {
-        "plant.m": _T1, "plant.K": _T1, "plant.G": "none in the illustration (load pre-compensated)",
-        "friction.Cf": _T1, "friction.sigma": _T1, "friction.s": _T1, "friction.kappa": _T1 + " [N/m]",
-        "friction.beta": _T1, "sensor.noise_rms": "our choice (the paper's noise level is not stated)",
-        "sensor.noise_bandwidth": "our choice", "observer.rho": _T1 + " (rho2; rho1 = 0.98 is unstable)",
-        "observer.omega_co": _T1 + " (40 Hz)", "observer.variant": "eq:3:1 as printed",
-        "observer.dt": "10 kHz (section 3.3)", "pid.max_S": _DERIVED, "pid.phase_margin_deg": _DERIVED,
-        "pid.tau": _DERIVED,
-    },
-    "vcm": {
-        "plant.m": _S4, "plant.K": _S4, "plant.G": _S4, "friction.Cf": _S4, "friction.sigma": _S4,
-        "friction.s": _S4, "friction.beta": "none: section 4 neglects the lag", "friction.kappa": "section 4 prints '8000 s'; read as 8000 N/m (docs/parameters.md)",
-        "sensor.quantization": "1 um encoder (our assumption)", "observer.rho": "section 4.2",
-        "observer.omega_co": "section 4.2 (40 Hz)", "observer.variant": "section 4 adjustment (beta -> 0)",
-        "observer.dt": "10 kHz (section 4)", "pid.max_S": _DERIVED, "pid.phase_margin_deg": _DERIVED,
-        "pid.tau": _DERIVED,
-    },
-}
+__all__ = ["render_report", "write_report"]
 
 
 def _source(row, cfg: Config, source_label: str) -> str:
-    """Where a parameter's value comes from: the preset's documented source, the default, or the config."""
-    known = PARAMETER_SOURCES.get(cfg.name, {}) if source_label.startswith("preset") else {}
-    if row.name in known:
-        return known[row.name]
+    """Where a parameter's value comes from: the config's ``[sources]``, the default, or the config."""
+    known = cfg.source_of(row.name)
+    if known is not None:
+        return known
     return "obsdesign default" if row.is_default else source_label
 
 
@@ -120,15 +103,13 @@ def _sweep_section(sweep_dir) -> dict | None:
     """The summary of an ``obsdesign sweep`` folder for the report."""
     if sweep_dir is None:
         return None
-    import json
-    from pathlib import Path
-
     folder = Path(sweep_dir)
     names = ("summary.json", "summary_map.svg", "summary_distributions.svg")
     if not all((folder / n).is_file() for n in names):
         raise ValueError(f"sweep: expected a folder written by 'obsdesign sweep' (with {', '.join(names)}), "
                          f"found {str(folder)!r}")
-    summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+    summary = check_summary(json.loads((folder / "summary.json").read_text(encoding="utf-8")),
+                            str(folder / "summary.json"))
     svgs = []
     for n in names[1:]:
         text = (folder / n).read_text(encoding="utf-8")
@@ -171,8 +152,6 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     bar.update()
 
     bar.set_postfix_str(steps[1])
-    import warnings
-
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         rep = check_stability(cfg)
@@ -194,32 +173,28 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
                                          ylabel="gain [N/m]"))
     bar.update()
 
-    claims = list(paper.derivation_claims()) + list(paper.pid_claims())
+    claims = list(studies.derivation_claims()) + list(studies.pid_claims())
     bar.set_postfix_str(steps[4])
-    conv = paper.convergence_study(seeds=3)
+    conv = studies.convergence_study(seeds=3)
     claims += conv.claims
-    ctx["convergence_svg"] = _svg(paper.convergence_figure(conv))
+    ctx["convergence_svg"] = _svg(convergence_figure(conv))
     bar.update()
 
     bar.set_postfix_str(steps[5])
-    exp = paper.experiments_study(cfg)
+    exp = studies.experiments_study(cfg)
     claims += exp.claims
     ctx["experiments"] = exp
-    ctx["experiments_svg"] = _svg(paper.experiments_figure(exp))
+    ctx["experiments_svg"] = _svg(experiments_figure(exp))
     bar.update()
 
     bar.set_postfix_str(steps[6])
-    loops = paper.friction_loops_study(cfg)
+    loops = studies.friction_loops_study(cfg)
     claims += loops.claims
-    ctx["loops_svg"] = _svg(paper.friction_loops_figure(loops))
+    ctx["loops_svg"] = _svg(friction_loops_figure(loops))
     bar.update()
 
     bar.set_postfix_str(steps[7])
-    claims += paper.noise_study().claims
-    table1 = check_stability(load_preset("table1").override(rho=1.02))
-    claims.insert(0, paper.Claim("eq:3:3:2", "Table 1, rho = 1.02: dominant pole -sqrt(kappa/m)(rho - 1)",
-                                 "-2.44 1/s", f"{table1.dominant_pole:.4f} 1/s",
-                                 abs(table1.dominant_pole + 2.44) < 0.005))
+    claims += studies.noise_study().claims
     ctx["claims"] = claims
     bar.update()
 
@@ -232,7 +207,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     ctx["elapsed"] = time.perf_counter() - t0
     env = Environment(loader=PackageLoader("obsdesign.report", "templates"), undefined=StrictUndefined,
                       autoescape=select_autoescape(default=True, default_for_string=True))
-    env.filters["num"] = _num
+    env.filters["num"] = report_number
     env.filters["log10"] = math.log10
     html = env.get_template("report.html.j2").render(**ctx)
     bar.update()
@@ -240,19 +215,17 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     return html
 
 
-def _num(value) -> str:
-    if value is None:
-        return "-"
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, float):
-        if value == 0.0 or (1e-3 <= abs(value) < 1e5):
-            return f"{value:.6g}"
-        return f"{value:.4e}" if math.isfinite(value) else str(value)
-    return str(value)
-
-
 def write_report(cfg: Config, path: str | os.PathLike, *, source_label: str | None = None,
                  progress: bool = False, sweep_dir=None) -> None:
-    """Render and write the report atomically (temporary file, then rename)."""
-    atomic_write_text(path, render_report(cfg, source_label=source_label, progress=progress, sweep_dir=sweep_dir))
+    """Render and write the report atomically (temporary file, then rename).
+
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+    path : str or os.PathLike
+        Output HTML file.
+    source_label, progress, sweep_dir : optional
+        As for :func:`render_report`.
+    """
+    atomic_write(path, render_report(cfg, source_label=source_label, progress=progress, sweep_dir=sweep_dir))

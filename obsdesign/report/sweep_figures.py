@@ -17,7 +17,17 @@ def _values(result, metric: str):
 
 
 def sweep_map_figure(result, varied: list[str], metric: str = "rms_error"):
-    """Mean ``metric`` over the draws at each grid point; failed/diverged/unstable points marked."""
+    """Mean ``metric`` over the draws at each grid point; failed/diverged/unstable points marked.
+
+    Parameters
+    ----------
+    result : SweepResult
+        A finished sweep.
+    varied : list of str
+        The varied parameters (the first two are drawn).
+    metric : str
+        A metric column.
+    """
     vals = _values(result, metric)
     fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
     if len(varied) == 1:
@@ -53,7 +63,15 @@ def sweep_map_figure(result, varied: list[str], metric: str = "rms_error"):
 
 
 def sweep_distribution_figure(result, metric: str = "rms_error"):
-    """Histogram of ``metric`` over all runs that finished (uncertainty spread)."""
+    """Histogram of ``metric`` over all runs that finished (uncertainty spread).
+
+    Parameters
+    ----------
+    result : SweepResult
+        A finished sweep.
+    metric : str
+        A metric column.
+    """
     vals = _values(result, metric)
     vals = vals[np.isfinite(vals)]
     fig, ax = plt.subplots(figsize=(7, 4), constrained_layout=True)

@@ -2,24 +2,25 @@
 
 One call of :func:`run_loop` simulates the whole horizon; there is no Python
 work per sample. The observer enters only through affine-in-stiffness arrays
-(``A(k) = A0 + k A1``, likewise ``b``, ``g``) computed from the symbolic
-derivation by :mod:`obsdesign.sim.simulate`, so the kernel is the same for both
-model variants.
+(``A(k) = A0 + k A1``, likewise ``b``, ``g``: :meth:`obsdesign.design.ObserverDesign.affine`),
+so the kernel is the same for both model variants. Integer codes of the choices
+(controller, schedule, estimator, plant) are those of :mod:`obsdesign.sim.registry`.
 
 Per sample ``n`` (time ``n dt``):
 
 1. measure ``x_meas = Q(x + noise[n])`` (``Q``: rounding to the encoder resolution);
-2. advance the observer from ``n-1`` to ``n`` with the exact ZOH/FOH recursion
-   of :mod:`obsdesign.sim.discretize` (stiffness of the interval) and apply the
-   back transformation eq:3:1:3;
-3. advance the low-pass filter eq:3:4:5 (exact for a linear input between samples);
-4. update the stiffness schedule for the next interval (``estimated``: a
-   pre-sliding branch driven by ``x_meas`` and the sign of ``v_hat``; ``true``;
-   ``constant``) and recompute the recursion only when the stiffness changed;
-5. controller: open loop, or parallel PID eq:PIDparallel on the measured error
+2. :func:`observer_sample`: advance the observer from ``n-1`` to ``n`` with the exact
+   ZOH/FOH recursion of :mod:`obsdesign.sim.discretize` (stiffness of the interval) and apply
+   the back transformation eq:3:1:3; advance the low-pass filter eq:3:4:5 (exact for a
+   linear input between samples); update the stiffness schedule for the next interval
+   (``estimated``: a pre-sliding branch driven by ``x_meas`` and the sign of ``v_hat``;
+   ``true``; ``constant``; estimator ``paper-k0``: k = 0) and recompute the recursion only
+   when the stiffness changed. The same function runs the observer over measured data
+   (:func:`observe_loop`), so offline and closed-loop estimates come from one implementation;
+3. controller: open loop, or parallel PID eq:PIDparallel on the measured error
    with a first-order filtered derivative, conditional integration under
    saturation, plus ``f_hat_filtered / K`` for ``pid+observer``;
-6. integrate the plant to ``(n+1) dt`` with the input held: ``n_sub`` substeps of
+4. integrate the plant to ``(n+1) dt`` with the input held: ``n_sub`` substeps of
    Heun's method (explicit trapezoidal rule, order 2), the pre-sliding branch frozen
    within a substep and updated after it (reversals are detected at substep
    resolution).
@@ -32,18 +33,97 @@ import math
 import numpy as np
 from numba import njit
 
-from .discretize import coefficients
-from .friction import coulomb_normalized, stiffness, track_reversal
+from ..design.discretize import coefficients
+from ..friction.presliding import coulomb_normalized, stiffness, track_reversal
 
-__all__ = ["run_loop", "PLANT_PHYSICAL", "PLANT_MODEL", "SCHEDULES", "CONTROLLERS"]
+__all__ = ["run_loop", "observer_sample", "observe_loop", "new_observer_state", "empty_outputs",
+           "OUTPUT_NAMES", "OBSERVER_STATE_SIZE", "PLANT_PHYSICAL", "PLANT_MODEL"]
 
 PLANT_PHYSICAL, PLANT_MODEL = 0, 1
-SCHEDULES = {"estimated": 0, "true": 1, "constant": 2}
-CONTROLLERS = {"open-loop": 0, "pid": 1, "pid+observer": 2}
+SCHEDULE_ESTIMATED, SCHEDULE_TRUE, SCHEDULE_CONSTANT = 0, 1, 2
+ESTIMATOR_PAPER, ESTIMATOR_PAPER_K0 = 0, 1
+CONTROLLER_OPEN, CONTROLLER_PID, CONTROLLER_PID_OBSERVER = 0, 1, 2
 
 #: States beyond these magnitudes count as diverged.
 DIVERGED_X = 1e3
 DIVERGED_F = 1e12
+
+#: Length of the observer's state tuple (see :func:`new_observer_state`).
+OBSERVER_STATE_SIZE = 20
+
+
+def new_observer_state() -> tuple:
+    """A fresh observer state for :func:`observer_sample` (before the first measurement).
+
+    The state is a tuple of floats ``(y1, y2, zf1, zf2, fh_prev, xm_prev, e_dir, e_xr, e_fr,
+    k_coef, P11, P12, P21, P22, bu1, bu2, gx01, gx02, gx11, gx12)``: observer, filter, previous
+    sample, branch of the estimated schedule, and the recursion of the current stiffness. A tuple
+    (not an array) lets the compiler keep it in registers inside the loop.
+    """
+    return _FRESH_STATE
+
+
+_FRESH_STATE = (0.0,) * 9 + (-1.0,) + (0.0,) * 10
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def observer_sample(st, n, xm, u_prev, k_true, dt, Cf, s, kappa,
+                    A0, A1, b0, b1, g0, g1, L1, L2, schedule, estimator, v_hat0, f_hat0,
+                    lp_phi, lp_g0, lp_g1):
+    """Process measurement ``xm`` of sample ``n`` (``u_prev``: the force held since sample ``n - 1``).
+
+    ``st`` is the observer state (:func:`new_observer_state`); returns the new state and
+    ``(v_hat, f_hat, f_hat_filtered, k)`` with ``k`` the stiffness scheduled for the coming
+    interval; ``k_true`` is the plant's stiffness (used by the ``true`` schedule).
+    """
+    (y1, y2, zf1, zf2, fh_prev, xm_prev, e_dir, e_xr, e_fr, k_coef,
+     P11, P12, P21, P22, bu1, bu2, gx01, gx02, gx11, gx12) = st
+    # observer recursion over the last interval, then the back transformation eq:3:1:3
+    if n == 0:
+        y1 = v_hat0 - L1 * xm
+        y2 = f_hat0 - L2 * xm
+    else:
+        t1 = P11 * y1 + P12 * y2 + bu1 * u_prev + gx01 * xm_prev + gx11 * xm
+        t2 = P21 * y1 + P22 * y2 + bu2 * u_prev + gx02 * xm_prev + gx12 * xm
+        y1 = t1
+        y2 = t2
+    vh = y1 + L1 * xm
+    fh = y2 + L2 * xm
+    # low-pass filter eq:3:4:5 of the friction estimate (state-space, FOH input)
+    if n > 0:
+        t1 = lp_phi[0, 0] * zf1 + lp_phi[0, 1] * zf2 + lp_g0[0] * fh_prev + lp_g1[0] * fh
+        t2 = lp_phi[1, 0] * zf1 + lp_phi[1, 1] * zf2 + lp_g0[1] * fh_prev + lp_g1[1] * fh
+        zf1 = t1
+        zf2 = t2
+    ff = zf1
+    # stiffness schedule for the coming interval
+    if estimator == ESTIMATOR_PAPER_K0:
+        k_now = 0.0
+    elif schedule == SCHEDULE_ESTIMATED:
+        e_dir, e_xr, e_fr = track_reversal(vh, xm, e_dir, e_xr, e_fr, s)
+        k_now = stiffness(xm, e_dir, e_xr, e_fr, Cf, s, kappa)
+    elif schedule == SCHEDULE_TRUE:
+        k_now = k_true
+    else:
+        k_now = kappa
+    if k_now != k_coef:
+        k_coef = k_now
+        c = coefficients(A0[0, 0] + k_now * A1[0, 0], A0[0, 1] + k_now * A1[0, 1],
+                         A0[1, 0] + k_now * A1[1, 0], A0[1, 1] + k_now * A1[1, 1], dt)
+        P11, P12, P21, P22 = c[0], c[1], c[2], c[3]
+        bb1 = b0[0] + k_now * b1[0]
+        bb2 = b0[1] + k_now * b1[1]
+        gg1 = g0[0] + k_now * g1[0]
+        gg2 = g0[1] + k_now * g1[1]
+        bu1 = c[4] * bb1 + c[5] * bb2
+        bu2 = c[6] * bb1 + c[7] * bb2
+        gx11 = c[8] * gg1 + c[9] * gg2
+        gx12 = c[10] * gg1 + c[11] * gg2
+        gx01 = c[4] * gg1 + c[5] * gg2 - gx11
+        gx02 = c[6] * gg1 + c[7] * gg2 - gx12
+    st = (y1, y2, zf1, zf2, fh, xm, e_dir, e_xr, e_fr, k_coef,
+          P11, P12, P21, P22, bu1, bu2, gx01, gx02, gx11, gx12)
+    return st, vh, fh, ff, k_now
 
 
 @njit(cache=True, error_model="numpy")
@@ -74,7 +154,7 @@ def _true_friction(x, v, w, direction, x_r, f_r, mode, lag_model, Cf, s, sigma, 
 @njit(cache=True, error_model="numpy")
 def run_loop(
     dt, n_sub, mode, lag_model, m, K, G, Cf, s, sigma, beta, kappa,
-    A0, A1, b0, b1, g0, g1, L1, L2, schedule, v_hat0, f_hat0,
+    A0, A1, b0, b1, g0, g1, L1, L2, schedule, estimator, v_hat0, f_hat0,
     controller, kp, ki, kd, tau_d, u_max, lp_phi, lp_g0, lp_g1,
     x_ref, u_open, noise, quantization,
     out_x, out_xm, out_v, out_f, out_vh, out_fh, out_ff, out_u, out_k,
@@ -89,70 +169,24 @@ def run_loop(
     v = 0.0
     w = 0.0
     p_dir, p_xr, p_fr = 0.0, 0.0, 0.0  # plant pre-sliding branch
-    e_dir, e_xr, e_fr = 0.0, 0.0, 0.0  # branch of the estimated stiffness schedule
-    y1 = 0.0
-    y2 = 0.0
-    zf1 = 0.0
-    zf2 = 0.0
-    fh_prev = 0.0
-    xm_prev = 0.0
+    ost = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     u_prev = 0.0
     integ = 0.0
     deriv = 0.0
     e_prev = 0.0
     alpha_d = math.exp(-dt / tau_d) if tau_d > 0.0 else 0.0
-    k_coef = -1.0
-    P11 = P12 = P21 = P22 = 0.0
-    bu1 = bu2 = gx01 = gx02 = gx11 = gx12 = 0.0
-    k_now = kappa
     for n in range(n_samples):
         # 1. measurement
         xm = x + noise[n]
         if quantization > 0.0:
             xm = quantization * math.floor(xm / quantization + 0.5)
-        # 2. observer
-        if n == 0:
-            y1 = v_hat0 - L1 * xm
-            y2 = f_hat0 - L2 * xm
-        else:
-            t1 = P11 * y1 + P12 * y2 + bu1 * u_prev + gx01 * xm_prev + gx11 * xm
-            t2 = P21 * y1 + P22 * y2 + bu2 * u_prev + gx02 * xm_prev + gx12 * xm
-            y1 = t1
-            y2 = t2
-        vh = y1 + L1 * xm
-        fh = y2 + L2 * xm
-        # 3. low-pass filter of the friction estimate (state-space, FOH input)
-        if n > 0:
-            t1 = lp_phi[0, 0] * zf1 + lp_phi[0, 1] * zf2 + lp_g0[0] * fh_prev + lp_g1[0] * fh
-            t2 = lp_phi[1, 0] * zf1 + lp_phi[1, 1] * zf2 + lp_g0[1] * fh_prev + lp_g1[1] * fh
-            zf1 = t1
-            zf2 = t2
-        ff = zf1
-        # 4. stiffness schedule for the coming interval
-        if schedule == 0:
-            e_dir, e_xr, e_fr = track_reversal(vh, xm, e_dir, e_xr, e_fr, s)
-            k_now = stiffness(xm, e_dir, e_xr, e_fr, Cf, s, kappa)
-        elif schedule == 1:
-            k_now = stiffness(x, p_dir, p_xr, p_fr, Cf, s, kappa)
-        else:
-            k_now = kappa
-        if k_now != k_coef:
-            k_coef = k_now
-            c = coefficients(A0[0, 0] + k_now * A1[0, 0], A0[0, 1] + k_now * A1[0, 1],
-                             A0[1, 0] + k_now * A1[1, 0], A0[1, 1] + k_now * A1[1, 1], dt)
-            P11, P12, P21, P22 = c[0], c[1], c[2], c[3]
-            bb1 = b0[0] + k_now * b1[0]
-            bb2 = b0[1] + k_now * b1[1]
-            gg1 = g0[0] + k_now * g1[0]
-            gg2 = g0[1] + k_now * g1[1]
-            bu1 = c[4] * bb1 + c[5] * bb2
-            bu2 = c[6] * bb1 + c[7] * bb2
-            gx11 = c[8] * gg1 + c[9] * gg2
-            gx12 = c[10] * gg1 + c[11] * gg2
-            gx01 = c[4] * gg1 + c[5] * gg2 - gx11
-            gx02 = c[6] * gg1 + c[7] * gg2 - gx12
-        # 5. controller (volts), load feed-forward, saturation
-        if controller == 0:
+        # 2. observer, filter and stiffness schedule
+        k_true = stiffness(x, p_dir, p_xr, p_fr, Cf, s, kappa) if schedule == SCHEDULE_TRUE else 0.0
+        ost, vh, fh, ff, k_now = observer_sample(ost, n, xm, u_prev, k_true, dt, Cf, s, kappa,
+                                                 A0, A1, b0, b1, g0, g1, L1, L2, schedule, estimator,
+                                                 v_hat0, f_hat0, lp_phi, lp_g0, lp_g1)
+        # 3. controller (volts), load feed-forward, saturation
+        if controller == CONTROLLER_OPEN:
             u_volt = u_open[n] / K
         else:
             e = x_ref[n] - xm
@@ -161,7 +195,7 @@ def run_loop(
             deriv = alpha_d * deriv + (1.0 - alpha_d) * (e - e_prev) / dt
             integ_new = integ + e * dt
             u_volt = kp * e + ki * integ_new + kd * deriv
-            if controller == 2:
+            if controller == CONTROLLER_PID_OBSERVER:
                 u_volt += ff / K
             total = u_volt + G / K
             if abs(total) <= u_max:
@@ -186,7 +220,7 @@ def run_loop(
         if not (abs(x) < DIVERGED_X and abs(fh) < DIVERGED_F and abs(vh) < DIVERGED_F
                 and abs(ff) < DIVERGED_F and abs(v) < DIVERGED_F):
             return n + 1
-        # 6. plant, Heun (explicit trapezoidal, order 2) substeps with the input held
+        # 4. plant, Heun (explicit trapezoidal, order 2) substeps with the input held
         for _ in range(n_sub):
             k1v, k1w = _plant_rhs(x, v, w, u, p_dir, p_xr, p_fr, mode, lag_model, m, Cf, s, sigma, beta, kappa)
             xp = x + h * v
@@ -197,13 +231,38 @@ def run_loop(
             v += 0.5 * h * (k1v + k2v)
             w += 0.5 * h * (k1w + k2w)
             p_dir, p_xr, p_fr = track_reversal(v, x, p_dir, p_xr, p_fr, s)
-        fh_prev = fh
-        xm_prev = xm
         u_prev = u
     return n_samples
 
 
+@njit(cache=True, error_model="numpy")
+def observe_loop(dt, Cf, s, kappa, A0, A1, b0, b1, g0, g1, L1, L2, schedule, estimator, v_hat0, f_hat0,
+                 lp_phi, lp_g0, lp_g1, x_meas, u, k_true, out_vh, out_fh, out_ff, out_k):
+    """The observer of :func:`run_loop` over measured data: ``x_meas[n]`` and the force ``u[n]``
+    applied from sample ``n`` to ``n + 1`` (``k_true``: a stiffness trace for the ``true`` schedule)."""
+    st = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    u_prev = 0.0
+    for n in range(x_meas.shape[0]):
+        st, vh, fh, ff, k_now = observer_sample(st, n, x_meas[n], u_prev, k_true[n], dt, Cf, s, kappa,
+                                            A0, A1, b0, b1, g0, g1, L1, L2, schedule, estimator,
+                                            v_hat0, f_hat0, lp_phi, lp_g0, lp_g1)
+        out_vh[n] = vh
+        out_fh[n] = fh
+        out_ff[n] = ff
+        out_k[n] = k_now
+        u_prev = u[n]
+
+
+#: Output arrays of :func:`run_loop`, in its argument order.
+OUTPUT_NAMES = ("x", "x_meas", "v", "f", "v_hat", "f_hat", "f_hat_filtered", "u", "stiffness")
+
+
 def empty_outputs(n: int) -> dict[str, np.ndarray]:
-    """Output arrays for :func:`run_loop` (NaN where a diverged run stopped)."""
-    names = ("x", "x_meas", "v", "f", "v_hat", "f_hat", "f_hat_filtered", "u", "stiffness")
-    return {name: np.full(n, np.nan) for name in names}
+    """Output arrays for :func:`run_loop` (NaN where a diverged run stopped).
+
+    Parameters
+    ----------
+    n : int
+        Number of samples.
+    """
+    return {name: np.full(n, np.nan) for name in OUTPUT_NAMES}

@@ -1,19 +1,22 @@
 """Scenarios: reference trajectories, open-loop inputs and band-limited noise.
 
-=============  ===========  ============================================================
-scenario       loop         signal
-=============  ===========  ============================================================
-excitation     open loop    band-limited random force, RMS ``input_force`` (default 1 N),
-                            bandwidth ``excitation_bandwidth`` (default 5 Hz): the paper's
-                            numerical illustration
-constant       open loop    constant force ``input_force`` (default 1 N)
-positioning    closed loop  steps ``0 -> step_size`` at ``step_up``, back to 0 at
-                            ``step_down`` (defaults 1 mm, 0.5 s, 3.0 s, end 6.0 s),
-                            like Fig. expref(a)
-tracking       closed loop  linear up-chirp 0.01 -> 3 Hz over the run (default 60 s),
-                            amplitude so that the peak reference velocity is 0.1 m/s,
-                            like Fig. expref(b)
-=============  ===========  ============================================================
+A scenario is chosen by name (its default options) or by a small frozen spec
+holding its options:
+
+=============  ===========  =====================  ==============================================
+scenario       loop         spec                   signal
+=============  ===========  =====================  ==============================================
+excitation     open loop    :class:`Excitation`    band-limited random force, RMS ``force_rms``
+                                                   (default 1 N), bandwidth ``bandwidth`` (default
+                                                   5 Hz): the paper's numerical illustration
+constant       open loop    :class:`ConstantForce` constant force ``force`` (default 1 N)
+positioning    closed loop  :class:`Positioning`   steps ``0 -> step_size`` at ``step_up``, back to
+                                                   0 at ``step_down`` (defaults 1 mm, 0.5 s, 3.0 s,
+                                                   end 6.0 s), like Fig. expref(a)
+tracking       closed loop  :class:`Chirp`         linear up-chirp 0.01 -> 3 Hz over the run
+                                                   (default 60 s), amplitude so that the peak
+                                                   reference velocity is 0.1 m/s, Fig. expref(b)
+=============  ===========  =====================  ==============================================
 
 Examples
 --------
@@ -22,33 +25,116 @@ Examples
 (6.0, (0.5, 3.0), ((0.5, 3.0), (3.0, 6.0)))
 >>> float(sc.x_ref[1000])  # 1 mm after the first step
 0.001
+>>> build_scenario(Positioning(step_size=2e-3, step_down=1.0), dt=1e-3, duration=2.0).holds
+((0.5, 1.0), (1.0, 2.0))
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
+from typing import Any, ClassVar, Union
 
 import numpy as np
 
-from ..params import _Range
+from .._validate import FINITE, NONNEGATIVE, POSITIVE, check_choice
 
-__all__ = ["SCENARIOS", "Scenario", "build_scenario", "band_limited_noise", "chirp_frequency", "CHIRP_BANDS",
+__all__ = ["SCENARIOS", "Scenario", "ScenarioSpec", "Excitation", "ConstantForce", "Positioning", "Chirp",
+           "scenario_spec", "build_scenario", "band_limited_noise", "chirp_frequency", "CHIRP_BANDS",
            "CHIRP_BAND_LABELS"]
 
-SCENARIOS = ("excitation", "constant", "positioning", "tracking")
-OPEN_LOOP = ("excitation", "constant")
-DEFAULT_DURATION = {"excitation": 10.0, "constant": 5.0, "positioning": 6.0, "tracking": 60.0}
-EXCITATION_BANDWIDTH = 5.0  # Hz
 CHIRP_F0, CHIRP_F1, CHIRP_PEAK_VELOCITY = 0.01, 3.0, 0.1
 #: Edges [Hz] of the chirp-frequency bands in which tracking errors are reported.
 CHIRP_BANDS = (0.01, 0.1, 0.3, 1.0, 3.0)
 #: ``(label, low, high)`` of each band, e.g. ``("0.01-0.1 Hz", 0.01, 0.1)``.
 CHIRP_BAND_LABELS = tuple((f"{lo:g}-{hi:g} Hz", lo, hi) for lo, hi in zip(CHIRP_BANDS[:-1], CHIRP_BANDS[1:]))
 
-_POS = _Range(low=0.0)
-_NONNEG = _Range(low=0.0, low_inclusive=True)
-_FINITE = _Range()
+
+@dataclass(frozen=True, kw_only=True)
+class Excitation:
+    """Open loop: band-limited white force of RMS ``force_rms`` [N] over ``[0, bandwidth]`` Hz."""
+
+    name: ClassVar[str] = "excitation"
+    open_loop: ClassVar[bool] = True
+    default_duration: ClassVar[float] = 10.0
+    force_rms: float = 1.0
+    bandwidth: float = 5.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "force_rms", NONNEGATIVE.check("input_force", self.force_rms))
+        object.__setattr__(self, "bandwidth", POSITIVE.check("excitation_bandwidth", self.bandwidth))
+
+
+@dataclass(frozen=True, kw_only=True)
+class ConstantForce:
+    """Open loop: a constant force ``force`` [N]."""
+
+    name: ClassVar[str] = "constant"
+    open_loop: ClassVar[bool] = True
+    default_duration: ClassVar[float] = 5.0
+    force: float = 1.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "force", FINITE.check("input_force", self.force))
+
+
+@dataclass(frozen=True, kw_only=True)
+class Positioning:
+    """Closed loop: a step of ``step_size`` [m] at ``step_up`` [s], back to 0 at ``step_down`` [s]."""
+
+    name: ClassVar[str] = "positioning"
+    open_loop: ClassVar[bool] = False
+    default_duration: ClassVar[float] = 6.0
+    step_size: float = 1e-3
+    step_up: float = 0.5
+    step_down: float = 3.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "step_size", FINITE.check("step_size", self.step_size))
+        object.__setattr__(self, "step_up", NONNEGATIVE.check("step_up", self.step_up))
+        object.__setattr__(self, "step_down", NONNEGATIVE.check("step_down", self.step_down))
+
+
+@dataclass(frozen=True, kw_only=True)
+class Chirp:
+    """Closed loop: a linear up-chirp reference from ``f0`` to ``f1`` [Hz] over the run, with the
+    amplitude that makes its peak velocity ``peak_velocity`` [m/s]."""
+
+    name: ClassVar[str] = "tracking"
+    open_loop: ClassVar[bool] = False
+    default_duration: ClassVar[float] = 60.0
+    f0: float = CHIRP_F0
+    f1: float = CHIRP_F1
+    peak_velocity: float = CHIRP_PEAK_VELOCITY
+
+    def __post_init__(self) -> None:
+        for name in ("f0", "f1", "peak_velocity"):
+            object.__setattr__(self, name, POSITIVE.check(name, getattr(self, name)))
+
+
+ScenarioSpec = Union[Excitation, ConstantForce, Positioning, Chirp]
+_SPECS: dict[str, type] = {cls.name: cls for cls in (Excitation, ConstantForce, Positioning, Chirp)}
+#: Scenario names, in documentation order.
+SCENARIOS = tuple(_SPECS)
+OPEN_LOOP = tuple(name for name, cls in _SPECS.items() if cls.open_loop)
+DEFAULT_DURATION = {name: cls.default_duration for name, cls in _SPECS.items()}
+
+
+def scenario_spec(scenario: Any) -> ScenarioSpec:
+    """The spec of a scenario given by name (its defaults) or as a spec.
+
+    Parameters
+    ----------
+    scenario : str or scenario spec
+        A name of :data:`SCENARIOS` or a spec.
+
+    >>> scenario_spec("constant")
+    ConstantForce(force=1.0)
+    """
+    if isinstance(scenario, tuple(_SPECS.values())):
+        return scenario
+    return _SPECS[check_choice("scenario", scenario, SCENARIOS)]()
 
 
 @dataclass(frozen=True)
@@ -57,7 +143,7 @@ class Scenario:
 
     Attributes
     ----------
-    name : str
+    spec : ScenarioSpec
     dt, duration : float
         Sample time and length [s].
     x_ref : ndarray
@@ -70,7 +156,7 @@ class Scenario:
         Hold intervals [s] after each step (positioning).
     """
 
-    name: str
+    spec: Any
     dt: float
     duration: float
     x_ref: np.ndarray = field(repr=False)
@@ -79,12 +165,29 @@ class Scenario:
     holds: tuple = ()
 
     @property
+    def name(self) -> str:
+        return self.spec.name
+
+    @property
     def open_loop(self) -> bool:
-        return self.name in OPEN_LOOP
+        return self.spec.open_loop
 
 
 def band_limited_noise(n: int, dt: float, rms: float, bandwidth: float, seed) -> np.ndarray:
     """White Gaussian noise limited to ``[0, bandwidth]`` Hz by an ideal filter (FFT mask).
+
+    Parameters
+    ----------
+    n : int
+        Number of samples.
+    dt : float
+        Sample time [s].
+    rms : float
+        Expected RMS.
+    bandwidth : float
+        Bandwidth [Hz].
+    seed : int or numpy.random.SeedSequence
+        Seed of the draw.
 
     The result has expected RMS ``rms`` (one-sided flat spectrum up to ``bandwidth``,
     or up to the Nyquist frequency if that is lower).
@@ -107,46 +210,92 @@ def band_limited_noise(n: int, dt: float, rms: float, bandwidth: float, seed) ->
     return np.fft.irfft(spec, n) * (rms / math.sqrt(bandwidth / nyquist))
 
 
-def chirp_frequency(t: np.ndarray, duration: float) -> np.ndarray:
-    """Instantaneous frequency [Hz] of the tracking chirp."""
-    return CHIRP_F0 + (CHIRP_F1 - CHIRP_F0) * t / duration
+def chirp_frequency(t: np.ndarray, duration: float, spec: Chirp | None = None) -> np.ndarray:
+    """Instantaneous frequency [Hz] of the tracking chirp.
+
+    Parameters
+    ----------
+    t : ndarray
+        Times [s].
+    duration : float
+        Length of the chirp [s].
+    spec : Chirp, optional
+        The chirp (default :class:`Chirp`).
+    """
+    spec = spec or Chirp()
+    return spec.f0 + (spec.f1 - spec.f0) * t / duration
 
 
-def build_scenario(name: str, *, dt: float, duration: float | None = None, input_force: float | None = None,
-                   step_size: float | None = None, step_up: float | None = None, step_down: float | None = None,
-                   excitation_bandwidth: float | None = None, seed=0) -> Scenario:
-    """Sample the signals of a scenario.
+def build_scenario(scenario: Any, *, dt: float, duration: float | None = None, seed=0) -> Scenario:
+    """Sample the signals of a scenario (a name or a spec) at ``dt`` over ``duration`` [s].
+
+    Parameters
+    ----------
+    scenario : str or scenario spec
+        A name of :data:`SCENARIOS` or a spec.
+    dt : float
+        Sample time [s].
+    duration : float, optional
+        Length [s] (the scenario's default).
+    seed : int or numpy.random.SeedSequence
+        Seed of the excitation.
 
     Raises
     ------
     ValueError
-        Unknown name, or inconsistent step times.
+        Unknown name, a duration shorter than two samples, or inconsistent step times.
     """
-    if not isinstance(name, str) or name not in SCENARIOS:
-        raise ValueError(f"scenario: expected one of {', '.join(SCENARIOS)}, found {name!r}")
-    duration = DEFAULT_DURATION[name] if duration is None else _POS.check("duration", duration)
+    spec = scenario_spec(scenario)
+    duration = spec.default_duration if duration is None else POSITIVE.check("duration", duration)
     n = int(round(duration / dt))
     if n < 2:
         raise ValueError(f"duration: expected at least 2 samples of dt = {dt:g} s, found {duration!r} s")
-    t = np.arange(n) * dt
-    zeros = np.zeros(n)
-    if name == "constant":
-        force = 1.0 if input_force is None else _FINITE.check("input_force", input_force)
-        return Scenario(name, dt, duration, zeros, np.full(n, force))
-    if name == "excitation":
-        force = 1.0 if input_force is None else _NONNEG.check("input_force", input_force)
-        band = EXCITATION_BANDWIDTH if excitation_bandwidth is None else _POS.check("excitation_bandwidth", excitation_bandwidth)
-        return Scenario(name, dt, duration, zeros, band_limited_noise(n, dt, force, band, seed))
-    if name == "positioning":
-        size = 1e-3 if step_size is None else _FINITE.check("step_size", step_size)
-        up = 0.5 if step_up is None else _NONNEG.check("step_up", step_up)
-        down = 3.0 if step_down is None else _NONNEG.check("step_down", step_down)
+    if isinstance(spec, Excitation):
+        return Scenario(spec, dt, duration, _zeros(n), band_limited_noise(n, dt, spec.force_rms, spec.bandwidth, seed))
+    if isinstance(spec, Positioning):
+        up, down = spec.step_up, spec.step_down
         if not up < down < duration:
             raise ValueError(
                 f"step_down: expected step_up < step_down < duration, found {up:g} < {down:g} < {duration:g} s"
             )
-        x_ref = np.where((t >= up - 0.5 * dt) & (t < down - 0.5 * dt), size, 0.0)
-        return Scenario(name, dt, duration, x_ref, zeros, (up, down), ((up, down), (down, duration)))
-    amplitude = CHIRP_PEAK_VELOCITY / (2 * math.pi * CHIRP_F1)
-    phase = 2 * math.pi * (CHIRP_F0 * t + 0.5 * (CHIRP_F1 - CHIRP_F0) * t * t / duration)
-    return Scenario(name, dt, duration, amplitude * np.sin(phase), zeros)
+        x_ref, u_open = _deterministic_signals(spec, dt, duration, n)
+        return Scenario(spec, dt, duration, x_ref, u_open, (up, down), ((up, down), (down, duration)))
+    x_ref, u_open = _deterministic_signals(spec, dt, duration, n)
+    return Scenario(spec, dt, duration, x_ref, u_open)
+
+
+def _zeros(n: int) -> np.ndarray:
+    out = np.zeros(n)
+    out.flags.writeable = False
+    return out
+
+
+@functools.lru_cache(maxsize=8)
+def _deterministic_signals(spec, dt: float, duration: float, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(x_ref, u_open)`` of a scenario without random parts, read-only and cached (sweeps and
+    repeated runs of one scenario share them)."""
+    x_ref, u_open = _signals(spec, dt, duration, n)
+    x_ref.flags.writeable = False
+    u_open.flags.writeable = False
+    return x_ref, u_open
+
+
+def _signals(spec, dt: float, duration: float, n: int) -> tuple[np.ndarray, np.ndarray]:
+    zeros = np.zeros(n)
+    if isinstance(spec, ConstantForce):
+        return zeros, np.full(n, spec.force)
+    t = np.arange(n) * dt
+    if isinstance(spec, Positioning):
+        up, down = spec.step_up, spec.step_down
+        return np.where((t >= up - 0.5 * dt) & (t < down - 0.5 * dt), spec.step_size, 0.0), zeros
+    amplitude = spec.peak_velocity / (2 * math.pi * spec.f1)
+    # 2 pi (f0 t + 0.5 (f1 - f0) t^2 / duration), evaluated in place in that order of operations
+    quadratic = t * (0.5 * (spec.f1 - spec.f0))
+    quadratic *= t
+    quadratic /= duration
+    phase = spec.f0 * t
+    phase += quadratic
+    phase *= 2 * math.pi
+    np.sin(phase, out=phase)
+    phase *= amplitude
+    return phase, zeros

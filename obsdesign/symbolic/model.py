@@ -26,9 +26,10 @@ from __future__ import annotations
 
 import sympy as sp
 
+from .._validate import Choice
 from ..params import VARIANTS
 
-__all__ = ["SYMBOLS", "model_matrices", "model_symbols", "check_variant", "STATE_NAMES"]
+__all__ = ["SYMBOLS", "model_matrices", "model_symbols", "check_variant"]
 
 #: SymPy symbols shared by every derivation (positive where physical).
 SYMBOLS: dict[str, sp.Symbol] = {
@@ -44,12 +45,14 @@ SYMBOLS: dict[str, sp.Symbol] = {
     "L2": sp.Symbol("L_2", real=True),
 }
 
-#: Names of the states ``w1, w2, w3``.
-STATE_NAMES = ("x", "v", "f")
-
 
 def check_variant(variant: object) -> str:
     """Validate a model variant name.
+
+    Parameters
+    ----------
+    variant : object
+        The value to check.
 
     >>> check_variant("lag")
     'lag'
@@ -60,13 +63,17 @@ def check_variant(variant: object) -> str:
     """
     if not isinstance(variant, str):
         raise TypeError(f"variant: expected a string, found {type(variant).__name__} {variant!r}")
-    if variant not in VARIANTS:
-        raise ValueError(f"variant: expected one of {', '.join(map(repr, VARIANTS))}, found {variant!r}")
-    return variant
+    return Choice(VARIANTS).check("variant", variant)
 
 
 def model_symbols(variant: str) -> dict[str, sp.Symbol]:
-    """The symbols a variant's derivation uses (``beta`` only for ``lag``)."""
+    """The symbols a variant's derivation uses (``beta`` only for ``lag``).
+
+    Parameters
+    ----------
+    variant : {'lag', 'static'}
+        Model variant.
+    """
     check_variant(variant)
     return {name: sym for name, sym in SYMBOLS.items() if variant == "lag" or name != "beta"}
 

@@ -15,11 +15,12 @@ Examples
 from __future__ import annotations
 
 import html
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import sympy as sp
 
-from .derivation import Derivation
+if TYPE_CHECKING:  # annotations only: derivation.py imports this module for its displays
+    from .derivation import Derivation
 
 __all__ = ["derivation_text", "derivation_latex", "derivation_json", "derivation_html"]
 
@@ -28,8 +29,14 @@ def _label(label: str | None) -> str:
     return f"({label})" if label else ""
 
 
-def derivation_text(d: Derivation) -> str:
-    """Plain-text derivation, one numbered step per block."""
+def derivation_text(d: "Derivation") -> str:
+    """Plain-text derivation, one numbered step per block.
+
+    Parameters
+    ----------
+    d : Derivation
+        From :func:`obsdesign.derive`.
+    """
     out = [f"Reduced-order friction observer, variant '{d.variant}'", ""]
     for i, (label, title, expr) in enumerate(d.steps, 1):
         out.append(f"[{i}] {title} {_label(label)}".rstrip())
@@ -38,8 +45,16 @@ def derivation_text(d: Derivation) -> str:
     return "\n".join(out)
 
 
-def derivation_latex(d: Derivation, *, standalone: bool = True) -> str:
-    """LaTeX of the derivation; a complete document when ``standalone``."""
+def derivation_latex(d: "Derivation", *, standalone: bool = True) -> str:
+    """LaTeX of the derivation; a complete document when ``standalone``.
+
+    Parameters
+    ----------
+    d : Derivation
+        From :func:`obsdesign.derive`.
+    standalone : bool
+        A complete document (else the body only).
+    """
     body = []
     for label, title, expr in d.steps:
         tag = f" \\quad \\text{{{label}}}" if label else ""
@@ -54,8 +69,14 @@ def derivation_latex(d: Derivation, *, standalone: bool = True) -> str:
     )
 
 
-def derivation_json(d: Derivation) -> dict[str, Any]:
-    """JSON-ready dictionary: the steps and the key results as strings."""
+def derivation_json(d: "Derivation") -> dict[str, Any]:
+    """JSON-ready dictionary: the steps and the key results as strings.
+
+    Parameters
+    ----------
+    d : Derivation
+        From :func:`obsdesign.derive`.
+    """
     L1, L2 = d.symbols["L1"], d.symbols["L2"]
     return {
         "variant": d.variant,
@@ -75,8 +96,14 @@ def derivation_json(d: Derivation) -> dict[str, Any]:
     }
 
 
-def derivation_html(d: Derivation) -> str:
-    """HTML table of the steps with MathML (SymPy's presentation printer)."""
+def derivation_html(d: "Derivation") -> str:
+    """HTML table of the steps with MathML (SymPy's presentation printer).
+
+    Parameters
+    ----------
+    d : Derivation
+        From :func:`obsdesign.derive`.
+    """
     rows = []
     for label, title, expr in d.steps:
         math = sp.mathml(expr, printer="presentation")

@@ -95,7 +95,15 @@ def coefficients(a11: float, a12: float, a21: float, a22: float, h: float):
 
 
 def coefficient_matrices(A: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(Phi, Gamma0, Gamma1)`` as 2x2 arrays (NumPy wrapper of :func:`coefficients`)."""
+    """``(Phi, Gamma0, Gamma1)`` as 2x2 arrays (NumPy wrapper of :func:`coefficients`).
+
+    Parameters
+    ----------
+    A : array_like, shape (2, 2)
+        Observer matrix.
+    h : float
+        Step [s].
+    """
     A = np.asarray(A, float)
     r = np.array(coefficients(A[0, 0], A[0, 1], A[1, 0], A[1, 1], float(h)))
     return r[0:4].reshape(2, 2), r[4:8].reshape(2, 2), r[8:12].reshape(2, 2)
@@ -103,6 +111,17 @@ def coefficient_matrices(A: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarra
 
 def step_matrices(A: np.ndarray, b: np.ndarray, g: np.ndarray, h: float):
     """One-step recursion ``y[n+1] = Phi y[n] + b_u u[n] + g0 x[n] + g1 x[n+1]``.
+
+    Parameters
+    ----------
+    A : array_like, shape (2, 2)
+        Observer matrix A22 - L A12.
+    b : array_like, shape (2,)
+        Input vector B2 - L B1.
+    g : array_like, shape (2,)
+        Measurement gain of eq:3:1:2.
+    h : float
+        Sample time [s].
 
     Returns ``Phi (2, 2)``, ``b_u (2,)``, ``g0 (2,)``, ``g1 (2,)``.
     """

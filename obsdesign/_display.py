@@ -1,39 +1,28 @@
-"""Plain-text and HTML rendering shared by the design result objects."""
+"""One home for displaying results: plain text, HTML (notebooks, reports) and LaTeX.
+
+Every result object of the package (stability report, PID, noise analysis,
+simulation, ...) mixes in :class:`ResultDisplay` and provides ``_title`` and
+``_rows()``; numbers are formatted by :func:`obsdesign._format.short`.
+"""
 
 from __future__ import annotations
 
 import html
-
-__all__ = ["Condition", "ResultDisplay", "fmt"]
-
 from dataclasses import dataclass
 
+from ._format import short as fmt
 
-def fmt(value: object) -> str:
-    """Compact formatting of numbers (4 significant digits), booleans and text.
-
-    >>> fmt(1234.5678), fmt(True), fmt(None), fmt(-2.4384e-3)
-    ('1235', 'yes', '-', '-0.002438')
-    """
-    if value is None:
-        return "-"
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, complex):
-        return f"{value.real:.4g}{value.imag:+.4g}j" if value.imag else f"{value.real:.4g}"
-    if isinstance(value, float):
-        return f"{value:.4g}"
-    return str(value)
+__all__ = ["Condition", "ResultDisplay", "tex_escape"]
 
 
 _TEX = {"\\": "\\textbackslash{}", "&": "\\&", "%": "\\%", "$": "\\$", "#": "\\#", "_": "\\_",
         "{": "\\{", "}": "\\}", "^": "\\^{}", "~": "\\~{}"}
 
 
-def _tex(text: str) -> str:
+def tex_escape(text: str) -> str:
     """Escape text for LaTeX (one pass, so replacements are not escaped again).
 
-    >>> print(_tex("a_1 & 50% \\\\x"))
+    >>> print(tex_escape("a_1 & 50% \\\\x"))
     a\\_1 \\& 50\\% \\textbackslash{}x
     """
     return "".join(_TEX.get(ch, ch) for ch in text)
@@ -82,8 +71,8 @@ class ResultDisplay:
         """A LaTeX tabular of the rows and verdicts (for notebooks and papers)."""
         rows = [(label, fmt(value)) for label, value in self._rows()]
         rows += [(c.name, "PASS" if c.holds else "FAIL") for c in self._conditions()]
-        body = " \\\\\n".join(f"{_tex(a)} & {_tex(b)}" for a, b in rows)
-        return f"\\begin{{tabular}}{{ll}}\n\\multicolumn{{2}}{{l}}{{{_tex(self._title)}}} \\\\ \\hline\n{body}\n\\end{{tabular}}"
+        body = " \\\\\n".join(f"{tex_escape(a)} & {tex_escape(b)}" for a, b in rows)
+        return f"\\begin{{tabular}}{{ll}}\n\\multicolumn{{2}}{{l}}{{{tex_escape(self._title)}}} \\\\ \\hline\n{body}\n\\end{{tabular}}"
 
     def _repr_html_(self) -> str:
         esc = html.escape

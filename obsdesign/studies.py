@@ -1,4 +1,4 @@
-"""Reproductions of the paper's figures and claims (used by ``analysis/`` and the report).
+"""Reproductions of the paper's figures and claims (computed here; drawn and rendered by ``report/``).
 
 Each study returns a frozen result with the measured numbers, a list of
 :class:`Claim` (the paper's statement, its value, ours, reproduced or not) and
@@ -14,13 +14,16 @@ from dataclasses import dataclass, field
 import numpy as np
 import sympy as sp
 
-from ..design.noise import noise_analysis
-from ..design.pid import pid_from_config
-from ..params import Config, load_preset
-from ..sim.friction import coulomb_along
-from ..sim.simulate import simulate
+from .design.noise import noise_analysis
+from .design.observer import check_stability
+from .design.pid import pid_from_config
+from .params import Config, load_preset
+from .friction.presliding import coulomb_along
+from .sim.scenarios import ConstantForce, Excitation
+from .sim.simulate import simulate
 
-__all__ = ["Claim", "convergence_study", "experiments_study", "friction_loops_study", "noise_study", "pid_claims"]
+__all__ = ["Claim", "convergence_study", "experiments_study", "friction_loops_study", "noise_study", "pid_claims",
+           "derivation_claims", "ConvergenceStudy", "ExperimentsStudy", "FrictionLoopsStudy", "NoiseStudy"]
 
 
 @dataclass(frozen=True)
@@ -54,6 +57,17 @@ def convergence_study(cfg: Config | None = None, *, seeds: int = 5, duration: fl
                       threshold: float = 1.0) -> ConvergenceStudy:
     """rho 0.98 vs 1.02 on Table 1 (section 3.3, Fig. simconv).
 
+    Parameters
+    ----------
+    cfg : Config, optional
+        Default: the ``table1`` preset.
+    seeds : int
+        Seeds per rho.
+    duration : float
+        Length of the excitation runs [s].
+    threshold : float
+        Estimation error [N] that counts as divergence.
+
     * steady sliding (constant force 1 N, ``true`` stiffness, initial friction error 0.5 N):
       the error's rate against the gross-sliding eigenvalue ``-sqrt(kappa/m)(rho - 1)``. The
       ``lag`` model plant cannot slide steadily (its viscous term is a spring ``sigma/beta``),
@@ -67,7 +81,7 @@ def convergence_study(cfg: Config | None = None, *, seeds: int = 5, duration: fl
     dt = cfg.observer.dt
     rates, runs = {}, {}
     for rho in (0.98, 1.02):
-        res = simulate(cfg.override(variant="static", noise_rms=0.0), "constant", rho=rho, input_force=1.0,
+        res = simulate(cfg.override(variant="static", noise_rms=0.0, rho=rho), ConstantForce(force=1.0),
                        stiffness="true", initial_estimate=(0.0, 0.5))
         window = (res.t > 1.0) & (res.t < 3.0)
         slope = float(np.polyfit(res.t[window], np.log(np.abs(res.f_hat - res.f)[window]), 1)[0])
@@ -77,7 +91,7 @@ def convergence_study(cfg: Config | None = None, *, seeds: int = 5, duration: fl
     excitation = {}
     for rho in (0.98, 1.02):
         for seed in range(seeds):
-            res = simulate(cfg, "excitation", rho=rho, plant="model", seed=seed, duration=duration)
+            res = simulate(cfg.override(rho=rho), "excitation", plant="model", seed=seed, duration=duration)
             err = res.f_hat_filtered - res.f
             excitation[(rho, seed)] = (float(np.sqrt(np.nanmean(err[res.t > 1.0] ** 2))),
                                        _first_exceed(err, threshold, dt))
@@ -86,8 +100,8 @@ def convergence_study(cfg: Config | None = None, *, seeds: int = 5, duration: fl
     slow = {}
     for rho in (0.98, 1.02):
         for seed in range(seeds):
-            res = simulate(cfg.override(variant="static"), "excitation", rho=rho, seed=seed, duration=duration,
-                           excitation_bandwidth=0.2)
+            res = simulate(cfg.override(variant="static", rho=rho), Excitation(bandwidth=0.2), seed=seed,
+                           duration=duration)
             slow[(rho, seed)] = _first_exceed(res.f_hat_filtered - res.f, threshold, dt)
     diverged = [t for (rho, _), (_, t) in excitation.items() if rho == 0.98 and t is not None]
     slow_div = [t for (rho, _), t in slow.items() if rho == 0.98 and t is not None]
@@ -112,34 +126,6 @@ def convergence_study(cfg: Config | None = None, *, seeds: int = 5, duration: fl
     return ConvergenceStudy(rates=rates, excitation=excitation, slow_excitation=slow, claims=claims, runs=runs)
 
 
-def convergence_figure(study: ConvergenceStudy):
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(4, 1, figsize=(8, 10), constrained_layout=True)
-    r98, r102 = study.runs[("excitation", 0.98)], study.runs[("excitation", 1.02)]
-    axes[0].plot(r102.t, r102.u)
-    axes[0].set_ylabel("u [N]")
-    axes[0].set_title("(a) band-limited random input")
-    axes[1].plot(r102.t, r102.x_meas * 1e3, lw=0.5)
-    axes[1].set_ylabel("x_meas [mm]")
-    axes[1].set_title("(b) noisy displacement")
-    axes[2].plot(r102.t, r102.f, "k", lw=1, label="w3 (model plant)")
-    axes[2].plot(r98.t, r98.f_hat_filtered, lw=0.8, label="estimate, rho = 0.98")
-    axes[2].plot(r102.t, r102.f_hat_filtered, lw=0.8, label="estimate, rho = 1.02")
-    axes[2].set_ylabel("friction state [N]")
-    axes[2].legend(loc="best")
-    axes[2].set_title("(c) friction state and its estimates")
-    for rho in (0.98, 1.02):
-        res = study.runs[("steady", rho)]
-        meas, exp = study.rates[rho]
-        axes[3].semilogy(res.t, np.abs(res.f_hat - res.f), label=f"rho = {rho}: {meas:+.3f} 1/s (eq:3:3:2: {exp:+.3f})")
-    axes[3].set_xlabel("time [s]")
-    axes[3].set_ylabel("|f_hat - f| [N]")
-    axes[3].legend(loc="best")
-    axes[3].set_title("(d) steady sliding: error growth/decay rate")
-    return fig
-
-
 @dataclass(frozen=True)
 class ExperimentsStudy:
     positioning: dict  # controller -> metrics
@@ -149,7 +135,13 @@ class ExperimentsStudy:
 
 
 def experiments_study(cfg: Config | None = None) -> ExperimentsStudy:
-    """Positioning and tracking on the VCM, PID vs PID + observer (section 4.2, Fig. experror)."""
+    """Positioning and tracking on the VCM, PID vs PID + observer (section 4.2, Fig. experror).
+
+    Parameters
+    ----------
+    cfg : Config, optional
+        Default: the ``vcm`` preset.
+    """
     cfg = cfg or load_preset("vcm")
     pos, trk, runs = {}, {}, {}
     for ctrl in ("pid", "pid+observer"):
@@ -181,22 +173,6 @@ def experiments_study(cfg: Config | None = None) -> ExperimentsStudy:
     return ExperimentsStudy(positioning=pos, tracking=trk, claims=claims, runs=runs)
 
 
-def experiments_figure(study: ExperimentsStudy):
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(2, 1, figsize=(8, 7), constrained_layout=True)
-    for ax, scenario in zip(axes, ("positioning", "tracking")):
-        for ctrl in ("pid", "pid+observer"):
-            r = study.runs[(scenario, ctrl)]
-            ax.plot(r.t, r.e * 1e6, lw=0.8, label=ctrl)
-        ax.set_ylabel("error [um]")
-        ax.set_title(f"({'a' if scenario == 'positioning' else 'b'}) {scenario}")
-        ax.legend(loc="best")
-    axes[0].set_ylim(-50, 50)
-    axes[1].set_xlabel("time [s]")
-    return fig
-
-
 @dataclass(frozen=True)
 class FrictionLoopsStudy:
     rms_estimate_vs_true: float
@@ -211,6 +187,11 @@ class FrictionLoopsStudy:
 
 def friction_loops_study(cfg: Config | None = None) -> FrictionLoopsStudy:
     """Friction estimate vs displacement against the model's f and Fc (Fig. frictionloops).
+
+    Parameters
+    ----------
+    cfg : Config, optional
+        Default: the ``vcm`` preset.
 
     As in the paper, the same low-pass (eq:3:4:5) is applied to the velocity estimate,
     which with the measured displacement drives the friction model: ``Fc`` from the
@@ -238,20 +219,6 @@ def friction_loops_study(cfg: Config | None = None) -> FrictionLoopsStudy:
     return FrictionLoopsStudy(rms_est, rms_model, claims, res.x_meas, est, f_model, fc, true_w3)
 
 
-def friction_loops_figure(study: FrictionLoopsStudy):
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 5), constrained_layout=True)
-    ax.plot(study.x * 1e3, study.model_f, lw=0.8, label="model f = Fc + sigma v (from filtered v_hat)")
-    ax.plot(study.x * 1e3, study.model_fc, lw=1.2, label="model Fc")
-    ax.plot(study.x * 1e3, study.estimate, lw=1.2, label="estimate w3 (filtered)")
-    ax.set_xlabel("measured displacement [mm]")
-    ax.set_ylabel("friction [N]")
-    ax.set_ylim(-1.0, 1.0)
-    ax.legend(loc="best")
-    return fig
-
-
 @dataclass(frozen=True)
 class NoiseStudy:
     rows: dict  # preset -> dict(predicted raw/filtered, simulated raw/filtered, direct_gain)
@@ -259,7 +226,17 @@ class NoiseStudy:
 
 
 def noise_study(noise_rms: float = 1e-6, bandwidth: float = 1000.0, seed: int = 0) -> NoiseStudy:
-    """Noise propagation with and without the low-pass (section 3.4) against the prediction."""
+    """Noise propagation with and without the low-pass (section 3.4) against the prediction.
+
+    Parameters
+    ----------
+    noise_rms : float
+        Noise RMS [m].
+    bandwidth : float
+        Noise bandwidth [Hz].
+    seed : int
+        Noise seed.
+    """
     rows, claims = {}, []
     for name in ("table1", "vcm"):
         cfg = load_preset(name).override(variant="static", quantization=0.0)
@@ -269,9 +246,9 @@ def noise_study(noise_rms: float = 1e-6, bandwidth: float = 1000.0, seed: int = 
         # Both runs use the plant's stiffness so that the observer sees the same k(t).
         # The start differs by the first noise sample (initial estimate L x_meas[0]); that
         # decays with the dominant pole (-2.44 1/s for Table 1), so compare after 3 s.
-        noisy = simulate(cfg, "constant", input_force=1.0, noise_rms=noise_rms, noise_bandwidth=bandwidth, seed=seed,
+        noisy = simulate(cfg.override(noise_rms=noise_rms, noise_bandwidth=bandwidth), ConstantForce(force=1.0), seed=seed,
                          stiffness="true", duration=12.0)
-        clean = simulate(cfg, "constant", input_force=1.0, noise_rms=0.0, stiffness="true", duration=12.0)
+        clean = simulate(cfg.override(noise_rms=0.0), ConstantForce(force=1.0), stiffness="true", duration=12.0)
         keep = noisy.t > 3.0
         raw = float(np.sqrt(np.mean((noisy.f_hat - clean.f_hat)[keep] ** 2)))
         filt = float(np.sqrt(np.mean((noisy.f_hat_filtered - clean.f_hat_filtered)[keep] ** 2)))
@@ -287,7 +264,13 @@ def noise_study(noise_rms: float = 1e-6, bandwidth: float = 1000.0, seed: int = 
 
 
 def pid_claims(cfg: Config | None = None) -> tuple:
-    """The published PID gains (eq:PIDparams) against the design rule."""
+    """The published PID gains (eq:PIDparams) against the design rule.
+
+    Parameters
+    ----------
+    cfg : Config, optional
+        Default: the ``vcm`` preset.
+    """
     pid = pid_from_config(cfg or load_preset("vcm"))
     out = []
     for name, paper in (("kp", 429.0), ("ki", 4348.0), ("kd", 2.67)):
@@ -300,9 +283,8 @@ def pid_claims(cfg: Config | None = None) -> tuple:
 
 def derivation_claims() -> tuple:
     """Statements of the derivation that the symbolic engine checks (table1 numbers)."""
-    from ..design.observer import check_stability
-    from ..symbolic import derive
-    from ..symbolic.derivation import EXTRA_SYMBOLS
+    from .symbolic import derive
+    from .symbolic.derivation import EXTRA_SYMBOLS
 
     d = derive("lag")
     E = EXTRA_SYMBOLS
@@ -314,7 +296,10 @@ def derivation_claims() -> tuple:
     extra = sp.simplify(L2 - kap * (1 - rho**2))
     cfg = load_preset("table1")
     vals = {d.symbols["sigma"]: cfg.friction.sigma, d.symbols["beta"]: cfg.friction.beta, kap: cfg.friction.kappa, rho: 1.02}
+    table1 = check_stability(load_preset("table1").override(rho=1.02))
     return (
+        Claim("eq:3:3:2", "Table 1, rho = 1.02: dominant pole -sqrt(kappa/m)(rho - 1)",
+              "-2.44 1/s", f"{table1.dominant_pole:.4f} 1/s", abs(table1.dominant_pole + 2.44) < 0.005),
         Claim("eq:3:2:7", "a0' = C1 s x'/z >= 0 after a reversal, so Ignatyev (ii) follows from Proposition 1",
               ">= 0", f"dk/dt = {d.stiffness_rate} ({rate:.3g} at x' = 1, z = 0.5): negative; (ii) holds in "
               f"pre-sliding only for |x'| < {bound * 1e3:.1f} mm/s (Table 1, reversal from sliding)", rate >= 0),

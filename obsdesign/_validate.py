@@ -1,0 +1,209 @@
+"""One home for input validation: ranges, choices, text, integers and number parsing.
+
+Every public entry point of the package checks its arguments with these rules,
+so a bad value always gets the same kind of message: the parameter's name, what
+was expected and what was found (python-control's style)::
+
+    observer.rho: expected a finite number > 0, found 0.0
+
+``ValueError`` is raised for a bad value, ``TypeError`` for a bad type. NumPy
+scalars are accepted where a Python number is; an integer too large for a float
+is a ``ValueError``, not an ``OverflowError``.
+
+Examples
+--------
+>>> POSITIVE.check("rho", 4)
+4.0
+>>> POSITIVE.check("rho", 0.0)
+Traceback (most recent call last):
+...
+ValueError: rho: expected a finite number > 0, found 0.0
+>>> check_choice("stiffness", "guess", ("estimated", "true"))
+Traceback (most recent call last):
+...
+ValueError: stiffness: expected one of estimated, true, found 'guess'
+>>> check_integer("samples", 0, minimum=1)
+Traceback (most recent call last):
+...
+ValueError: samples: expected an integer >= 1, found 0
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+__all__ = [
+    "Range", "Choice", "Text", "POSITIVE", "NONNEGATIVE", "FINITE",
+    "check_choice", "check_integer", "parse_number", "as_float", "FrozenMap",
+]
+
+
+def as_float(name: str, value: Any, expected: str) -> float:
+    """``value`` as a float if it is a real number (Python or NumPy, not bool), else ``TypeError``.
+
+    >>> import numpy as np
+    >>> as_float("rho", np.int64(4), "a number")
+    4.0
+    >>> as_float("rho", 10**400, "a finite number")
+    Traceback (most recent call last):
+    ...
+    ValueError: rho: expected a finite number, found an integer of 401 digits
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name}: expected {expected}, found {type(value).__name__} {value!r}")
+    try:
+        return float(value)
+    except OverflowError:
+        raise ValueError(f"{name}: expected {expected}, found an integer of {len(str(abs(int(value))))} digits") from None
+
+
+@dataclass(frozen=True)
+class Range:
+    """Admissible range of a numeric value; ``None`` bounds are open-ended."""
+
+    low: float | None = None
+    high: float | None = None
+    low_inclusive: bool = False
+    high_inclusive: bool = False
+    optional: bool = False
+
+    def describe(self) -> str:
+        """The expectation in words, e.g. ``'a finite number > 0'``."""
+        parts = []
+        if self.low is not None:
+            parts.append(f"{'>=' if self.low_inclusive else '>'} {self.low:g}")
+        if self.high is not None:
+            parts.append(f"{'<=' if self.high_inclusive else '<'} {self.high:g}")
+        text = "a finite number" + (" " + " and ".join(parts) if parts else "")
+        return text + (" (or omitted)" if self.optional else "")
+
+    def contains(self, number: float) -> bool:
+        """Whether a float lies in the range (finite and within the bounds)."""
+        ok = math.isfinite(number)
+        if ok and self.low is not None:
+            ok = number >= self.low if self.low_inclusive else number > self.low
+        if ok and self.high is not None:
+            ok = number <= self.high if self.high_inclusive else number < self.high
+        return ok
+
+    def check(self, name: str, value: Any) -> float | None:
+        """``value`` as a float in the range, or a ``ValueError``/``TypeError`` naming ``name``."""
+        if value is None and self.optional:
+            return None
+        number = as_float(name, value, self.describe())
+        if not self.contains(number):
+            raise ValueError(f"{name}: expected {self.describe()}, found {number!r}")
+        return number
+
+
+@dataclass(frozen=True)
+class Choice:
+    """One of a fixed set of strings."""
+
+    options: tuple[str, ...]
+
+    def describe(self) -> str:
+        return "one of " + ", ".join(repr(o) for o in self.options)
+
+    def check(self, name: str, value: Any) -> str:
+        if not isinstance(value, str):
+            raise TypeError(f"{name}: expected {self.describe()}, found {type(value).__name__} {value!r}")
+        if value not in self.options:
+            raise ValueError(f"{name}: expected {self.describe()}, found {value!r}")
+        return value
+
+
+@dataclass(frozen=True)
+class Text:
+    """Any string."""
+
+    def describe(self) -> str:
+        return "a string"
+
+    def check(self, name: str, value: Any) -> str:
+        if not isinstance(value, str):
+            raise TypeError(f"{name}: expected a string, found {type(value).__name__} {value!r}")
+        return value
+
+
+POSITIVE = Range(low=0.0)
+NONNEGATIVE = Range(low=0.0, low_inclusive=True)
+FINITE = Range()
+
+
+def check_choice(name: str, value: Any, options) -> str:
+    """``value`` if it is one of ``options`` (strings), else a ``ValueError`` listing them."""
+    options = tuple(options)
+    if not isinstance(value, str) or value not in options:
+        raise ValueError(f"{name}: expected one of {', '.join(options)}, found {value!r}")
+    return value
+
+
+def check_integer(name: str, value: Any, *, minimum: int | None = None, maximum: int | None = None) -> int:
+    """``value`` as an int (Python or NumPy integer, not bool) within ``[minimum, maximum]``.
+
+    >>> check_integer("chunk", 8, minimum=1, maximum=100)
+    8
+    >>> check_integer("chunk", 2.5, minimum=1)
+    Traceback (most recent call last):
+    ...
+    ValueError: chunk: expected an integer >= 1, found 2.5
+    """
+    bounds = []
+    if minimum is not None:
+        bounds.append(f">= {minimum}")
+    if maximum is not None:
+        bounds.append(f"<= {maximum}")
+    expected = "an integer" + (" " + " and ".join(bounds) if bounds else "")
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise ValueError(f"{name}: expected {expected}, found {value!r}")
+    value = int(value)
+    if (minimum is not None and value < minimum) or (maximum is not None and value > maximum):
+        raise ValueError(f"{name}: expected {expected}, found {value!r}")
+    return value
+
+
+def parse_number(text: str, what: str, rule: Range = FINITE, unit: str = "") -> float:
+    """Parse a number typed by a user; the message names ``what`` and quotes the text.
+
+    >>> parse_number("2.5", "--vary rho")
+    2.5
+    >>> parse_number("abc", "--rho", POSITIVE)
+    Traceback (most recent call last):
+    ...
+    ValueError: --rho: expected a finite number > 0, found 'abc'
+    """
+    try:
+        value = float(text)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what}: expected {rule.describe()}{unit}, found {text!r}") from None
+    if not rule.contains(value):
+        raise ValueError(f"{what}: expected {rule.describe()}{unit}, found {text!r}")
+    return value
+
+
+class FrozenMap(Mapping):
+    """A read-only mapping for frozen config objects (picklable, unlike ``types.MappingProxyType``).
+
+    >>> m = FrozenMap({"plant.m": "paper"})
+    >>> m["plant.m"], len(m), dict(m)
+    ('paper', 1, {'plant.m': 'paper'})
+    """
+
+    def __init__(self, data) -> None:
+        self._data = dict(data)
+
+    def __getitem__(self, key):
+        return self._data[key]
+
+    def __iter__(self):
+        return iter(self._data)
+
+    def __len__(self) -> int:
+        return len(self._data)
+
+    def __repr__(self) -> str:
+        return repr(self._data)

@@ -1,0 +1,97 @@
+"""Commands on the design: ``derive``, ``check``, ``pid``, ``noise``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from ..params import VARIANTS
+from ._common import (NONNEGATIVE_ARG, PHASE_ARG, POSITIVE_ARG, add_config_flags, add_design_flags, emit,
+                      load)
+
+__all__ = ["add_commands"]
+
+
+def _cmd_derive(args: argparse.Namespace) -> int:
+    from ..symbolic import derive
+    from ..symbolic.printing import derivation_json, derivation_latex, derivation_text
+
+    d = derive(args.variant)
+    if args.format == "json":
+        print(json.dumps(derivation_json(d)))
+    elif args.format == "latex":
+        print(derivation_latex(d, standalone=True), end="")
+    else:
+        print(derivation_text(d), end="")
+    return 0
+
+
+def _cmd_check(args: argparse.Namespace) -> int:
+    import warnings
+
+    from ..design import check_stability
+
+    cfg = load(args)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # reported in the output instead
+        report = check_stability(cfg, rho=args.rho, kappa=args.kappa, variant=args.variant)
+    emit(args, report, report.to_dict())
+    if not args.json:
+        for note in report.warnings:
+            print(f"warning: {note}")
+    return 0 if report.all_hold else 1
+
+
+def _cmd_pid(args: argparse.Namespace) -> int:
+    from ..design import design_pid
+
+    cfg = load(args)
+    pid = design_pid(
+        phi=args.phi if args.phi is not None else (cfg.phi if args.tau is None else cfg.plant.K * args.tau / cfg.plant.m),
+        tau=args.tau if args.tau is not None else cfg.pid.tau,
+        max_S=args.max_s if args.max_s is not None else cfg.pid.max_S,
+        phase_margin_deg=args.phase_margin if args.phase_margin is not None else cfg.pid.phase_margin_deg,
+    )
+    emit(args, pid, pid.to_dict())
+    return 0
+
+
+def _cmd_noise(args: argparse.Namespace) -> int:
+    from ..design import noise_analysis
+
+    cfg = load(args)
+    na = noise_analysis(cfg, rho=args.rho, kappa=args.kappa, variant=args.variant,
+                        noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
+                        stiffness=args.stiffness)
+    emit(args, na, na.to_dict())
+    return 0
+
+
+def add_commands(sub) -> None:
+    """Add the design commands to the subparsers ``sub``."""
+    p = sub.add_parser("derive", help="symbolic derivation of the observer")
+    p.add_argument("--variant", choices=VARIANTS, default="lag", help="model variant (default: lag)")
+    p.add_argument("--format", choices=("text", "latex", "json"), default="text")
+    p.set_defaults(run=_cmd_derive)
+
+    p = sub.add_parser("check", help="stability verdicts of an observer design (exit 1 if one fails)")
+    add_config_flags(p, default_preset="table1")
+    add_design_flags(p)
+    p.set_defaults(run=_cmd_check)
+
+    p = sub.add_parser("pid", help="sensitivity-based PID design (section 4.1)")
+    add_config_flags(p, default_preset="vcm")
+    p.add_argument("--phi", type=POSITIVE_ARG, help="plant gain phi [m/(V s)] (default: K tau / m)")
+    p.add_argument("--tau", type=POSITIVE_ARG, help="plant time constant tau [s]")
+    p.add_argument("--max-s", type=POSITIVE_ARG, help="bound of |S| [m/V]; k = 1/max|S|")
+    p.add_argument("--phase-margin", type=PHASE_ARG, help="phase margin [deg], in (0, 90)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(run=_cmd_pid)
+
+    p = sub.add_parser("noise", help="measurement noise in the friction estimate (section 3.4)")
+    add_config_flags(p, default_preset="vcm")
+    add_design_flags(p)
+    p.add_argument("--noise-rms", type=NONNEGATIVE_ARG, help="noise RMS [m] (>= 0)")
+    p.add_argument("--noise-bandwidth", type=POSITIVE_ARG, help="noise bandwidth [Hz] (> 0)")
+    p.add_argument("--stiffness", type=NONNEGATIVE_ARG, default=0.0, help="constant stiffness k [N/m] (default 0)")
+    p.set_defaults(run=_cmd_noise)

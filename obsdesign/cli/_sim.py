@@ -1,0 +1,205 @@
+"""Commands that simulate: ``simulate`` and ``sweep``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from .._validate import parse_number
+from ..params import VARIANTS
+from ..sim.registry import CONTROLLERS, PLANTS, SCHEDULES
+from ..sim.scenarios import SCENARIOS
+from ._common import (FINITE_ARG, NONNEGATIVE_ARG, POSITIVE_ARG, UsageError, add_config_flags, add_design_flags,
+                      check_output_file, emit, integer, load)
+
+__all__ = ["add_commands", "parse_vary", "parse_uncertain"]
+
+#: Scenario flags of ``simulate`` -> the fields of the scenario specs they set.
+_SPEC_FLAGS = {
+    "excitation": {"input_force": "force_rms", "excitation_bandwidth": "bandwidth"},
+    "constant": {"input_force": "force"},
+    "positioning": {"step_size": "step_size", "step_up": "step_up", "step_down": "step_down"},
+    "tracking": {},
+}
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    from ..sim import simulate
+    from ..sim.scenarios import scenario_spec
+
+    check_output_file("simulate", "--out", args.out, (".csv", ".npz"))
+    check_output_file("simulate", "--plot", args.plot, (".svg", ".png"))
+    if args.config is None and args.preset is None:
+        args.preset = "table1" if args.scenario in ("excitation", "constant") else "vcm"
+    cfg = load(args).override(noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
+                              quantization=args.quantization, dt=args.dt, rho=args.rho, kappa=args.kappa,
+                              variant=args.variant)
+    options = {field: getattr(args, flag) for flag, field in _SPEC_FLAGS[args.scenario].items()
+               if getattr(args, flag) is not None}
+    spec = type(scenario_spec(args.scenario))(**options)
+    res = simulate(cfg, spec, controller=args.controller, stiffness=args.stiffness, plant=args.plant,
+                   duration=args.duration, seed=args.seed, settle_tol=args.settle_tol,
+                   keep_trace=bool(args.out or args.plot))
+    if args.out:
+        (res.to_npz if args.out.lower().endswith(".npz") else res.to_csv)(args.out)
+    if args.plot:
+        from ..report.figures import save_trace_figure
+
+        save_trace_figure(res, args.plot)
+    emit(args, res, res.metrics)
+    return 0
+
+
+def _split(item: str, flag: str, syntax: str, n_parts: int) -> tuple[str, list[str]]:
+    name, sep, rest = item.partition("=")
+    parts = rest.split(":")
+    if not sep or not name or len(parts) != n_parts:
+        raise ValueError(f"{flag}: expected {syntax}, found {item!r}")
+    return name, parts
+
+
+def parse_vary(items: list[str]) -> dict[str, tuple[float, float, int]]:
+    """Parse ``NAME=LO:HI:N`` items.
+
+    >>> parse_vary(["rho=1.5:4:6"])
+    {'rho': (1.5, 4.0, 6)}
+    >>> parse_vary(["rho=1.5:4"])
+    Traceback (most recent call last):
+    ...
+    ValueError: --vary: expected NAME=LO:HI:N, found 'rho=1.5:4'
+    """
+    from ..sweeps.plan import check_names
+
+    out = {}
+    for item in items:
+        name, parts = _split(item, "--vary", "NAME=LO:HI:N", 3)
+        lo, hi = (parse_number(p, f"--vary {name}") for p in parts[:2])
+        n = int(parts[2]) if parts[2].strip().isdigit() else 0
+        if n < 1:
+            raise ValueError(f"--vary {name}: expected an integer N >= 1, found {parts[2]!r}")
+        out[name] = (lo, hi, n)
+    return check_names("--vary", out)
+
+
+def parse_uncertain(items: list[str]) -> dict[str, tuple[float, float]]:
+    """Parse ``NAME=LO:HI`` items.
+
+    >>> parse_uncertain(["Cf=0.3:0.4"])
+    {'Cf': (0.3, 0.4)}
+    """
+    from ..sweeps.plan import check_names
+
+    out = {}
+    for item in items:
+        name, parts = _split(item, "--uncertain", "NAME=LO:HI", 2)
+        lo, hi = (parse_number(p, f"--uncertain {name}") for p in parts)
+        if hi < lo:
+            raise ValueError(f"--uncertain {name}: expected LO <= HI, found {lo:g} > {hi:g}")
+        out[name] = (lo, hi)
+    return check_names("--uncertain", out)
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from .._io import atomic_write
+    from ..report.figures import save_figure
+    from ..report.sweep_figures import sweep_distribution_figure, sweep_map_figure
+    from ..sweeps import make_summary, sweep
+
+    vary = parse_vary(args.vary or [])
+    uncertain = parse_uncertain(args.uncertain or [])
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"obsdesign sweep: argument --out: expected a directory, found the file {args.out!r}")
+    if args.resume and not (out / "results.csv").exists():
+        raise UsageError(f"obsdesign sweep: argument --resume: no results.csv in {args.out!r} to resume")
+    cfg = load(args)
+    client = None
+    if args.scheduler:
+        try:
+            from distributed import Client
+        except ImportError:
+            raise UsageError("obsdesign sweep: argument --scheduler: needs dask[distributed] "
+                             "(pip install 'obsdesign[distributed]')") from None
+        try:
+            client = Client(args.scheduler, timeout="10s")
+        except OSError as e:
+            raise UsageError(f"obsdesign sweep: argument --scheduler: cannot reach {args.scheduler!r} ({e})") from None
+    try:
+        res = sweep(cfg, args.scenario, vary=vary, uncertain=uncertain, samples=args.samples, seed=args.seed,
+                    executor=client, workers=args.workers, out_dir=out, resume=args.resume,
+                    progress=sys.stderr.isatty(), duration=args.duration, variant=args.variant)
+    except KeyboardInterrupt:
+        print(f"obsdesign sweep: interrupted; finished runs are in {str(out / 'results.csv')!r}, "
+              "continue with --resume", file=sys.stderr)
+        return 130
+    except Exception as e:  # a worker process died (BrokenProcessPool, dask KilledWorker, lost connection)
+        if not _is_worker_failure(e):
+            raise
+        print(f"obsdesign sweep: a worker failed ({type(e).__name__}); finished runs are in "
+              f"{str(out / 'results.csv')!r}, continue with --resume", file=sys.stderr)
+        return 1
+    finally:
+        if client is not None:
+            client.close()
+    if res.rows and args.metric not in res.columns:
+        raise UsageError(f"obsdesign sweep: argument --metric: expected one of "
+                         f"{', '.join(c for c in res.columns if c not in ('status', 'error'))}, found {args.metric!r}")
+    summary = make_summary(res.rows, list(vary), metric=args.metric, resumed_runs=res.skipped, wall_s=res.wall_s)
+    save_figure(sweep_map_figure(res, list(vary), args.metric), out / "summary_map.svg")
+    save_figure(sweep_distribution_figure(res, args.metric), out / "summary_distributions.svg")
+    atomic_write(out / "summary.json", json.dumps(summary, indent=1))
+    print(json.dumps(summary))
+    return 0
+
+
+def _is_worker_failure(e: BaseException) -> bool:
+    import concurrent.futures
+
+    if isinstance(e, concurrent.futures.BrokenExecutor):
+        return True
+    return type(e).__module__.startswith("distributed") or type(e).__name__ in ("KilledWorker", "CommClosedError")
+
+
+def add_commands(sub) -> None:
+    """Add ``simulate`` and ``sweep`` to the subparsers ``sub``."""
+    p = sub.add_parser("simulate", help="closed-loop simulation of a scenario")
+    p.add_argument("scenario", choices=SCENARIOS)
+    add_config_flags(p, default_preset="table1 for excitation/constant, vcm otherwise")
+    p.add_argument("--controller", choices=CONTROLLERS.names())
+    add_design_flags(p, json_flag="print the metrics as one JSON object")
+    p.add_argument("--stiffness", choices=SCHEDULES.names(), default="estimated",
+                   help="observer stiffness schedule (default: estimated)")
+    p.add_argument("--plant", choices=PLANTS.names(), default="physical")
+    p.add_argument("--noise-rms", type=NONNEGATIVE_ARG, help="measurement noise RMS [m]")
+    p.add_argument("--noise-bandwidth", type=POSITIVE_ARG, help="measurement noise bandwidth [Hz]")
+    p.add_argument("--quantization", type=NONNEGATIVE_ARG, help="encoder resolution [m] (0: none)")
+    p.add_argument("--input-force", type=FINITE_ARG, help="open-loop force [N] (constant, or RMS of the excitation)")
+    p.add_argument("--duration", type=POSITIVE_ARG, help="length [s]")
+    p.add_argument("--dt", type=POSITIVE_ARG, help="sample time [s]")
+    p.add_argument("--seed", type=integer(0), default=0, help="noise seed (integer >= 0)")
+    p.add_argument("--step-size", type=FINITE_ARG, help="positioning step [m] (default 1e-3)")
+    p.add_argument("--step-up", type=NONNEGATIVE_ARG, help="time of the step up [s] (default 0.5)")
+    p.add_argument("--step-down", type=NONNEGATIVE_ARG, help="time of the step back [s] (default 3.0)")
+    p.add_argument("--excitation-bandwidth", type=POSITIVE_ARG, help="bandwidth of the excitation force [Hz] (default 5)")
+    p.add_argument("--settle-tol", type=POSITIVE_ARG, default=2e-6, help="settling band [m] (default 2e-6)")
+    p.add_argument("--out", metavar="FILE", help="write the trace to FILE.csv or FILE.npz")
+    p.add_argument("--plot", metavar="FILE", help="write a figure to FILE.svg or FILE.png")
+    p.set_defaults(run=_cmd_simulate)
+
+    p = sub.add_parser("sweep", help="design sweep with Monte-Carlo draws, locally or on Dask")
+    add_config_flags(p, default_preset="vcm")
+    p.add_argument("--scenario", required=True, choices=SCENARIOS)
+    p.add_argument("--vary", action="append", metavar="NAME=LO:HI:N", help="grid axis (repeatable)")
+    p.add_argument("--uncertain", action="append", metavar="NAME=LO:HI", help="uniform draw (repeatable)")
+    p.add_argument("--samples", type=integer(1), default=1, help="draws per grid point (default 1)")
+    p.add_argument("--duration", type=POSITIVE_ARG, help="simulated time per run [s]")
+    p.add_argument("--variant", choices=VARIANTS)
+    p.add_argument("--seed", type=integer(0), default=0)
+    p.add_argument("--out", required=True, metavar="DIR", help="folder for results.csv and the summary")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://127.0.0.1:8786")
+    p.add_argument("--workers", type=integer(1), help="local processes (default: all cores)")
+    p.add_argument("--resume", action="store_true", help="finish an interrupted sweep in --out")
+    p.add_argument("--metric", default="rms_error", help="metric for the best design (default rms_error)")
+    p.set_defaults(run=_cmd_sweep)

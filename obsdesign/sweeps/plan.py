@@ -1,0 +1,82 @@
+"""The plan of a sweep: a grid over the varied parameters times Monte-Carlo draws.
+
+Run ``r`` gets its own ``numpy.random.SeedSequence`` (the sweep seed's ``spawn``);
+the draws and the simulation's noise seed come from it, so a run's numbers do not
+depend on where or in which order it is executed.
+
+Examples
+--------
+>>> plan = make_plan({"rho": (1.0, 2.0, 2)}, {"Cf": (0.3, 0.4)}, samples=2, seed=0)
+>>> [(r.run, r.grid_point, r.sample, r.params["rho"]) for r in plan]
+[(0, 0, 0, 1.0), (1, 0, 1, 1.0), (2, 1, 0, 2.0), (3, 1, 1, 2.0)]
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..params import PARAMETERS
+
+__all__ = ["RunSpec", "make_plan", "check_names"]
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One run: its index, grid point, sample, seed and the parameter values to apply."""
+
+    run: int
+    grid_point: int
+    sample: int
+    seed: int
+    params: dict
+
+
+def check_names(kind: str, spec: dict) -> dict[str, tuple]:
+    """``spec`` if every key is a numeric config parameter (``ValueError`` naming ``kind`` otherwise).
+
+    Parameters
+    ----------
+    kind : str
+        The argument's name for messages (e.g. ``'vary'``).
+    spec : dict
+        Parameter name -> bounds.
+    """
+    if not isinstance(spec, dict):
+        raise TypeError(f"{kind}: expected a dict of parameter name -> bounds, found {type(spec).__name__}")
+    for name in spec:
+        if name not in PARAMETERS or name == "variant":
+            raise ValueError(f"{kind}: unknown parameter {name!r}; expected a numeric config field such as "
+                             "rho, omega_co, kappa, Cf, sigma, m")
+    return spec
+
+
+def make_plan(vary: dict, uncertain: dict, samples: int, seed: int) -> list[RunSpec]:
+    """The runs of a sweep in run order: grid point by grid point, ``samples`` draws each.
+
+    Parameters
+    ----------
+    vary : dict
+        ``{name: (low, high, n)}`` grid axes.
+    uncertain : dict
+        ``{name: (low, high)}`` uniform draws.
+    samples : int
+        Draws per grid point.
+    seed : int
+        Sweep seed.
+    """
+    axes = [np.linspace(lo, hi, n) for lo, hi, n in vary.values()]
+    grid = list(itertools.product(*axes)) if axes else [()]
+    n_runs = len(grid) * samples
+    children = np.random.SeedSequence(seed).spawn(n_runs)
+    plan = []
+    for g, point in enumerate(grid):
+        for j in range(samples):
+            r = g * samples + j
+            rng = np.random.default_rng(children[r])
+            params = {name: float(v) for name, v in zip(vary, point)}
+            params.update({name: float(rng.uniform(lo, hi)) for name, (lo, hi) in uncertain.items()})
+            plan.append(RunSpec(r, g, j, int(children[r].generate_state(1, np.uint32)[0]), params))
+    return plan

@@ -1,0 +1,106 @@
+"""The summary of a finished sweep: the one definition of the keys of ``summary.json``.
+
+``obsdesign sweep`` writes it and ``obsdesign report --sweep DIR`` reads it; both go
+through this module.
+
+Examples
+--------
+>>> summary = {"runs": 2, "ok": 2, "diverged": 0, "failed": 0, "resumed_runs": 0, "wall_s": 1.0,
+...            "metric": "rms_error", "best": {"rho": {"value": 2.0, "mean_metric": 1e-5}}}
+>>> check_summary(summary, "summary.json") == summary
+True
+>>> check_summary([], "summary.json")
+Traceback (most recent call last):
+...
+ValueError: summary.json: expected a JSON object with the keys runs, ok, diverged, failed, resumed_runs, wall_s, metric, best, found list
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+__all__ = ["SUMMARY_KEYS", "STATUS_VALUES", "best_value", "make_summary", "check_summary"]
+
+#: Keys of ``summary.json``, in order.
+SUMMARY_KEYS = ("runs", "ok", "diverged", "failed", "resumed_runs", "wall_s", "metric", "best")
+#: Values of a row's ``status``.
+STATUS_VALUES = ("ok", "diverged", "failed")
+
+
+def best_value(rows: list[dict], parameter: str, metric: str = "rms_error") -> tuple[float, float]:
+    """The value of a varied ``parameter`` with the lowest mean ``metric`` over its runs
+    (runs that failed or diverged count as infinitely bad).
+
+    Parameters
+    ----------
+    rows : list of dict
+        Typed rows of a sweep.
+    parameter : str
+        A varied parameter.
+    metric : str
+        A metric column.
+    """
+    groups: dict[float, list[float]] = {}
+    for row in rows:
+        value = row.get(metric)
+        ok = row["status"] == "ok" and value not in (None, "")
+        groups.setdefault(row[parameter], []).append(float(value) if ok else math.inf)
+    means = {p: float(np.mean(v)) for p, v in groups.items()}
+    best = min(means, key=means.get)
+    return best, means[best]
+
+
+def make_summary(rows: list[dict], varied, *, metric: str, resumed_runs: int, wall_s: float) -> dict[str, Any]:
+    """The ``summary.json`` of a sweep's rows (keys :data:`SUMMARY_KEYS`).
+
+    Parameters
+    ----------
+    rows : list of dict
+        Typed rows of a sweep.
+    varied : iterable of str
+        The varied parameters.
+    metric : str
+        The metric for the best design.
+    resumed_runs : int
+        Runs taken from an interrupted sweep.
+    wall_s : float
+        Wall time [s].
+    """
+    counts = {s: sum(r["status"] == s for r in rows) for s in STATUS_VALUES}
+    summary: dict[str, Any] = {"runs": len(rows), **counts, "resumed_runs": resumed_runs, "wall_s": wall_s,
+                               "metric": metric, "best": {}}
+    for name in varied:
+        value, score = best_value(rows, name, metric)
+        summary["best"][name] = {"value": value, "mean_metric": score if math.isfinite(score) else None}
+    return summary
+
+
+def check_summary(data: Any, source: str) -> dict[str, Any]:
+    """``data`` if it is a summary of the expected shape (``ValueError`` naming ``source`` otherwise).
+
+    Parameters
+    ----------
+    data : object
+        Parsed JSON.
+    source : str
+        Its file, for messages.
+    """
+    expected = f"a JSON object with the keys {', '.join(SUMMARY_KEYS)}"
+    if not isinstance(data, dict):
+        raise ValueError(f"{source}: expected {expected}, found {type(data).__name__}")
+    missing = [k for k in SUMMARY_KEYS if k not in data]
+    if missing:
+        raise ValueError(f"{source}: expected {expected}, found no {missing[0]!r}")
+    for key in ("runs", "ok", "diverged", "failed", "resumed_runs"):
+        if isinstance(data[key], bool) or not isinstance(data[key], int):
+            raise ValueError(f"{source}: {key}: expected an integer, found {data[key]!r}")
+    if not isinstance(data["metric"], str) or not isinstance(data["best"], dict):
+        raise ValueError(f"{source}: expected a metric name and a 'best' object, found {data['metric']!r}, "
+                         f"{type(data['best']).__name__}")
+    for name, best in data["best"].items():
+        if not isinstance(best, dict) or not {"value", "mean_metric"} <= set(best):
+            raise ValueError(f"{source}: best.{name}: expected an object with value and mean_metric, found {best!r}")
+    return data
