@@ -83,7 +83,7 @@ def _check_column(param: str, label: str, values: object) -> np.ndarray:
     arr = arr.astype(float).ravel()
     bad = np.flatnonzero(~np.isfinite(arr))
     if bad.size:
-        raise ValueError(f"{param}: expected finite values, found {arr[bad[0]]!r} in {label} at index {bad[0]}")
+        raise ValueError(f"{param}: expected finite values, found {float(arr[bad[0]])!r} in {label} at index {bad[0]}")
     if arr.size < MIN_SAMPLES:
         raise ValueError(f"{param}: expected at least {MIN_SAMPLES} samples, found {arr.size} in {label}")
     return arr
