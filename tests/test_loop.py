@@ -145,3 +145,103 @@ def test_result_is_frozen(la):
     with pytest.raises(Exception):
         la.max_S = 0.0  # type: ignore[misc]
     assert isinstance(la, LoopAnalysis)
+
+
+# --------------------------------------------------------------------------------------------
+# Step metrics (obsdesign.sim.step_metrics); here because this branch may add only these test files.
+from obsdesign.sim.step_metrics import step_metrics  # noqa: E402
+
+ZETA, WN = 0.4, 10.0
+
+
+@pytest.fixture(scope="module")
+def second_order():
+    import control as ct
+
+    sys = ct.tf([WN**2], [1.0, 2 * ZETA * WN, WN**2])
+    t = np.linspace(0.0, 3.0, 300_001)  # dt = 1e-5 s
+    resp = ct.step_response(sys, t)
+    return t, np.asarray(resp.outputs).ravel()
+
+
+def _analytic(t):
+    wd = WN * math.sqrt(1 - ZETA**2)
+    return 1.0 - np.exp(-ZETA * WN * t) / math.sqrt(1 - ZETA**2) * np.sin(wd * t + math.acos(ZETA))
+
+
+def test_step_metrics_against_step_info(second_order):
+    import control as ct
+
+    t, y = second_order
+    band = 0.02
+    info = ct.step_info(y, t, SettlingTimeThreshold=band, RiseTimeLimits=(0.1, 0.9), final_output=1.0)
+    m = step_metrics(t, y, t_step=0.0, y0=0.0, y1=1.0, settle_band=band * 1.0)  # relative band x |y1|
+    dt = t[1] - t[0]
+    assert m["overshoot"] == pytest.approx(info["Overshoot"] / 100.0, rel=1e-12)
+    assert m["peak_time"] == pytest.approx(info["PeakTime"], abs=1e-15)
+    # step_info takes the first sample past each limit; ours interpolates: within one sample
+    assert abs(m["rise_time"] - info["RiseTime"]) <= dt
+    # step_info's band is open (>= threshold is outside), ours closed: equal unless a sample hits the edge
+    assert abs(m["settling_time"] - info["SettlingTime"]) <= dt
+
+
+def test_step_metrics_against_closed_forms(second_order):
+    t, y = second_order
+    m = step_metrics(t, y, t_step=0.0, y0=0.0, y1=1.0, settle_band=0.02)
+    root = math.sqrt(1 - ZETA**2)
+    assert m["overshoot"] == pytest.approx(math.exp(-math.pi * ZETA / root), rel=1e-6)
+    assert m["peak_time"] == pytest.approx(math.pi / (WN * root), abs=1e-5)
+    # rise time: the analytic response's 10 % and 90 % crossings, by root finding
+    t10 = scipy.optimize.brentq(lambda s: _analytic(s) - 0.1, 1e-9, 0.2)
+    t90 = scipy.optimize.brentq(lambda s: _analytic(s) - 0.9, 0.05, math.pi / (WN * root))
+    assert m["rise_time"] == pytest.approx(t90 - t10, rel=1e-6)  # interpolation error O(dt^2)
+
+
+def test_step_metrics_is_symmetric_and_shift_invariant(second_order):
+    t, y = second_order
+    ref = step_metrics(t, y, t_step=0.0, y0=0.0, y1=1.0, settle_band=0.02)
+    # a step down from 3 to 1, starting at t = 0.5 s, preceded by a flat stretch
+    pre = np.arange(1, 50_001) * -1e-5
+    t2 = np.concatenate([pre[::-1], t]) + 0.5
+    y2 = np.concatenate([np.full(pre.size, 3.0), 3.0 - 2.0 * y])
+    m = step_metrics(t2, y2, t_step=0.5, y0=3.0, y1=1.0, settle_band=0.04)
+    for key in ref:
+        assert m[key] == pytest.approx(ref[key], rel=1e-9, abs=1e-12)
+
+
+def test_step_metrics_edge_cases():
+    t = np.arange(5) * 0.1
+    assert step_metrics(t, [1, 1, 1, 1, 1], t_step=0, y0=0, y1=1, settle_band=0.1) == {
+        "overshoot": 0.0, "rise_time": 0.0, "settling_time": 0.0, "peak_time": 0.0}
+    never = step_metrics(t, [0, 0.2, 0.5, 0.7, 0.8], t_step=0, y0=0, y1=1, settle_band=0.1)
+    assert never["rise_time"] is None and never["settling_time"] is None and never["overshoot"] == 0.0
+    lost = step_metrics(t, [0, 1, 1, np.nan, 1], t_step=0, y0=0, y1=1, settle_band=0.1)
+    assert lost["settling_time"] == pytest.approx(0.4)  # a NaN sample counts as outside the band
+
+
+@pytest.mark.parametrize("args, kwargs, exc, match", [
+    (([0, 1], [0, 1, 2]), {}, ValueError, "t, y: expected two 1-D arrays"),
+    (([0.0], [0.0]), {}, ValueError, "t: expected at least 2 samples"),
+    (([0, 0], [0, 1]), {}, ValueError, "t: expected strictly increasing"),
+    (([0, 1], [0, 1]), {"y1": 0.0}, ValueError, "y1: expected a value different from y0"),
+    (([0, 1], [0, 1]), {"settle_band": 0.0}, ValueError, "settle_band: expected a number > 0"),
+    (([0, 1], [0, 1]), {"t_step": 5.0}, ValueError, "t_step: expected a time within the trace"),
+    (([0, 1], [0, 1]), {"y0": "0"}, TypeError, "y0: expected a real number"),
+    (([0, 1], [0, 1]), {"y0": math.nan}, ValueError, "y0: expected a finite number"),
+])
+def test_step_metrics_errors(args, kwargs, exc, match):
+    kw = dict(t_step=0.0, y0=0.0, y1=1.0, settle_band=0.1) | kwargs
+    with pytest.raises(exc, match=match):
+        step_metrics(*args, **kw)
+
+
+def test_step_metrics_settling_matches_the_simulator(vcm):
+    res = od.simulate(vcm, "positioning", controller="pid+observer", duration=4.0)
+    holds = ((0.5, 3.0), (3.0, 4.0))  # the positioning scenario's holds (step up at 0.5 s, down at 3 s)
+    dt = vcm.observer.dt
+    for (start, end), expected in zip(holds, res.metrics["settling_time"]):
+        sel = (res.t >= start - 0.5 * dt) & (res.t < end - 0.5 * dt)
+        before = res.x_ref[np.nonzero(sel)[0][0] - 1]
+        m = step_metrics(res.t[sel], res.x[sel], t_step=start, y0=before, y1=res.x_ref[sel][0], settle_band=2e-6)
+        assert expected is not None and m["settling_time"] == pytest.approx(expected, rel=1e-12)
+        assert m["overshoot"] >= 0.0 and 0.0 < m["rise_time"] < m["settling_time"]
