@@ -4,7 +4,9 @@ The settling time has the simulator's definition (``_metrics`` of
 :mod:`obsdesign.sim.simulate`): over the samples from the step on, the last sample
 outside the band ``|y - y1| <= settle_band`` (a NaN counts as outside) is found; the
 step has settled at the next sample. No sample outside gives 0, a last sample outside
-gives ``None`` (never settles within the trace).
+gives ``None`` (never settles within the trace). The simulator counts ``(k + 1) dt`` from the
+first sample of the hold; here the time is ``t[settled] - t_step``: the same sample, equal up to
+the rounding of the time stamps.
 
 Examples
 --------
