@@ -1,0 +1,352 @@
+"""The exported whole controller: each language is run and compared with the simulator's ``u``.
+
+The exported step returns the command [V] after saturation with the load feed-forward, so
+``K * command - G`` must equal the simulator's ``u`` column (1e-9 relative to its largest value).
+The compensation knobs are checked against a reference step written here from the kernel and
+the knob law, itself first checked against the simulator with the default knobs.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.util
+import json
+import math
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+import obsdesign as od
+from obsdesign.export.controller import (
+    CompensationSpec,
+    controller_constants,
+    controller_files,
+    sanitize_comment,
+)
+from obsdesign.sim.discretize import coefficients
+from obsdesign.sim.friction import stiffness, track_reversal
+
+VCM = od.load_preset("vcm")
+HAS_GCC = shutil.which("gcc") is not None
+HAS_NODE = shutil.which("node") is not None
+HAS_OCTAVE = shutil.which("octave") is not None
+
+CASES = {
+    "tracking": (VCM, dict(scenario="tracking", controller="pid+observer")),
+    "positioning": (VCM, dict(scenario="positioning", controller="pid+observer", step_down=1.2)),
+    "pid-only": (VCM, dict(scenario="tracking", controller="pid")),
+    "saturated": (VCM.override(u_max=0.5), dict(scenario="positioning", controller="pid+observer", step_down=1.2)),
+    "noisy-lag": (od.load_preset("table1").override(noise_rms=2e-7),
+                  dict(scenario="tracking", controller="pid+observer")),
+}
+
+
+@pytest.fixture(scope="module", params=list(CASES))
+def case(request):
+    cfg, kw = CASES[request.param]
+    kw = dict(kw)
+    scenario = kw.pop("scenario")
+    res = od.simulate(cfg, scenario, duration=2.0, **kw)
+    assert not res.metrics["diverged"]
+    if request.param == "saturated":
+        cmd = (res.u + cfg.plant.G) / cfg.plant.K
+        assert np.sum(np.abs(np.abs(cmd) - 0.5) < 1e-12) > 100  # the limit is active for a while
+    return request.param, cfg, kw["controller"], res
+
+
+# ---------------------------------------------------------------------------------------------
+# Runners: each takes the files of one language and returns the commands for the inputs.
+def _run_python(files, x_ref, x_meas, tmp_path):
+    (path,) = [tmp_path / n for n in files]
+    path.write_text(files[path.name])
+    spec = importlib.util.spec_from_file_location(f"exported_controller_{id(files)}", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    ctrl = mod.Controller()
+    return np.array([ctrl.step(float(r), float(x)) for r, x in zip(x_ref, x_meas)])
+
+
+C_DRIVER = r"""
+#include <stdio.h>
+#include "obsdesign_controller.h"
+int main(int argc, char **argv) {
+    double r, x;
+    obsdesign_controller c;
+    FILE *in;
+    if (argc != 2 || !(in = fopen(argv[1], "r"))) return 2;
+    obsdesign_controller_init(&c);
+    while (fscanf(in, "%lf,%lf", &r, &x) == 2) printf("%.17g\n", obsdesign_controller_step(&c, r, x));
+    fclose(in);
+    return 0;
+}
+"""
+
+
+def _compile_c(files, tmp_path):
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+    (tmp_path / "driver.c").write_text(C_DRIVER)
+    exe = tmp_path / "driver"
+    subprocess.run(["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O2", f"-I{tmp_path}", "-o",
+                    str(exe), str(tmp_path / "driver.c"), str(tmp_path / "obsdesign_controller.c"), "-lm"],
+                   check=True, capture_output=True, text=True)
+    return exe
+
+
+def _run_c(files, x_ref, x_meas, tmp_path):
+    exe = _compile_c(files, tmp_path)
+    data = tmp_path / "in.csv"
+    np.savetxt(data, np.column_stack([x_ref, x_meas]), delimiter=",", fmt="%.17g")
+    out = subprocess.run([str(exe), str(data)], capture_output=True, text=True, check=True).stdout
+    return np.loadtxt(out.splitlines())
+
+
+def _run_js(files, x_ref, x_meas, tmp_path):
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+    (tmp_path / "in.json").write_text(json.dumps({"x_ref": list(map(float, x_ref)), "x_meas": list(map(float, x_meas))}))
+    module = (tmp_path / "obsdesign_controller.mjs").as_uri()
+    script = (f"import {{ Controller }} from {json.dumps(module)}; import fs from 'fs';"
+              f"const d = JSON.parse(fs.readFileSync({json.dumps(str(tmp_path / 'in.json'))}, 'utf8'));"
+              "const c = new Controller();"
+              "console.log(JSON.stringify(d.x_ref.map((r, i) => c.step(r, d.x_meas[i]))));")
+    out = subprocess.run(["node", "--input-type=module", "-e", script], capture_output=True, text=True, check=True)
+    return np.array(json.loads(out.stdout))
+
+
+def _run_octave(files, x_ref, x_meas, tmp_path, *, persistent=False):
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+    np.savetxt(tmp_path / "in.csv", np.column_stack([x_ref, x_meas]), delimiter=",", fmt="%.17g")
+    call = ("out(i) = obsdesign_controller(data(i, 1), data(i, 2));" if persistent else
+            "[out(i), st] = obsdesign_controller_step(st, data(i, 1), data(i, 2));")
+    script = ("data = dlmread('in.csv', ','); st = obsdesign_controller_init(); out = zeros(rows(data), 1);"
+              f"for i = 1:rows(data) {call} end; fprintf('%.17g\\n', out);")
+    out = subprocess.run(["octave", "--no-gui", "--quiet", "--no-window-system", "--eval", script],
+                         capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    assert out.returncode == 0, out.stderr
+    return np.loadtxt(out.stdout.splitlines())
+
+
+RUNNERS = {
+    "python": (_run_python, True),
+    "c": (_run_c, HAS_GCC),
+    "js": (_run_js, HAS_NODE),
+    "octave": (_run_octave, HAS_OCTAVE),
+}
+
+
+def _max_rel(command, cfg, u_ref):
+    u = cfg.plant.K * np.asarray(command) - cfg.plant.G
+    return float(np.max(np.abs(u - u_ref[: len(u)])) / np.max(np.abs(u_ref)))
+
+
+@pytest.mark.parametrize("language", list(RUNNERS))
+def test_exported_controller_reproduces_the_simulator(language, case, tmp_path):
+    run, available = RUNNERS[language]
+    if not available:
+        pytest.skip(f"{language}: toolchain not installed")
+    name, cfg, controller, res = case
+    n = len(res.t)
+    files = controller_files(cfg, language, controller=controller)
+    command = run(files, res.x_ref[:n], res.x_meas[:n], tmp_path)
+    assert command.shape == (n,)
+    assert _max_rel(command, cfg, res.u) <= 1e-9
+    assert np.all(np.abs(command) <= cfg.plant.u_max)
+
+
+@pytest.mark.skipif(not HAS_OCTAVE, reason="octave not installed")
+def test_octave_persistent_wrapper_equals_the_state_in_out_step(tmp_path):
+    res = od.simulate(VCM, "tracking", controller="pid+observer", duration=0.2)
+    files = controller_files(VCM, "octave")
+    a = _run_octave(files, res.x_ref, res.x_meas, tmp_path, persistent=True)
+    assert _max_rel(a, VCM, res.u) <= 1e-9
+
+
+def test_octave_files_are_well_formed():
+    files = controller_files(VCM, "octave")
+    for name, text in files.items():
+        assert text.startswith(f"function ") and re.match(rf"function .*\b{name[:-2]}\(", text)
+        assert "%#codegen" in text
+        # every 'function' (and control block) is closed: count block openers against 'end' lines
+        opens = len(re.findall(r"^\s*(function|if|for|while)\b", text, flags=re.M))
+        assert opens == len(re.findall(r"^\s*end\s*$", text, flags=re.M))
+    assert "persistent state" in files["obsdesign_controller.m"]
+    consts = controller_constants(VCM)
+    step = files["obsdesign_controller_step.m"]
+    for key, value in consts.items():
+        assert f"\n{key} = {value!r};\n" in step
+
+
+# ---------------------------------------------------------------------------------------------
+# Compensation knobs against a reference step written from the kernel and the knob law.
+def _reference_commands(loop, x_ref, x_meas, comp: CompensationSpec):
+    """Steps 2-5 of the kernel's sample, with ``comp = gain (ff + sigma vh [viscous]) fade``."""
+    A0, A1, b0, b1, g0, g1 = loop.A0, loop.A1, loop.b0, loop.b1, loop.g0, loop.g1
+    alpha = math.exp(-loop.dt / loop.tau_d)
+    y = np.zeros(2)
+    zf = np.zeros(2)
+    branch = (0.0, 0.0, 0.0)
+    k_coef = -1.0
+    integ = deriv = e_prev = u_prev = fh_prev = xm_prev = 0.0
+    out = []
+    for n, (r, xm) in enumerate(zip(x_ref, x_meas)):
+        if n == 0:
+            y = np.array([loop.v_hat0 - loop.L1 * xm, loop.f_hat0 - loop.L2 * xm])
+        else:
+            y = P @ y + bu * u_prev + gx0 * xm_prev + gx1 * xm
+        vh, fh = y[0] + loop.L1 * xm, y[1] + loop.L2 * xm
+        if n > 0:
+            zf = loop.lp_phi @ zf + loop.lp_g0 * fh_prev + loop.lp_g1 * fh
+        ff = zf[0]
+        branch = track_reversal(vh, xm, *branch, loop.s)
+        k = stiffness(xm, *branch, loop.Cf, loop.s, loop.kappa)
+        if k != k_coef:
+            k_coef = k
+            c = np.array(coefficients(*(A0 + k * A1).ravel(), loop.dt))
+            P, G0, G1 = c[0:4].reshape(2, 2), c[4:8].reshape(2, 2), c[8:12].reshape(2, 2)
+            bu = G0 @ (b0 + k * b1)
+            gx1 = G1 @ (g0 + k * g1)
+            gx0 = G0 @ (g0 + k * g1) - gx1
+        e = r - xm
+        if n == 0:
+            e_prev = e
+        deriv = alpha * deriv + (1.0 - alpha) * (e - e_prev) / loop.dt
+        integ_new = integ + e * loop.dt
+        u_volt = loop.kp * e + loop.ki * integ_new + loop.kd * deriv
+        fade = min(1.0, abs(vh) / comp.deadzone) if comp.deadzone > 0 else 1.0
+        u_volt += comp.gain * (ff + (loop.sigma * vh if comp.viscous else 0.0)) * fade / loop.K
+        total = u_volt + loop.G / loop.K
+        if abs(total) <= loop.u_max:
+            integ = integ_new
+        e_prev = e
+        total = min(max(total, -loop.u_max), loop.u_max)
+        u_prev = loop.K * total - loop.G
+        fh_prev, xm_prev = fh, xm
+        out.append(total)
+    return np.array(out)
+
+
+@pytest.fixture(scope="module")
+def knob_inputs():
+    kw = dict(controller="pid+observer", duration=1.0)
+    res = od.simulate(VCM, "tracking", **kw)
+    loop = od.simulate(VCM, "tracking", _return_inputs=True, **kw)
+    ref = _reference_commands(loop, res.x_ref, res.x_meas, CompensationSpec())
+    assert _max_rel(ref, VCM, res.u) <= 1e-9  # the reference is the simulator's loop
+    return loop, res
+
+
+KNOBS = [CompensationSpec(gain=0.5), CompensationSpec(viscous=True), CompensationSpec(deadzone=2e-3),
+         CompensationSpec(gain=0.7, viscous=True, deadzone=5e-4)]
+
+
+@pytest.mark.parametrize("language", list(RUNNERS))
+@pytest.mark.parametrize("comp", KNOBS, ids=lambda c: f"g{c.gain}-v{int(c.viscous)}-d{c.deadzone}")
+def test_compensation_knobs_follow_the_law(language, comp, knob_inputs, tmp_path):
+    run, available = RUNNERS[language]
+    if not available:
+        pytest.skip(f"{language}: toolchain not installed")
+    loop, res = knob_inputs
+    n = len(res.t)
+    ref = _reference_commands(loop, res.x_ref[:n], res.x_meas[:n], comp)
+    default = (res.u[:n] + VCM.plant.G) / VCM.plant.K
+    assert np.max(np.abs(ref - default)) > 1e-4  # the knob changes the command
+    command = run(controller_files(VCM, language, compensation=comp), res.x_ref[:n], res.x_meas[:n], tmp_path)
+    assert np.max(np.abs(command - ref)) <= 1e-9 * np.max(np.abs(ref))
+
+
+# ---------------------------------------------------------------------------------------------
+# Hostile config names, C hygiene, errors
+HOSTILE = ['"""; import os; os.system("x") #', "*/ int evil; /*", "a\\\nb", "nul\x00name", "two\nlines\r\nx",
+           "sep\u2028para\u2029", "</script><!--", "${x} `y` % %s ]]", "x" * 500]
+
+
+@pytest.mark.parametrize("name", HOSTILE, ids=range(len(HOSTILE)))
+def test_hostile_names_are_sanitized_everywhere(name, tmp_path):
+    cfg = dataclasses.replace(VCM, name=name)
+    safe = sanitize_comment(name)
+    assert re.fullmatch(r"[A-Za-z0-9 _.,+\-]*", safe) and len(safe) <= 64
+    for language in RUNNERS:
+        files = controller_files(cfg, language)
+        for text in files.values():
+            assert safe in text
+            assert not set(text) & {"\x00", "\u2028", "\u2029", "\r"}
+            if len(name) > 64:
+                assert name not in text
+    # the exported code still works: Python imports and runs, C compiles strictly, JS parses
+    x_ref, x_meas = np.full(50, 1e-4), np.linspace(0.0, 2e-5, 50)
+    (tmp_path / "plain").mkdir()
+    ref = _run_python(controller_files(VCM, "python"), x_ref, x_meas, tmp_path / "plain")
+    got = _run_python(controller_files(cfg, "python"), x_ref, x_meas, tmp_path)
+    np.testing.assert_array_equal(got, ref)
+    if HAS_GCC:
+        _compile_c(controller_files(cfg, "c"), tmp_path)
+    if HAS_NODE:
+        (tmp_path / "m.mjs").write_text(controller_files(cfg, "js")["obsdesign_controller.mjs"])
+        subprocess.run(["node", "--check", str(tmp_path / "m.mjs")], check=True, capture_output=True)
+
+
+@pytest.mark.skipif(not HAS_GCC or shutil.which("nm") is None, reason="gcc/nm not installed")
+def test_c_object_has_no_data_symbols_and_no_allocation(tmp_path):
+    files = controller_files(VCM, "c")
+    assert "malloc" not in files["obsdesign_controller.c"] and "static double od_" in files["obsdesign_controller.c"]
+    assert "typedef struct obsdesign_controller {" in files["obsdesign_controller.h"]
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+    obj = tmp_path / "controller.o"
+    subprocess.run(["gcc", "-std=c99", "-c", "-O2", "-o", str(obj), str(tmp_path / "obsdesign_controller.c")], check=True)
+    symbols = subprocess.run(["nm", str(obj)], capture_output=True, text=True, check=True).stdout.splitlines()
+    assert not [s for s in symbols if re.match(r"^\S*\s+[BbDdCc]\s", s)]  # read-only literals (r) are fine
+    defined = {s.split()[-1] for s in symbols if " T " in s}
+    assert defined == {"obsdesign_controller_init", "obsdesign_controller_step"}
+
+
+def test_python_module_uses_the_standard_library_only():
+    text = controller_files(VCM, "python")["obsdesign_controller.py"]
+    imports = set(re.findall(r"^(?:import|from) (\w+)", text, flags=re.M))
+    assert imports == {"math"}
+    assert "numba" not in text and "numpy" not in text
+
+
+def test_pid_export_does_not_compensate():
+    assert controller_constants(VCM, controller="pid")["COMP_ON"] == 0.0
+    assert controller_constants(VCM)["COMP_ON"] == 1.0
+
+
+@pytest.mark.parametrize("args, kwargs, exc, match", [
+    ((VCM, "fortran"), {}, ValueError, "language: expected one of c, python, octave, js"),
+    ((VCM, "c"), {"controller": "open-loop"}, ValueError, "controller: expected one of pid, pid"),
+    ((VCM, "c"), {"compensation": {"gain": 1.0}}, TypeError, "compensation: expected a CompensationSpec"),
+    ((VCM, "c"), {"controller": "pid", "compensation": CompensationSpec(gain=0.5)}, ValueError,
+     "compensation: only the controller 'pid\\+observer'"),
+    (("vcm", "c"), {}, TypeError, "cfg: expected a Config"),
+])
+def test_controller_files_errors(args, kwargs, exc, match):
+    with pytest.raises(exc, match=match):
+        controller_files(*args, **kwargs)
+
+
+@pytest.mark.parametrize("kwargs, exc, match", [
+    ({"gain": 0.0}, ValueError, r"compensation.gain: expected a number in \(0, 1\]"),
+    ({"gain": 1.01}, ValueError, "compensation.gain"),
+    ({"gain": math.nan}, ValueError, "compensation.gain"),
+    ({"gain": "1"}, TypeError, "compensation.gain: expected a real number"),
+    ({"viscous": 1}, TypeError, "compensation.viscous: expected True or False"),
+    ({"deadzone": -1e-3}, ValueError, "compensation.deadzone: expected a finite number >= 0"),
+    ({"deadzone": math.inf}, ValueError, "compensation.deadzone"),
+    ({"deadzone": True}, TypeError, "compensation.deadzone: expected a real number"),
+])
+def test_compensation_spec_errors(kwargs, exc, match):
+    with pytest.raises(exc, match=match):
+        CompensationSpec(**kwargs)
+
+
+def test_compensation_spec_is_frozen_and_normalized():
+    spec = CompensationSpec(gain=1, deadzone=0)
+    assert spec == CompensationSpec() and isinstance(spec.gain, float)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        spec.gain = 0.5  # type: ignore[misc]
