@@ -118,8 +118,8 @@ def test_dob_realization_equals_block_diagram(sigma):
     for f in (0.5, 30.0, 400.0, 5000.0):
         s = 1j * f
         H = sys(s)
-        assert complex(H[1, 0]) == pytest.approx(complex(Q(s)), rel=1e-12)
-        assert complex(H[1, 1]) == pytest.approx(complex(-Q(s) * (m * s * s + sigma * s)), rel=1e-12)
+        assert complex(H[1, 0]) == pytest.approx(complex(Q(s)), rel=1e-10)
+        assert complex(H[1, 1]) == pytest.approx(complex(-Q(s) * (m * s * s + sigma * s)), rel=1e-10)
     np.testing.assert_allclose(np.poly(sys.A), np.poly([-w, -w]), rtol=1e-12)
 
 
@@ -144,7 +144,7 @@ def test_paper_reproduces_kernel_recursion():
     worst = 0.0
     for n in range(len(r.u) - 1):
         z = np.array([r.v_hat[n] - L[0] * r.x_meas[n], r.f_hat[n] - L[1] * r.x_meas[n]])
-        scale = np.abs(z) + np.abs(L * r.x_meas[n + 1])     # the terms that cancel in the output
+        scale = np.abs(z) + np.abs(L * r.x_meas[n + 1]) + 1e-300     # the terms that cancel in the output
         out = estimator_step(est.Phi, est.gu, est.g0, est.g1, est.Cz, est.d, z, r.u[n], r.x_meas[n], r.x_meas[n + 1])
         worst = max(worst, float(np.max(np.abs(np.array(out) - (r.v_hat[n + 1], r.f_hat[n + 1])) / scale)))
     assert worst < 1e-12
@@ -178,8 +178,9 @@ def test_unbiased_on_linear_plant(cfg, tuned, name):
     The plant is sampled exactly; every model is exact for it (Kalman: to ~1e-12) except that the
     FOH treats x as linear between samples. That error is O(dt^2): an equivalent slow measurement
     offset ~ dt^2/12 |x''| = 1.5e-9 m reaching f_hat through |m s^2 + sigma s| at 2 Hz, i.e. about
-    1e-7 N (measured 1e-7 N for the ESO, 1.4e-6 N for the DOB, both falling 4x when dt halves;
-    see test_foh_error_is_second_order). Tolerances: 1e-5 N and 1e-6 m/s. The start error
+    1e-7 N (measured 1e-7 N for the ESO, 1.4e-6 N for the DOB, 4.3e-5 N for the vcm paper observer
+    with its 1.2e5 N/m feedthrough, each falling 4x when dt halves; see
+    test_foh_error_is_second_order). Tolerances: 1e-4 N and 1e-6 m/s. The start error
     (f0 = 0 instead of 0.3 N) decays with the slowest pole p: the run lasts 30/|p| + 1 s.
     """
     est = tuned[name]
@@ -189,7 +190,7 @@ def test_unbiased_on_linear_plant(cfg, tuned, name):
     u, x, v = _linear_plant(m, sig, 0.3, dt, n)
     v_hat, f_hat = run_offline(est, u, x)
     tail = slice(n - int(0.5 / dt), n)
-    assert np.max(np.abs(f_hat[tail] - 0.3)) < 1e-5
+    assert np.max(np.abs(f_hat[tail] - 0.3)) < 1e-4
     assert np.max(np.abs(v_hat[tail] - v[tail])) < 1e-6
 
 
@@ -217,7 +218,11 @@ def test_foh_error_is_second_order():
         for name, knob in (("eso", {"omega_o": 40.0}), ("dob", {"omega_q": 40.0})):
             _, f_hat = run_offline(build(name, cfg, **knob), u, x)
             errors[name, dt] = np.max(np.abs(f_hat[-int(1.0 / dt):] - 0.3))
-    for name in ("eso", "dob"):
+        vcm = od.load_preset("vcm").override(dt=dt)
+        u, x, v = _linear_plant(vcm.plant.m, vcm.friction.sigma, 0.3, dt, int(1.5 / dt))
+        _, f_hat = run_offline(build("paper", vcm), u, x)
+        errors["paper", dt] = np.max(np.abs(f_hat[-int(1.0 / dt):] - 0.3))
+    for name in ("eso", "dob", "paper"):
         assert errors[name, 1e-4] / errors[name, 5e-5] == pytest.approx(4.0, rel=0.05)
 
 

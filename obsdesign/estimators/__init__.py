@@ -24,6 +24,7 @@ from .base import estimator_step as estimator_step
 from .base import foh_matrices as foh_matrices
 from .base import run_offline as run_offline
 from .dob import build_dob as build_dob
+from .dob import dob_continuous as dob_continuous
 from .dob import q_filter as q_filter
 from .eso import build_eso as build_eso
 from .eso import eso_gains as eso_gains
@@ -46,7 +47,7 @@ from .tuning import velocity_noise_rms as velocity_noise_rms
 
 __all__ = [
     "MAX_STATES", "DiscreteEstimator", "discretize_observer", "estimator_output", "estimator_step",
-    "foh_matrices", "run_offline", "build_dob", "q_filter", "build_eso", "eso_gains", "build_kalman",
+    "foh_matrices", "run_offline", "build_dob", "dob_continuous", "q_filter", "build_eso", "eso_gains", "build_kalman",
     "noise_level", "build_paper", "build_paper_k0", "paper_dominant_pole", "with_lowpass", "ESTIMATORS",
     "EstimatorInfo", "build", "estimator_names", "RULES", "friction_noise_rms", "reference_estimator",
     "reference_noise_rms", "tune", "velocity_noise_rms",
