@@ -304,3 +304,8 @@ def test_initial_state_outputs(tuned):
 def test_bad_input(call, match):
     with pytest.raises(ValueError, match=match):
         call(od.load_preset("vcm"))
+
+
+def test_registry_tune_entry_matches_tune():
+    cfg = PRESETS["vcm"]()
+    assert ESTIMATORS["dob"].tune(cfg).params["omega_q"] == tune("dob", cfg).params["omega_q"]

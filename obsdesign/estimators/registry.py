@@ -16,6 +16,7 @@ ValueError: omega_o: 'eso' needs it, expected a finite number > 0 [rad/s], found
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 from typing import Callable
 
 from ..params import Config
@@ -46,6 +47,8 @@ class EstimatorInfo:
         (the paper entries); the baselines' bandwidth is their own knob.
     build : callable
         ``build(cfg, *, <knob>=..., sigma_model=None) -> DiscreteEstimator``.
+    tune : callable
+        ``tune(cfg, *, rule="noise", sigma_model=None) -> DiscreteEstimator`` (the fair rule).
     """
 
     code: int
@@ -54,23 +57,20 @@ class EstimatorInfo:
     knob_unit: str | None
     lowpass: bool
     build: Callable[..., DiscreteEstimator]
-
-    def tune(self, name: str, cfg: Config, *, rule: str = "noise", sigma_model: float | None = None):
-        """:func:`obsdesign.estimators.tuning.tune` for this entry."""
-        return tune(name, cfg, rule=rule, sigma_model=sigma_model)
+    tune: Callable[..., DiscreteEstimator]
 
 
 ESTIMATORS: dict[str, EstimatorInfo] = {
     "paper": EstimatorInfo(code=0, doc="the paper's reduced-order observer (fixed-k form; the kernel schedules k)",
-                           knob="stiffness", knob_unit="N/m", lowpass=True, build=build_paper),
+                           knob="stiffness", knob_unit="N/m", lowpass=True, build=build_paper, tune=partial(tune, "paper")),
     "paper-k0": EstimatorInfo(code=1, doc="the paper's gains with the stiffness schedule off (k = 0): ablation",
-                              knob=None, knob_unit=None, lowpass=True, build=build_paper_k0),
+                              knob=None, knob_unit=None, lowpass=True, build=build_paper_k0, tune=partial(tune, "paper-k0")),
     "eso": EstimatorInfo(code=2, doc="linear extended state observer, all three poles at -omega_o (Gao 2003)",
-                         knob="omega_o", knob_unit="rad/s", lowpass=False, build=build_eso),
+                         knob="omega_o", knob_unit="rad/s", lowpass=False, build=build_eso, tune=partial(tune, "eso")),
     "kalman": EstimatorInfo(code=3, doc="steady-state Kalman filter (current estimator), friction random walk",
-                            knob="q", knob_unit="N^2/s", lowpass=False, build=build_kalman),
+                            knob="q", knob_unit="N^2/s", lowpass=False, build=build_kalman, tune=partial(tune, "kalman")),
     "dob": EstimatorInfo(code=4, doc="disturbance observer, Q(s) = omega_q^2/(s + omega_q)^2, v_hat = s Q y",
-                         knob="omega_q", knob_unit="rad/s", lowpass=False, build=build_dob),
+                         knob="omega_q", knob_unit="rad/s", lowpass=False, build=build_dob, tune=partial(tune, "dob")),
 }
 
 
