@@ -1,0 +1,200 @@
+"""Fair tuning: each baseline's knob from the paper observer's noise or convergence rate.
+
+Noise model (as :mod:`obsdesign.design.noise`): band-limited white noise of RMS ``eta``,
+flat on ``[0, B]`` Hz. Sampled at ``dt`` its spectrum is flat on ``|theta| <= theta_B =
+2 pi B dt`` (``B`` capped at the Nyquist frequency), so a discrete transfer ``G(z)`` from
+the measurement to an estimate gives::
+
+    rms^2 = eta^2 / theta_B * integral_0^theta_B |G(e^{j theta})|^2 d theta
+
+Rules (``rule``):
+
+``"noise"`` (default)
+    The knob (ESO ``omega_o``, Kalman ``q``, DOB ``omega_q``) is solved with ``brentq`` on
+    its logarithm so that the RMS of the baseline's own friction estimate equals that of the
+    paper observer's friction estimate after the low-pass eq:3:4:5, both at ``k = 0``
+    (gross sliding) and both discrete at ``dt``. The baselines get no extra filter: each
+    compares the signal used for compensation.
+``"rate"``
+    The slowest error pole equals the paper's dominant pole ``-sqrt(kappa/m)(rho - 1)`` at
+    ``k = 0``: ``omega_o = omega_q = sqrt(kappa/m)(rho - 1)``; for the Kalman filter
+    ``q`` is solved so that the largest discrete pole radius is ``exp(p_dom dt)``.
+
+Both rules are independent of ``eta`` (every RMS is proportional to it; the Kalman gain
+depends on ``q / eta^2`` and its knob scales with ``eta^2``), but depend on ``B`` and ``dt``.
+
+Examples
+--------
+>>> import obsdesign as od
+>>> cfg = od.load_preset("vcm")
+>>> ref = reference_noise_rms(cfg)
+>>> est = tune("eso", cfg)
+>>> round(friction_noise_rms(est, *noise_level(cfg)) / ref, 6)
+1.0
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.integrate
+import scipy.optimize
+
+from ..params import Config
+from .base import DiscreteEstimator, check_positive
+from .dob import build_dob
+from .eso import build_eso
+from .kalman import build_kalman, noise_level
+from .paper import _check_config, build_paper, build_paper_k0, paper_dominant_pole, with_lowpass
+
+__all__ = ["RULES", "friction_noise_rms", "velocity_noise_rms", "estimate_noise_rms",
+           "reference_noise_rms", "reference_estimator", "tune", "noise_level"]
+
+RULES = ("noise", "rate")
+
+#: Search ranges of the knobs (log-uniform) for brentq.
+#: The Kalman range is for a sensor RMS of 1 um and scales with eta^2 (the gain depends on q / eta^2).
+_KNOBS = {"eso": ("omega_o", 1e-3, 1e5), "dob": ("omega_q", 1e-3, 1e5), "kalman": ("q", 1e-20, 1e8)}
+#: Relative tolerance of the solved knob (the RMS is a power of it: well inside 1 %).
+_XTOL = 1e-9
+
+
+def _response(est: DiscreteEstimator, row: int, theta: float) -> complex:
+    z = complex(math.cos(theta), math.sin(theta))
+    rhs = est.g0 + est.g1 * z
+    x = np.linalg.solve(z * np.eye(est.nz) - est.Phi, rhs.astype(complex))
+    return complex(est.Cz[row] @ x + est.d[row])
+
+
+def estimate_noise_rms(est: DiscreteEstimator, noise_rms: float, bandwidth_hz: float, *, row: int) -> float:
+    """RMS of output ``row`` (0: ``v_hat``, 1: ``f_hat``) for band-limited measurement noise."""
+    if not isinstance(est, DiscreteEstimator):
+        raise TypeError(f"est: expected a DiscreteEstimator, found {type(est).__name__}")
+    eta = float(noise_rms)
+    if not (math.isfinite(eta) and eta >= 0.0):
+        raise ValueError(f"noise_rms: expected a finite number >= 0 [m], found {noise_rms!r}")
+    B = check_positive("noise_bandwidth", bandwidth_hz, "Hz")
+    if eta == 0.0:
+        return 0.0
+    top = min(2.0 * math.pi * B * est.dt, math.pi)
+    poles = np.linalg.eigvals(est.Phi).astype(complex)
+    corners = {abs(np.log(p)) for p in poles if p != 0}
+    edges = [0.0, *sorted(c for c in corners if 0.0 < c < top), top]
+    # Each corner also gets points a decade either side, where the integrand bends.
+    fine = sorted({e * f for e in edges[1:-1] for f in (0.1, 1.0, 10.0) if 0.0 < e * f < top} | {0.0, top})
+
+    def power(theta: float) -> float:
+        return abs(_response(est, row, theta)) ** 2
+
+    total = 0.0
+    for lo, hi in zip(fine[:-1], fine[1:]):
+        total += scipy.integrate.quad(power, lo, hi, limit=400, epsrel=1e-8, epsabs=0.0)[0]
+    return eta * math.sqrt(total / top)
+
+
+def friction_noise_rms(est: DiscreteEstimator, noise_rms: float, bandwidth_hz: float) -> float:
+    """RMS [N] of ``f_hat`` for band-limited measurement noise of RMS ``noise_rms`` [m] over ``[0, B]`` Hz.
+
+    Computed from the discrete transfer ``y -> f_hat`` (:meth:`DiscreteEstimator.transfer_from_measurement`).
+    """
+    return estimate_noise_rms(est, noise_rms, bandwidth_hz, row=1)
+
+
+def velocity_noise_rms(est: DiscreteEstimator, noise_rms: float, bandwidth_hz: float) -> float:
+    """RMS [m/s] of ``v_hat`` for the same noise."""
+    return estimate_noise_rms(est, noise_rms, bandwidth_hz, row=0)
+
+
+def reference_estimator(cfg: Config) -> DiscreteEstimator:
+    """The paper observer at ``k = 0`` followed by the discretized low-pass eq:3:4:5 (``nz = 4``)."""
+    cfg = _check_config(cfg)
+    _check_paper_stable(cfg)
+    return with_lowpass(build_paper(cfg, stiffness=0.0), cfg.observer.omega_co)
+
+
+def reference_noise_rms(cfg: Config) -> float:
+    """RMS [N] of the paper's low-pass filtered friction estimate at ``k = 0``: the equal-noise target."""
+    return friction_noise_rms(reference_estimator(cfg), *noise_level(cfg))
+
+
+def _check_paper_stable(cfg: Config) -> float:
+    pole = paper_dominant_pole(cfg)
+    if not pole < 0.0:
+        raise ValueError(
+            f"rho: the reference needs a stable paper observer at k = 0 (rho > 1), found rho = "
+            f"{cfg.observer.rho!r} (dominant pole {pole:.4g} 1/s)")
+    return pole
+
+
+def _builder(name: str):
+    return {"eso": build_eso, "dob": build_dob, "kalman": build_kalman}[name]
+
+
+def _solve_log(fun, lo: float, hi: float, what: str) -> float:
+    """Root of ``fun(log knob)`` on ``[log lo, log hi]`` (``fun`` increasing in the knob)."""
+    a, b = math.log(lo), math.log(hi)
+    fa, fb = fun(a), fun(b)
+    if not (fa < 0.0 < fb):
+        raise ValueError(f"{what}: no knob in [{lo:g}, {hi:g}] reaches the target "
+                         f"(relative mismatch {fa:+.3g} at the low end, {fb:+.3g} at the high end)")
+    return math.exp(scipy.optimize.brentq(fun, a, b, xtol=_XTOL, rtol=_XTOL, maxiter=200))
+
+
+def tune(name: str, cfg: Config, *, rule: str = "noise", sigma_model: float | None = None) -> DiscreteEstimator:
+    """An estimator of the registry with its knob set by the fair tuning rule.
+
+    Parameters
+    ----------
+    name : {"paper", "paper-k0", "eso", "kalman", "dob"}
+        The paper entries are the reference and are returned as designed (``k = 0``).
+    cfg : Config
+    rule : {"noise", "rate"}
+        Equal friction-noise RMS with the paper's filtered estimate, or equal slowest pole.
+    sigma_model : float, optional
+        Viscous coefficient of the baselines' model (default: ``sigma`` for ``static``, 0 for ``lag``).
+
+    Raises
+    ------
+    ValueError
+        Unknown name or rule; unstable reference (``rho <= 1``); no sensor noise for ``"noise"``
+        or for the Kalman filter; no knob in the search range reaches the target.
+    """
+    if not isinstance(name, str) or name not in ("paper", "paper-k0", *_KNOBS):
+        raise ValueError(f"name: expected one of paper, paper-k0, eso, kalman, dob, found {name!r}")
+    if not isinstance(rule, str) or rule not in RULES:
+        raise ValueError(f"rule: expected one of {', '.join(RULES)}, found {rule!r}")
+    cfg = _check_config(cfg)
+    if name == "paper":
+        return build_paper(cfg, sigma_model=sigma_model)
+    if name == "paper-k0":
+        return build_paper_k0(cfg, sigma_model=sigma_model)
+    pole = _check_paper_stable(cfg)
+    knob, lo, hi = _KNOBS[name]
+    build = _builder(name)
+
+    def make(value: float) -> DiscreteEstimator:
+        return build(cfg, **{knob: value}, sigma_model=sigma_model, tuning=rule)
+
+    if rule == "rate" and name in ("eso", "dob"):
+        return make(-pole)
+    if name == "kalman":
+        eta = noise_level(cfg)[0]
+        check_positive("measurement_rms (sensor noise_rms or quantization)", eta, "m")
+        lo, hi = lo * eta * eta / 1e-12, hi * eta * eta / 1e-12
+    if rule == "rate":
+        target = pole * cfg.observer.dt          # log of the target pole radius
+
+        def mismatch(log_q: float) -> float:     # > 0 when faster than the target
+            return target - math.log(float(np.max(np.abs(make(math.exp(log_q)).poles()))))
+
+        return make(_solve_log(mismatch, lo, hi, "rate rule"))
+    eta, B = noise_level(cfg)
+    if eta == 0.0:
+        raise ValueError("sensor: the noise rule needs noise_rms > 0 or quantization > 0, found both 0")
+    ref = reference_noise_rms(cfg)
+
+    def mismatch(log_knob: float) -> float:
+        return friction_noise_rms(make(math.exp(log_knob)), eta, B) / ref - 1.0
+
+    return make(_solve_log(mismatch, lo, hi, "noise rule"))
