@@ -25,7 +25,7 @@ Examples
 >>> coulomb_level(p, -1.0)
 0.25
 >>> round(stribeck_level(0.35, 0.525, 1e-3, 1e-3), 6)  # Cf + (Fs - Cf) / e
-0.414381
+0.414379
 """
 
 from __future__ import annotations
