@@ -26,8 +26,8 @@ from obsdesign.export.controller import (
     controller_files,
     sanitize_comment,
 )
-from obsdesign.sim.discretize import coefficients
-from obsdesign.sim.friction import stiffness, track_reversal
+from obsdesign.design.discretize import coefficients
+from obsdesign.friction.presliding import stiffness, track_reversal
 
 VCM = od.load_preset("vcm")
 HAS_GCC = shutil.which("gcc") is not None

@@ -20,7 +20,7 @@ from obsdesign.estimators import (
 from obsdesign.estimators.eso import eso_continuous
 from obsdesign.estimators.kalman import kalman_model
 from obsdesign.sim import band_limited_noise
-from obsdesign.sim.discretize import step_matrices
+from obsdesign.design.discretize import step_matrices
 
 PRESETS = {"table1-static": lambda: od.load_preset("table1").override(variant="static"),
            "vcm": lambda: od.load_preset("vcm")}

@@ -14,7 +14,7 @@ over the last interval. ``nz <= 4``. A continuous observer
     Phi = exp(A dt),  gu = Gamma0 b,  g0 = (Gamma0 - Gamma1) g,  g1 = Gamma1 g
 
 with ``Gamma0 = dt phi1(A dt)``, ``Gamma1 = dt phi2(A dt)`` (see
-:mod:`obsdesign.sim.discretize`). :func:`foh_matrices` computes them from one
+:mod:`obsdesign.design.discretize`). :func:`foh_matrices` computes them from one
 matrix exponential of an augmented matrix, for any ``nz``.
 
 Examples

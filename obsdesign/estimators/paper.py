@@ -6,7 +6,7 @@ At a constant stiffness ``k`` the observer eq:3:1:2-3 is LTI::
 
 with ``A, b, g`` from :meth:`obsdesign.design.observer.ObserverDesign.matrices`. Its
 common discrete form is the kernel's own recursion
-(:func:`obsdesign.sim.discretize.step_matrices`): ``z = ytilde``, ``Cz = I``,
+(:func:`obsdesign.design.discretize.step_matrices`): ``z = ytilde``, ``Cz = I``,
 ``d = L = (L1, L2)``.
 
 ``paper`` and ``paper-k0`` give the same discrete estimator at ``k = 0``; they differ only
@@ -35,13 +35,13 @@ from .base import DiscreteEstimator
 
 
 def step_matrices(A, b, g, h):
-    """The kernel's exact 2x2 recursion, :func:`obsdesign.sim.discretize.step_matrices`.
+    """The kernel's exact 2x2 recursion, :func:`obsdesign.design.discretize.step_matrices`.
 
     Imported on call: ``sim`` sits downstream of ``estimators`` (its package ``__init__``
     loads the simulator, which will load the estimators), so a module-level import would
     close an import circle.
     """
-    from ..sim.discretize import step_matrices as exact
+    from ..design.discretize import step_matrices as exact
 
     return exact(A, b, g, h)
 

@@ -10,7 +10,7 @@ Per sample ``n`` (time ``n dt``):
 
 1. measure ``x_meas = Q(x + noise[n])`` (``Q``: rounding to the encoder resolution);
 2. :func:`observer_sample`: advance the observer from ``n-1`` to ``n`` with the exact
-   ZOH/FOH recursion of :mod:`obsdesign.sim.discretize` (stiffness of the interval) and apply
+   ZOH/FOH recursion of :mod:`obsdesign.design.discretize` (stiffness of the interval) and apply
    the back transformation eq:3:1:3; advance the low-pass filter eq:3:4:5 (exact for a
    linear input between samples); update the stiffness schedule for the next interval
    (``estimated``: a pre-sliding branch driven by ``x_meas`` and the sign of ``v_hat``;

@@ -1,0 +1,81 @@
+"""Parameter layout and helpers shared by the plant friction kernels (numba).
+
+Every model is described by a flat ``float64`` parameter array ``p`` whose first
+:data:`P_MODEL` entries are common to all models:
+
+====================  ===========  ==============================================
+index                 symbol       meaning
+====================  ===========  ==============================================
+``P_CF``  (0)         ``Cf``       Coulomb level, positive direction [N]
+``P_CF_NEG`` (1)      ``Cf_neg``   Coulomb level, negative direction [N]
+``P_SIGMA`` (2)       ``sigma``    viscous coefficient, positive direction [N s/m]
+``P_SIGMA_NEG`` (3)   ``sigma_neg`` viscous coefficient, negative direction [N s/m]
+``P_OFFSET`` (4)      ``offset``   constant force added to the friction [N]
+====================  ===========  ==============================================
+
+The model's own parameters follow from index :data:`P_MODEL`. The arrays are
+built and validated by :mod:`obsdesign.friction.registry`; the kernels trust them.
+
+Examples
+--------
+>>> import numpy as np
+>>> p = np.array([0.35, 0.25, 20.0, 10.0, 0.0])
+>>> viscous(p, 0.01), viscous(p, -0.01)
+(0.2, -0.1)
+>>> coulomb_level(p, -1.0)
+0.25
+>>> round(stribeck_level(0.35, 0.525, 1e-3, 1e-3), 6)  # Cf + (Fs - Cf) / e
+0.414379
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+__all__ = [
+    "PAPER", "LUGRE", "DAHL", "GMS",
+    "P_CF", "P_CF_NEG", "P_SIGMA", "P_SIGMA_NEG", "P_OFFSET", "P_MODEL",
+    "sign", "coulomb_level", "viscous", "stribeck_level",
+]
+
+#: Integer model codes dispatched by :mod:`obsdesign.friction.kernels`.
+PAPER, LUGRE, DAHL, GMS = 0, 1, 2, 3
+
+P_CF, P_CF_NEG, P_SIGMA, P_SIGMA_NEG, P_OFFSET = 0, 1, 2, 3, 4
+#: Index of the first model-specific parameter.
+P_MODEL = 5
+
+
+@njit(cache=True, error_model="numpy")
+def sign(a: float) -> float:
+    """``+1``, ``-1`` or ``0`` (as float)."""
+    if a > 0.0:
+        return 1.0
+    if a < 0.0:
+        return -1.0
+    return 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def coulomb_level(p, direction: float) -> float:
+    """Coulomb level [N] (>= 0) for a motion in ``direction`` (``-1`` selects ``Cf_neg``)."""
+    if direction < 0.0:
+        return p[P_CF_NEG]
+    return p[P_CF]
+
+
+@njit(cache=True, error_model="numpy")
+def viscous(p, v: float) -> float:
+    """Linear viscous force [N]: ``sigma v`` for ``v > 0``, ``sigma_neg v`` for ``v < 0``."""
+    if v < 0.0:
+        return p[P_SIGMA_NEG] * v
+    return p[P_SIGMA] * v
+
+
+@njit(cache=True, error_model="numpy")
+def stribeck_level(coulomb: float, static: float, vs: float, speed: float) -> float:
+    """Stribeck magnitude ``Fc + (Fs - Fc) exp(-(speed/vs)^2)`` [N] for ``speed = |v|``."""
+    r = speed / vs
+    return coulomb + (static - coulomb) * math.exp(-r * r)

@@ -1,0 +1,270 @@
+"""Registry of the plant friction models: names, codes, documented parameters, packing.
+
+Each model is a :class:`FrictionModelInfo` in :data:`FRICTION_MODELS`. Its
+``parameters`` are ``ParameterSpec(name, unit, doc, default, low, high)`` tuples
+(closed ranges); :meth:`FrictionModelInfo.pack` validates named values, fills the
+defaults and returns the flat ``float64`` array the numba kernels take (layout in
+:mod:`obsdesign.friction.common`).
+
+Defaults. The force levels are the paper's presets (``Cf`` = 0.35 N,
+``sigma`` = 21.1 N s/m, Table 1 and section 4, for the 0.538 kg axis). The
+dynamic parameters are the published sets: LuGre ``sigma0`` = 1e5 N/m,
+``sigma1`` = sqrt(1e5) N s/m, ``vs`` = 1e-3 m/s and ``Fs/Fc`` = 1.5 from Canudas de
+Wit et al. (1995), Table 1; Dahl with the same rest stiffness and ``alpha`` = 1
+(Olsson et al. 1998); GMS with the same total stiffness split over ``N`` = 4
+elements (Al-Bender et al. 2005 structure). The GMS attraction parameter
+``C`` = 20 N/s and its element distribution rule are this package's choice
+(documented in docs/friction-models.md), not published values.
+
+Examples
+--------
+>>> info = FRICTION_MODELS["lugre"]
+>>> info.code, info.n_state({})
+(1, 3)
+>>> p = info.pack({"Cf_neg": 0.3, "offset": 0.05})
+>>> p[:5].tolist()  # Cf, Cf_neg, sigma, sigma_neg, offset
+[0.35, 0.3, 21.1, 21.1, 0.05]
+>>> info.pack({"sigma0": -1.0})
+Traceback (most recent call last):
+...
+ValueError: lugre.sigma0: expected a finite number in [1000, 1e+09] N/m, found -1.0
+>>> FRICTION_MODELS["gms"].n_state({"N": 6})
+14
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from .common import DAHL, GMS, LUGRE, PAPER
+
+__all__ = ["ParameterSpec", "FrictionModelInfo", "FRICTION_MODELS", "friction_code"]
+
+
+class ParameterSpec(NamedTuple):
+    """One named parameter: ``(name, unit, doc, default, low, high)``; ``low <= value <= high``."""
+
+    name: str
+    unit: str
+    doc: str
+    default: Any
+    low: float
+    high: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class FrictionModelInfo:
+    """A plant friction model: code for the kernels, documented parameters, packing rule."""
+
+    name: str
+    code: int
+    doc: str
+    parameters: tuple[ParameterSpec, ...]
+    _layout: Callable[[dict[str, Any]], list[float]]
+    _n_state: Callable[[dict[str, Any]], int]
+
+    def defaults(self) -> dict[str, Any]:
+        """The default value of every parameter, by name."""
+        return {spec.name: spec.default for spec in self.parameters}
+
+    def resolve(self, params: Mapping[str, Any]) -> dict[str, Any]:
+        """Validated parameters with the defaults filled in (``None`` asymmetry resolved)."""
+        if not isinstance(params, Mapping):
+            raise TypeError(f"{self.name}: expected a mapping of parameter names to values, "
+                            f"found {type(params).__name__}")
+        specs = {spec.name: spec for spec in self.parameters}
+        unknown = sorted(set(params) - set(specs))
+        if unknown:
+            raise ValueError(f"{self.name}: unknown parameter {unknown[0]!r}; "
+                             f"expected one of {', '.join(specs)}")
+        values = self.defaults()
+        values.update(params)
+        out: dict[str, Any] = {}
+        for name, spec in specs.items():
+            out[name] = _check(f"{self.name}.{name}", spec, values[name], (self.name, name))
+        if "k" in params and params["k"] is not None and "K" in params:
+            raise ValueError(f"{self.name}.K: give either the total stiffness K or the element "
+                             f"stiffnesses k, not both")
+        if "Cf_neg" in out and out["Cf_neg"] is None:
+            out["Cf_neg"] = out["Cf"]
+        if "sigma_neg" in out and out["sigma_neg"] is None:
+            out["sigma_neg"] = out["sigma"]
+        if "Fs" in out and out["Fs"] < out["Cf"]:
+            raise ValueError(f"{self.name}.Fs: expected Fs >= Cf = {out['Cf']!r} N "
+                             f"(stiction at least the Coulomb level), found {out['Fs']!r}")
+        return out
+
+    def pack(self, params: Mapping[str, Any]) -> np.ndarray:
+        """Validate ``params`` (names of :attr:`parameters`), fill defaults, return ``p``.
+
+        Raises
+        ------
+        ValueError
+            Unknown name, non-finite or out-of-range value, inconsistent values.
+        TypeError
+            A value of the wrong type (e.g. a string, a bool, a float for ``N``).
+        """
+        return np.array(self._layout(self.resolve(params)), dtype=np.float64)
+
+    def n_state(self, params: Mapping[str, Any]) -> int:
+        """Length of the internal state array for these parameters."""
+        return self._n_state(self.resolve(params))
+
+
+def friction_code(name: str) -> int:
+    """Integer code of the model ``name`` (``ValueError`` naming the choices)."""
+    if not isinstance(name, str):
+        raise TypeError(f"friction model: expected a string, found {type(name).__name__} {name!r}")
+    if name not in FRICTION_MODELS:
+        raise ValueError(f"friction model: expected one of {', '.join(FRICTION_MODELS)}, found {name!r}")
+    return FRICTION_MODELS[name].code
+
+
+def _fmt(a: float) -> str:
+    return f"{a:g}"
+
+
+def _check_number(label: str, spec: ParameterSpec, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{label}: expected a real number, found {type(value).__name__} {value!r}")
+    number = float(value)
+    if not (math.isfinite(number) and spec.low <= number <= spec.high):
+        raise ValueError(f"{label}: expected a finite number in [{_fmt(spec.low)}, {_fmt(spec.high)}]"
+                         f"{' ' + spec.unit if spec.unit else ''}, found {value!r}")
+    return number
+
+
+#: Parameters that are integers, and parameters that are sequences (one value per element).
+_INTEGER = {("gms", "N")}
+_SEQUENCE = {("gms", "k"), ("gms", "alpha")}
+
+
+def _check(label: str, spec: ParameterSpec, value: Any, key: tuple[str, str]) -> Any:
+    """Validate one value against its spec (``None`` where the default is ``None``)."""
+    if value is None:
+        if spec.default is None:
+            return None
+        raise TypeError(f"{label}: expected a real number, found None")
+    if key in _INTEGER:
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+            raise TypeError(f"{label}: expected an integer, found {type(value).__name__} {value!r}")
+        if not spec.low <= value <= spec.high:
+            raise ValueError(f"{label}: expected an integer in [{spec.low}, {spec.high}], found {value!r}")
+        return int(value)
+    if key in _SEQUENCE:
+        if isinstance(value, (str, bytes, Mapping)) or not hasattr(value, "__len__"):
+            raise TypeError(f"{label}: expected a sequence of numbers, found {type(value).__name__} {value!r}")
+        return [_check_number(f"{label}[{i}]", spec, item) for i, item in enumerate(value)]
+    return _check_number(label, spec, value)
+
+
+# --- parameter sets -------------------------------------------------------------------------
+
+_CF = ParameterSpec("Cf", "N", "Coulomb friction level, positive direction (Fc)", 0.35, 1e-6, 1e3)
+_SIGMA = ParameterSpec("sigma", "N s/m", "viscous coefficient, positive direction (sigma2)", 21.1, 0.0, 1e4)
+_COMMON = (
+    ParameterSpec("Cf_neg", "N", "Coulomb level for v < 0 (None: Cf)", None, 1e-6, 1e3),
+    ParameterSpec("sigma_neg", "N s/m", "viscous coefficient for v < 0 (None: sigma)", None, 0.0, 1e4),
+    ParameterSpec("offset", "N", "constant force added to the friction", 0.0, -1e3, 1e3),
+)
+_STRIBECK = (
+    ParameterSpec("Fs", "N", "static (stiction) level, positive direction; Fs_neg = Fs Cf_neg / Cf",
+                  0.525, 1e-6, 1e3),
+    ParameterSpec("vs", "m/s", "Stribeck velocity", 1e-3, 1e-6, 1.0),
+)
+
+
+def _header(q: dict[str, Any]) -> list[float]:
+    return [q["Cf"], q["Cf_neg"], q["sigma"], q["sigma_neg"], q["offset"]]
+
+
+def _stribeck(q: dict[str, Any]) -> list[float]:
+    return [q["Fs"], q["Fs"] * q["Cf_neg"] / q["Cf"], q["vs"]]
+
+
+def _paper_layout(q: dict[str, Any]) -> list[float]:
+    return [q["Cf"], q["Cf"], q["sigma"], q["sigma"], 0.0, q["s"], q["beta"]]
+
+
+def _lugre_layout(q: dict[str, Any]) -> list[float]:
+    return _header(q) + _stribeck(q) + [q["sigma0"], q["sigma1"]]
+
+
+def _dahl_layout(q: dict[str, Any]) -> list[float]:
+    return _header(q) + [q["sigma0"], q["alpha"]]
+
+
+def gms_elements(q: dict[str, Any]) -> tuple[list[float], list[float]]:
+    """Element stiffnesses and shares: explicit ``k``/``alpha`` or the default rule.
+
+    Default rule: equal stiffness ``K / N`` and slip displacements
+    ``2 i Fs / (K (N + 1))``, i = 1..N (evenly spaced up to about ``2 Fs / K``),
+    which gives ``alpha_i = 2 i / (N (N + 1))``.
+    """
+    n = q["N"]
+    k = q["k"] if q["k"] is not None else [q["K"] / n] * n
+    alpha = q["alpha"] if q["alpha"] is not None else [2.0 * (i + 1) / (n * (n + 1)) for i in range(n)]
+    for name, seq in (("k", k), ("alpha", alpha)):
+        if len(seq) != n:
+            raise ValueError(f"gms.{name}: expected {n} values (one per element, N = {n}), found {len(seq)}")
+    if abs(sum(alpha) - 1.0) > 1e-9:
+        raise ValueError(f"gms.alpha: expected shares summing to 1, found sum {sum(alpha)!r}")
+    return list(k), list(alpha)
+
+
+def _gms_layout(q: dict[str, Any]) -> list[float]:
+    k, alpha = gms_elements(q)
+    return _header(q) + _stribeck(q) + [q["C"], q["sigma1"], float(q["N"])] + k + alpha
+
+
+FRICTION_MODELS: dict[str, FrictionModelInfo] = {
+    "paper": FrictionModelInfo(
+        name="paper", code=PAPER,
+        doc="Coulomb with log-shaped pre-sliding memory (eq:2:3:1-2:3:5) and viscous lag; kernel in sim/friction.py",
+        parameters=(
+            ParameterSpec("Cf", "N", "Coulomb friction level", 0.35, 0.0, 1e3),
+            ParameterSpec("sigma", "N s/m", "viscous coefficient", 21.1, 0.0, 1e4),
+            ParameterSpec("s", "1/m", "pre-sliding shape factor (z = s x)", 3000.0, 1.0, 1e7),
+            ParameterSpec("beta", "s", "viscous lag time constant (0: static)", 0.001, 0.0, 1.0),
+        ),
+        _layout=_paper_layout, _n_state=lambda q: 3,
+    ),
+    "lugre": FrictionModelInfo(
+        name="lugre", code=LUGRE,
+        doc="LuGre bristle model with Stribeck curve (Canudas de Wit et al. 1995)",
+        parameters=(_CF, _SIGMA) + _COMMON + _STRIBECK + (
+            ParameterSpec("sigma0", "N/m", "bristle stiffness", 1e5, 1e3, 1e9),
+            ParameterSpec("sigma1", "N s/m", "bristle (micro-)damping", math.sqrt(1e5), 0.0, 1e5),
+        ),
+        _layout=_lugre_layout, _n_state=lambda q: 3,
+    ),
+    "dahl": FrictionModelInfo(
+        name="dahl", code=DAHL,
+        doc="Dahl rate-independent pre-sliding model (Dahl 1968)",
+        parameters=(_CF, _SIGMA) + _COMMON + (
+            ParameterSpec("sigma0", "N/m", "rest stiffness dF/dx at F = 0", 1e5, 1e2, 1e9),
+            ParameterSpec("alpha", "", "shape exponent of the stress-strain curve", 1.0, 0.25, 4.0),
+        ),
+        _layout=_dahl_layout, _n_state=lambda q: 3,
+    ),
+    "gms": FrictionModelInfo(
+        name="gms", code=GMS,
+        doc="Generalized Maxwell-slip model with N elements (Al-Bender et al. 2005)",
+        parameters=(_CF, _SIGMA) + _COMMON + _STRIBECK + (
+            ParameterSpec("C", "N/s", "attraction parameter of the slip relaxation", 20.0, 1e-3, 1e6),
+            ParameterSpec("sigma1", "N s/m", "micro-damping of the elements (sum of b_i)", 0.0, 0.0, 1e5),
+            ParameterSpec("N", "", "number of elements", 4, 1, 64),
+            ParameterSpec("K", "N/m", "total element stiffness (used when k is None)", 1e5, 1e2, 1e9),
+            ParameterSpec("k", "N/m", "element stiffnesses, N values (None: K / N each)", None, 1.0, 1e9),
+            ParameterSpec("alpha", "", "element shares of s(v), N values summing to 1 (None: 2 i / (N (N+1)))",
+                          None, 1e-9, 1.0),
+        ),
+        _layout=_gms_layout, _n_state=lambda q: 2 + 2 * q["N"],
+    ),
+}
