@@ -39,6 +39,10 @@ _LAZY = {
     "simulate": "sim",
     "sweep": "sweeps",
     "SweepResult": "sweeps",
+    "load_trace": "data",
+    "identify": "data",
+    "Trace": "data",
+    "Identification": "data",
 }
 
 __all__ = [
@@ -62,7 +66,8 @@ def __getattr__(name: str):
         value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
         globals()[name] = value
         return value
-    if name in ("design", "sim", "report", "symbolic", "params", "cli", "export", "friction", "studies", "sweeps"):
+    if name in ("design", "sim", "report", "symbolic", "params", "cli", "export", "friction", "studies", "sweeps",
+                "data", "estimators"):
         return importlib.import_module(f".{name}", __name__)
     raise AttributeError(f"module 'obsdesign' has no attribute {name!r}")
 

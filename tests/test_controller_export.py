@@ -36,9 +36,9 @@ HAS_OCTAVE = shutil.which("octave") is not None
 
 CASES = {
     "tracking": (VCM, dict(scenario="tracking", controller="pid+observer")),
-    "positioning": (VCM, dict(scenario="positioning", controller="pid+observer", step_down=1.2)),
+    "positioning": (VCM, dict(scenario=od.sim.Positioning(step_down=1.2), controller="pid+observer")),
     "pid-only": (VCM, dict(scenario="tracking", controller="pid")),
-    "saturated": (VCM.override(u_max=0.5), dict(scenario="positioning", controller="pid+observer", step_down=1.2)),
+    "saturated": (VCM.override(u_max=0.5), dict(scenario=od.sim.Positioning(step_down=1.2), controller="pid+observer")),
     "noisy-lag": (od.load_preset("table1").override(noise_rms=2e-7),
                   dict(scenario="tracking", controller="pid+observer")),
 }
@@ -234,7 +234,7 @@ def _reference_commands(loop, x_ref, x_meas, comp: CompensationSpec):
 def knob_inputs():
     kw = dict(controller="pid+observer", duration=1.0)
     res = od.simulate(VCM, "tracking", **kw)
-    loop = od.simulate(VCM, "tracking", _return_inputs=True, **kw)
+    loop = od.sim.prepare(VCM, "tracking", **kw)
     ref = _reference_commands(loop, res.x_ref, res.x_meas, CompensationSpec())
     assert _max_rel(ref, VCM, res.u) <= 1e-9  # the reference is the simulator's loop
     return loop, res

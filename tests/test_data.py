@@ -178,7 +178,8 @@ TRUE = dict(m=2.0, sigma=20.0, Cf=1.0, G=3.0)
 
 def _simulated_trace(s: float) -> Trace:
     cfg = od.load_preset("vcm").override(m=TRUE["m"], sigma=TRUE["sigma"], Cf=TRUE["Cf"], G=TRUE["G"], s=s, dt=1e-4)
-    res = od.simulate(cfg, "excitation", input_force=20.0, duration=20.0, seed=1, noise_rms=1e-7, quantization=1e-7)
+    res = od.simulate(cfg.override(noise_rms=1e-7, quantization=1e-7), od.sim.Excitation(force_rms=20.0), duration=20.0,
+                      seed=1)
     # the simulator's u is the net force K u_volt - G: the actuator force is u + G
     return Trace(t=res.t, position=res.x_meas, force=res.u + TRUE["G"], sample_time=1e-4, source="simulated")
 

@@ -264,7 +264,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     >>> import obsdesign as od
     >>> from obsdesign.data import Trace
     >>> cfg = od.load_preset("vcm").override(m=2.0, sigma=20.0, Cf=1.0, s=1e5, G=3.0, dt=1e-4)
-    >>> res = od.simulate(cfg, "excitation", input_force=20.0, duration=10.0, seed=1)
+    >>> res = od.simulate(cfg, od.sim.Excitation(force_rms=20.0), duration=10.0, seed=1)
     >>> tr = Trace(t=res.t, position=res.x_meas, force=res.u + 3.0, sample_time=1e-4)  # actuator force
     >>> ident = identify(tr)
     >>> [round(p, 1) for p in (ident.m, ident.sigma, ident.Cf, ident.offset)]

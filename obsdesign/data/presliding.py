@@ -32,6 +32,17 @@ MIN_DISTINCT = 5
 def presliding_map(travel: np.ndarray, *, s: float, Cf: float, direction: float) -> np.ndarray:
     """Coulomb force [N] after a reversal from gross sliding, along ``|x - x_r|`` = ``travel`` [m].
 
+    Parameters
+    ----------
+    travel : ndarray
+        Displacement since the reversal [m].
+    s : float
+        Pre-sliding scale [1/m].
+    Cf : float
+        Coulomb level [N].
+    direction : float
+        +1 or -1, the direction of the new motion.
+
     eq:2:3:3 with ``f_r = -direction`` and eq:2:3:4; ``z ln|z|`` is taken as 0 at ``z = 0``.
     """
     zeta = np.minimum(s * np.abs(travel), 1.0)
@@ -53,6 +64,19 @@ def fit_presliding(*, x: np.ndarray, x_f: np.ndarray, v: np.ndarray, a: np.ndarr
                    m: float, sigma: float, Cf: float, offset: float, rows: int,
                    window: float) -> tuple[float | None, str]:
     """``(s, note)``: ``s`` [1/m] fitted from post-reversal segments, or ``None`` and the reason.
+
+    Parameters
+    ----------
+    x, x_f, v, a, u_f : ndarray
+        Raw and filtered position [m], velocity [m/s], acceleration [m/s^2] and filtered force [N], per sample.
+    dt : float
+        Sample time [s].
+    m, sigma, Cf, offset : float
+        The rigid-body and gross-sliding fit.
+    rows : ndarray
+        Indices of the samples the fit may use.
+    window : float
+        Travel after a reversal [m] that counts as pre-sliding.
 
     A reversal resolves pre-sliding when the filtered position stays within ``window`` [m]
     of the reversal point for at least ``MIN_ROWS`` rows of the identification grid

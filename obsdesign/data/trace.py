@@ -109,6 +109,15 @@ def _check_time(t: np.ndarray, label: str) -> float:
 def zero_phase_velocity(position: np.ndarray, sample_time: float, cutoff_hz: float | None = None) -> np.ndarray:
     """Velocity [m/s] by a zero-phase Butterworth low-pass and central differences.
 
+    Parameters
+    ----------
+    position : ndarray
+        Position samples [m].
+    sample_time : float
+        Sample time [s].
+    cutoff_hz : float, optional
+        Cut-off of the zero-phase filter [Hz].
+
     The filter is 4th order, run forwards and backwards (``sosfiltfilt``), with
     cut-off ``cutoff_hz`` (default a tenth of the sampling rate, the rule of
     :func:`obsdesign.data.identify`); central differences are exact for a

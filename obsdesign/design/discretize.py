@@ -37,7 +37,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["coefficients", "coefficient_matrices", "step_matrices"]
+__all__ = ["coefficients", "coefficient_matrices", "step_matrices", "lowpass_arrays"]
 
 _TERMS = 16
 
@@ -127,3 +127,19 @@ def step_matrices(A: np.ndarray, b: np.ndarray, g: np.ndarray, h: float):
     """
     Phi, G0, G1 = coefficient_matrices(A, h)
     return Phi, G0 @ np.asarray(b, float), (G0 - G1) @ np.asarray(g, float), G1 @ np.asarray(g, float)
+
+
+def lowpass_arrays(omega_co: float, dt: float):
+    """FOH recursion ``(Phi, g0, g1)`` of the low-pass eq:3:4:5 with state (f_filtered, its derivative).
+
+    Parameters
+    ----------
+    omega_co : float
+        Cutoff [rad/s].
+    dt : float
+        Sample time [s].
+    """
+    w = omega_co
+    A = np.array([[0.0, 1.0], [-w * w, -2.0 * w]])
+    Phi, _, g0, g1 = step_matrices(A, np.zeros(2), np.array([0.0, w * w]), dt)
+    return np.ascontiguousarray(Phi), g0, g1

@@ -37,8 +37,8 @@ import control as ct
 import numpy as np
 
 from ..params import Config, load_preset
-from .pid import PIDDesign, _peak, design_pid
-from .results import ResultDisplay
+from .pid import PIDDesign, design_pid, peak_magnitude
+from .._display import ResultDisplay
 
 __all__ = ["LoopAnalysis", "loop_analysis", "loop_figure"]
 
@@ -166,8 +166,8 @@ def loop_analysis(cfg: Config | None = None, *, phi: float | None = None, tau: f
     S = ct.feedback(ct.tf([1.0], [1.0]), L)  # 1 / (1 + L)
     T = ct.feedback(L, 1)  # L / (1 + L)
     gm, pm, _, wpc, wgc, _ = ct.stability_margins(L)
-    max_S, w_S = _peak(S)
-    max_T, w_T = _peak(T)
+    max_S, w_S = peak_magnitude(S)
+    max_T, w_T = peak_magnitude(T)
     poles = sorted((complex(p) for p in ct.poles(T)), key=lambda p: (p.real, p.imag))
     return LoopAnalysis(
         gain_margin_db=20.0 * math.log10(gm) if math.isfinite(gm) else math.inf,

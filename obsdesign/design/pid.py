@@ -30,7 +30,7 @@ from .._display import ResultDisplay
 from .._validate import NONNEGATIVE, POSITIVE, Range
 from ..params import Config
 
-__all__ = ["PIDDesign", "design_pid", "pid_gains", "pid_from_config", "pid_from_gains"]
+__all__ = ["PIDDesign", "design_pid", "pid_gains", "pid_from_config", "pid_from_gains", "peak_magnitude"]
 
 _POS = POSITIVE
 _PHASE = Range(low=0.0, high=90.0)
@@ -98,8 +98,19 @@ class PIDDesign(ResultDisplay):
                 ("closed loop stable", self.closed_loop_stable)]
 
 
-def _peak(sys: ct.TransferFunction) -> tuple[float, float]:
-    """Peak magnitude over frequency: dense log grid, then a bounded refinement."""
+def peak_magnitude(sys: ct.TransferFunction) -> tuple[float, float]:
+    """Peak magnitude over frequency and where it is: dense log grid, then a bounded refinement.
+
+    Parameters
+    ----------
+    sys : control.TransferFunction
+        A stable SISO system.
+
+    Returns
+    -------
+    (float, float)
+        ``max |sys(j omega)|`` and ``omega`` [rad/s].
+    """
     w = np.logspace(-4, 6, 4001)
     mag = np.abs(ct.frequency_response(sys, w).complex.ravel())
     i = int(mag.argmax())
@@ -116,7 +127,7 @@ def _build(k: float, T_I: float, tau: float, phi: float, phase_margin_deg: float
     H = ct.tf([phi], [tau, 1.0, 0.0])
     C = ct.tf([k * tau * T_I, k * (tau + T_I), k], [T_I, 0.0])
     S = ct.feedback(H, C)  # H / (1 + H C), eq:Syd
-    peak, w_peak = _peak(S)
+    peak, w_peak = peak_magnitude(S)
     gm, pm, _, _, wgc, _ = ct.stability_margins(C * H)
     stable = bool(np.all(np.real(ct.poles(S)) < 0))
     return PIDDesign(

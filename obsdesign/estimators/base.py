@@ -56,6 +56,15 @@ MAX_STATES = 4
 def check_positive(name: str, value, unit: str) -> float:
     """``value`` as a float, or one ValueError naming ``name``, the range and the value found.
 
+    Parameters
+    ----------
+    name : str
+        The argument's name for messages.
+    value : object
+        The value to check.
+    unit : str
+        Its unit, for messages.
+
     >>> check_positive("omega_o", -1.0, "rad/s")
     Traceback (most recent call last):
     ...
@@ -71,6 +80,13 @@ def check_positive(name: str, value, unit: str) -> float:
 
 def foh_matrices(A: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(Phi, Gamma0, Gamma1)`` of ``A`` over ``h`` from one augmented matrix exponential.
+
+    Parameters
+    ----------
+    A : ndarray
+        Continuous system matrix.
+    h : float
+        Sample time [s].
 
     ``expm([[A h, I, 0], [0, 0, I], [0, 0, 0]])`` holds ``exp(A h)``, ``phi1(A h)`` and
     ``phi2(A h)`` in its first block row; ``Gamma0 = h phi1``, ``Gamma1 = h phi2``.
@@ -93,7 +109,19 @@ def foh_matrices(A: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, np.nd
 
 
 def discretize_observer(A: np.ndarray, b: np.ndarray, g: np.ndarray, h: float):
-    """``(Phi, gu, g0, g1)`` of ``z' = A z + b u + g y`` with ZOH ``u`` and FOH ``y`` (exact)."""
+    """``(Phi, gu, g0, g1)`` of ``z' = A z + b u + g y`` with ZOH ``u`` and FOH ``y`` (exact).
+
+    Parameters
+    ----------
+    A : ndarray
+        Continuous observer matrix.
+    b : ndarray
+        Input vector.
+    g : ndarray
+        Measurement vector.
+    h : float
+        Sample time [s].
+    """
     Phi, G0, G1 = foh_matrices(A, h)
     b, g = np.asarray(b, float), np.asarray(g, float)
     return Phi, G0 @ b, (G0 - G1) @ g, G1 @ g
@@ -256,6 +284,8 @@ def run_offline(est: DiscreteEstimator, u: np.ndarray, y: np.ndarray, *, z0: np.
         Measured displacement [m].
     z0 : ndarray, shape (nz,), optional
         Start state; default ``est.initial_state(y[0], v0, f0)``.
+    v0, f0 : float
+        Initial velocity [m/s] and friction [N] estimates.
 
     Returns
     -------

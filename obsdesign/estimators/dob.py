@@ -47,6 +47,11 @@ __all__ = ["build_dob", "q_filter", "dob_continuous"]
 def q_filter(omega_q: float) -> ct.TransferFunction:
     """``Q(s) = omega_q^2/(s + omega_q)^2`` as a python-control transfer function (unit DC gain).
 
+    Parameters
+    ----------
+    omega_q : float
+        Cutoff [rad/s].
+
     >>> float(q_filter(3.0).dcgain())
     1.0
     """
@@ -64,7 +69,17 @@ def _matrices(w: float, m: float, sig: float):
 
 
 def dob_continuous(omega_q: float, m: float, sigma_model: float) -> ct.StateSpace:
-    """The continuous realization: inputs ``(u, y)``, outputs ``(v_hat, f_hat)``."""
+    """The continuous realization: inputs ``(u, y)``, outputs ``(v_hat, f_hat)``.
+
+    Parameters
+    ----------
+    omega_q : float
+        Q-filter cutoff [rad/s].
+    m : float
+        Mass [kg].
+    sigma_model : float
+        Viscous coefficient of the nominal model [N s/m].
+    """
     A, b, g, L = _matrices(check_positive("omega_q", omega_q, "rad/s"), m, sigma_model)
     return ct.ss(A, np.column_stack([b, g]), np.eye(2), np.column_stack([np.zeros(2), L]),
                  inputs=["u", "x_meas"], outputs=["v_hat", "f_hat"])
@@ -73,6 +88,17 @@ def dob_continuous(omega_q: float, m: float, sigma_model: float) -> ct.StateSpac
 def build_dob(cfg: Config, *, omega_q: float, sigma_model: float | None = None,
               tuning: str = "manual") -> DiscreteEstimator:
     """DOB with Q-filter cutoff ``omega_q`` [rad/s], discretized at ``cfg.observer.dt``.
+
+    Parameters
+    ----------
+    cfg : Config
+        The design (plant, sensor, sample time).
+    omega_q : float
+        Q-filter cutoff [rad/s].
+    sigma_model : float, optional
+        Viscous coefficient of the nominal model (default from the variant).
+    tuning : str
+        How the knob was chosen (recorded in the result).
 
     Raises
     ------

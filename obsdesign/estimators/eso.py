@@ -41,6 +41,15 @@ __all__ = ["build_eso", "eso_gains", "eso_continuous"]
 def eso_gains(omega_o: float, m: float, sigma_model: float) -> np.ndarray:
     """``(l1, l2, l3)`` placing the three error poles at ``-omega_o``.
 
+    Parameters
+    ----------
+    omega_o : float
+        Observer bandwidth [rad/s].
+    m : float
+        Mass [kg].
+    sigma_model : float
+        Viscous coefficient of the model [N s/m].
+
     >>> eso_gains(10.0, 1.0, 0.0).tolist()
     [30.0, 300.0, -1000.0]
     """
@@ -50,7 +59,17 @@ def eso_gains(omega_o: float, m: float, sigma_model: float) -> np.ndarray:
 
 
 def eso_continuous(omega_o: float, m: float, sigma_model: float):
-    """``(A, b, c, l)`` of the continuous model and gains; the error matrix is ``A - l c``."""
+    """``(A, b, c, l)`` of the continuous model and gains; the error matrix is ``A - l c``.
+
+    Parameters
+    ----------
+    omega_o : float
+        Observer bandwidth [rad/s].
+    m : float
+        Mass [kg].
+    sigma_model : float
+        Viscous coefficient of the model [N s/m].
+    """
     A = np.array([[0.0, 1.0, 0.0], [0.0, -sigma_model / m, -1.0 / m], [0.0, 0.0, 0.0]])
     b = np.array([0.0, 1.0 / m, 0.0])
     c = np.array([1.0, 0.0, 0.0])
@@ -60,6 +79,17 @@ def eso_continuous(omega_o: float, m: float, sigma_model: float):
 def build_eso(cfg: Config, *, omega_o: float, sigma_model: float | None = None,
               tuning: str = "manual") -> DiscreteEstimator:
     """ESO with all error poles at ``-omega_o`` [rad/s], discretized at ``cfg.observer.dt``.
+
+    Parameters
+    ----------
+    cfg : Config
+        The design (plant, sensor, sample time).
+    omega_o : float
+        Observer bandwidth [rad/s].
+    sigma_model : float, optional
+        Viscous coefficient of the model (default from the variant).
+    tuning : str
+        How the knob was chosen (recorded in the result).
 
     Raises
     ------

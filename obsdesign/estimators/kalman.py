@@ -41,6 +41,11 @@ __all__ = ["build_kalman", "kalman_model", "noise_level"]
 def noise_level(cfg: Config) -> tuple[float, float]:
     """``(eta, B)``: sensor noise RMS [m] and bandwidth [Hz] as in :func:`obsdesign.noise_analysis`.
 
+    Parameters
+    ----------
+    cfg : Config
+        The design; its sensor section.
+
     ``eta = sqrt(noise_rms^2 + quantization^2/12)`` (the encoder's rounding as uniform noise).
 
     >>> import obsdesign as od
@@ -53,7 +58,17 @@ def noise_level(cfg: Config) -> tuple[float, float]:
 
 
 def kalman_model(m: float, sigma_model: float, dt: float):
-    """``(Ad, Bd, c, G)`` of the sampled model with the friction as a random walk."""
+    """``(Ad, Bd, c, G)`` of the sampled model with the friction as a random walk.
+
+    Parameters
+    ----------
+    m : float
+        Mass [kg].
+    sigma_model : float
+        Viscous coefficient of the model [N s/m].
+    dt : float
+        Sample time [s].
+    """
     A = np.array([[0.0, 1.0, 0.0], [0.0, -sigma_model / m, -1.0 / m], [0.0, 0.0, 0.0]])
     Ad, G0, _ = foh_matrices(A, dt)
     Bd = G0 @ np.array([0.0, 1.0 / m, 0.0])
@@ -70,6 +85,12 @@ def build_kalman(cfg: Config, *, q: float, measurement_rms: float | None = None,
         Intensity of the friction random walk [N^2/s]; its variance per sample is ``q dt``.
     measurement_rms : float, optional
         Measurement noise RMS [m]; default the sensor's (:func:`noise_level`).
+    cfg : Config
+        The design (plant, sensor, sample time).
+    sigma_model : float, optional
+        Viscous coefficient of the model (default from the variant).
+    tuning : str
+        How the knob was chosen (recorded in the result).
 
     Raises
     ------

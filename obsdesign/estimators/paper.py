@@ -51,6 +51,13 @@ __all__ = ["build_paper", "build_paper_k0", "with_lowpass", "lowpass_recursion",
 def model_sigma(cfg: Config, sigma_model: float | None) -> float:
     """Viscous coefficient [N s/m] of the linear model: ``sigma`` for ``static``, 0 for ``lag``.
 
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+    sigma_model : float, optional
+        An explicit value (returned when given).
+
     ``sigma_model`` overrides it (a finite number >= 0).
     """
     if sigma_model is None:
@@ -70,6 +77,11 @@ def _check_config(cfg) -> Config:
 
 def paper_dominant_pole(cfg: Config) -> float:
     """Largest real part [1/s] of the paper observer's poles at ``k = 0`` (gross sliding).
+
+    Parameters
+    ----------
+    cfg : Config
+        The design.
 
     For both variants this is ``-sqrt(kappa/m) (rho - 1)``.
 
@@ -94,6 +106,10 @@ def build_paper(cfg: Config, *, stiffness: float = 0.0, sigma_model: float | Non
     sigma_model : float, optional
         Must match the variant (``sigma`` for ``static``, 0 for ``lag``): the paper's
         observer has its model built in.
+    name : str
+        Registry name recorded in the result.
+    schedule : str
+        The kernel's stiffness schedule this entry runs with.
 
     Raises
     ------
@@ -125,12 +141,27 @@ def build_paper(cfg: Config, *, stiffness: float = 0.0, sigma_model: float | Non
 
 
 def build_paper_k0(cfg: Config, *, sigma_model: float | None = None) -> DiscreteEstimator:
-    """The paper's gains with the stiffness schedule off (``k = 0`` always): the ablation."""
+    """The paper's gains with the stiffness schedule off (``k = 0`` always): the ablation.
+
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+    sigma_model : float, optional
+        Viscous coefficient of the model (default from the variant).
+    """
     return build_paper(cfg, stiffness=0.0, sigma_model=sigma_model, name="paper-k0", schedule="off")
 
 
 def lowpass_recursion(omega_co: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """FOH recursion ``(Phi, g0, g1)`` of eq:3:4:5 with state ``(f_filtered, its derivative)``.
+
+    Parameters
+    ----------
+    omega_co : float
+        Cutoff of eq:3:4:5 [rad/s].
+    dt : float
+        Sample time [s].
 
     The same recursion as the simulator's filter: exact for an input linear between samples.
     """
@@ -142,6 +173,13 @@ def lowpass_recursion(omega_co: float, dt: float) -> tuple[np.ndarray, np.ndarra
 
 def with_lowpass(est: DiscreteEstimator, omega_co: float) -> DiscreteEstimator:
     """``est`` with its friction estimate passed through ``F(s) = omega_co^2/(s + omega_co)^2``.
+
+    Parameters
+    ----------
+    est : DiscreteEstimator
+        The estimator.
+    omega_co : float
+        Cutoff of eq:3:4:5 [rad/s].
 
     The filter's FOH recursion is fed by ``f_hat[n-1]`` and ``f_hat[n]``; substituting
     ``f_hat[n] = Cz_f z[n] + d_f y[n]`` and the estimator's own recursion gives one

@@ -68,7 +68,19 @@ def _response(est: DiscreteEstimator, row: int, theta: float) -> complex:
 
 
 def estimate_noise_rms(est: DiscreteEstimator, noise_rms: float, bandwidth_hz: float, *, row: int) -> float:
-    """RMS of output ``row`` (0: ``v_hat``, 1: ``f_hat``) for band-limited measurement noise."""
+    """RMS of output ``row`` (0: ``v_hat``, 1: ``f_hat``) for band-limited measurement noise.
+
+    Parameters
+    ----------
+    est : DiscreteEstimator
+        The estimator.
+    noise_rms : float
+        Noise RMS [m].
+    bandwidth_hz : float
+        Noise bandwidth [Hz].
+    row : int
+        Output row (0: velocity, 1: friction).
+    """
     if not isinstance(est, DiscreteEstimator):
         raise TypeError(f"est: expected a DiscreteEstimator, found {type(est).__name__}")
     eta = float(noise_rms)
@@ -96,25 +108,56 @@ def estimate_noise_rms(est: DiscreteEstimator, noise_rms: float, bandwidth_hz: f
 def friction_noise_rms(est: DiscreteEstimator, noise_rms: float, bandwidth_hz: float) -> float:
     """RMS [N] of ``f_hat`` for band-limited measurement noise of RMS ``noise_rms`` [m] over ``[0, B]`` Hz.
 
+    Parameters
+    ----------
+    est : DiscreteEstimator
+        The estimator.
+    noise_rms : float
+        Noise RMS [m].
+    bandwidth_hz : float
+        Noise bandwidth [Hz].
+
     Computed from the discrete transfer ``y -> f_hat`` (:meth:`DiscreteEstimator.transfer_from_measurement`).
     """
     return estimate_noise_rms(est, noise_rms, bandwidth_hz, row=1)
 
 
 def velocity_noise_rms(est: DiscreteEstimator, noise_rms: float, bandwidth_hz: float) -> float:
-    """RMS [m/s] of ``v_hat`` for the same noise."""
+    """RMS [m/s] of ``v_hat`` for the same noise.
+
+    Parameters
+    ----------
+    est : DiscreteEstimator
+        The estimator.
+    noise_rms : float
+        Noise RMS [m].
+    bandwidth_hz : float
+        Noise bandwidth [Hz].
+    """
     return estimate_noise_rms(est, noise_rms, bandwidth_hz, row=0)
 
 
 def reference_estimator(cfg: Config) -> DiscreteEstimator:
-    """The paper observer at ``k = 0`` followed by the discretized low-pass eq:3:4:5 (``nz = 4``)."""
+    """The paper observer at ``k = 0`` followed by the discretized low-pass eq:3:4:5 (``nz = 4``).
+
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+    """
     cfg = _check_config(cfg)
     _check_paper_stable(cfg)
     return with_lowpass(build_paper(cfg, stiffness=0.0), cfg.observer.omega_co)
 
 
 def reference_noise_rms(cfg: Config) -> float:
-    """RMS [N] of the paper's low-pass filtered friction estimate at ``k = 0``: the equal-noise target."""
+    """RMS [N] of the paper's low-pass filtered friction estimate at ``k = 0``: the equal-noise target.
+
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+    """
     return friction_noise_rms(reference_estimator(cfg), *noise_level(cfg))
 
 

@@ -47,8 +47,9 @@ from dataclasses import dataclass
 
 from ..design.pid import pid_gains
 from ..params import Config
-from ..sim import discretize, friction
-from ..sim.simulate import _lowpass_arrays
+from ..design import discretize
+from ..design.discretize import lowpass_arrays
+from ..friction import presliding as friction
 from .codegen import _plain_source, export_spec
 
 __all__ = ["CompensationSpec", "controller_files", "controller_constants", "sanitize_comment", "LANGUAGES",
@@ -112,6 +113,13 @@ def _real(name: str, value) -> float:
 def sanitize_comment(text: str, *, limit: int = NAME_MAX) -> str:
     """A user string made safe for any comment or docstring of the generated code.
 
+    Parameters
+    ----------
+    text : str
+        User text (e.g. a config name).
+    limit : int
+        Longest result.
+
     Keeps ``[A-Za-z0-9 _.,+-]``, replaces every other character with ``_`` and caps the length.
 
     >>> sanitize_comment("a */ b\\nc\\u2028d")
@@ -132,6 +140,15 @@ def controller_constants(cfg: Config, *, controller: str = "pid+observer",
                          compensation: CompensationSpec = CompensationSpec()) -> dict[str, float]:
     """Every number of the generated controller, computed as :func:`obsdesign.simulate` computes it.
 
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+    controller : {'pid+observer', 'pid'}
+        The controller.
+    compensation : CompensationSpec
+        The compensation knobs.
+
     Keys are the constant names of the generated code (``DT``, ``KP``, ``A0_0``, ...);
     flags (``COMP_ON``, ``COMP_VISCOUS``) are 0.0 or 1.0.
 
@@ -151,7 +168,7 @@ def controller_constants(cfg: Config, *, controller: str = "pid+observer",
     spec = export_spec(cfg)
     arr = spec.arrays
     dt = spec.dt
-    lp_phi, lp_g0, lp_g1 = _lowpass_arrays(cfg.observer.omega_co, dt)
+    lp_phi, lp_g0, lp_g1 = lowpass_arrays(cfg.observer.omega_co, dt)
     _, _, kp, ki, kd = pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
                                  phase_margin_deg=cfg.pid.phase_margin_deg)
     tau_d = kd / kp / cfg.pid.derivative_N

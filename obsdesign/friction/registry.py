@@ -118,7 +118,13 @@ class FrictionModelInfo:
 
 
 def friction_code(name: str) -> int:
-    """Integer code of the model ``name`` (``ValueError`` naming the choices)."""
+    """Integer code of the model ``name`` (``ValueError`` naming the choices).
+
+    Parameters
+    ----------
+    name : str
+        A name of :data:`FRICTION_MODELS`.
+    """
     if not isinstance(name, str):
         raise TypeError(f"friction model: expected a string, found {type(name).__name__} {name!r}")
     if name not in FRICTION_MODELS:

@@ -34,13 +34,13 @@ from ..design.observer import design_observer
 from ..design.pid import pid_gains
 from ..params import Config
 from . import kernel
-from ..design.discretize import step_matrices
+from ..design.discretize import lowpass_arrays
 from .metrics import loop_metrics
 from .registry import CONTROLLERS, ESTIMATORS, PLANTS, SCHEDULES
 from .result import SimResult
 from .scenarios import Scenario, band_limited_noise, build_scenario, scenario_spec
 
-__all__ = ["LoopInputs", "KERNEL_ARGS", "prepare", "run", "simulate", "lowpass_arrays"]
+__all__ = ["LoopInputs", "KERNEL_ARGS", "prepare", "run", "simulate"]
 
 #: The arguments of :func:`obsdesign.sim.kernel.run_loop` before its output arrays, in order.
 KERNEL_ARGS = ("dt", "n_sub", "mode", "lag_model", "m", "K", "G", "Cf", "s", "sigma", "beta", "kappa",
@@ -107,22 +107,6 @@ class LoopInputs:
     def args(self) -> tuple:
         """The positional arguments of ``run_loop`` before its output arrays."""
         return tuple(getattr(self, name) for name in KERNEL_ARGS)
-
-
-def lowpass_arrays(omega_co: float, dt: float):
-    """FOH recursion ``(Phi, g0, g1)`` of the low-pass eq:3:4:5 with state (f_filtered, its derivative).
-
-    Parameters
-    ----------
-    omega_co : float
-        Cutoff [rad/s].
-    dt : float
-        Sample time [s].
-    """
-    w = omega_co
-    A = np.array([[0.0, 1.0], [-w * w, -2.0 * w]])
-    Phi, _, g0, g1 = step_matrices(A, np.zeros(2), np.array([0.0, w * w]), dt)
-    return np.ascontiguousarray(Phi), g0, g1
 
 
 def prepare(
