@@ -23,34 +23,50 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numba import njit
 
 from .scenarios import CHIRP_BAND_LABELS, Scenario, chirp_frequency
 
 __all__ = ["loop_metrics"]
 
 
-@njit(cache=True, error_model="numpy")
-def _rms_of_difference(a, b, n):
-    """RMS of the finite values of ``a[:n] - b[:n]`` (NaN if there are none)."""
-    total = 0.0
-    count = 0
-    for i in range(n):
-        d = a[i] - b[i]
-        if np.isfinite(d):
-            total += d * d
-            count += 1
-    return np.sqrt(total / count) if count else np.nan
-
-
-def _rms(x: np.ndarray) -> float | None:
-    if not np.isfinite(x).all():
+def _rms(x: np.ndarray, finite: bool = False, scratch: np.ndarray | None = None) -> float | None:
+    """RMS of the finite values of ``x`` (``finite``: the caller knows they all are; ``scratch``:
+    a buffer at least as long as ``x`` for the squares, to spare an allocation per call)."""
+    if not finite:
         x = x[np.isfinite(x)]
-    return float(np.sqrt(np.mean(x * x))) if x.size else None
+        scratch = None
+    if not x.size:
+        return None
+    squares = np.multiply(x, x, out=None if scratch is None else scratch[:x.size])
+    return float(np.sqrt(np.mean(squares)))
 
 
-def _none_if_nan(value: float) -> float | None:
-    return None if np.isnan(value) else float(value)
+def _rms_of_difference(a: np.ndarray, b: np.ndarray, finite: bool, scratch: np.ndarray) -> float | None:
+    """RMS of ``a - b`` (as :func:`_rms` of the difference), computed in ``scratch``."""
+    if not finite:
+        return _rms(a - b)
+    diff = np.subtract(a, b, out=scratch[:a.size])
+    return _rms(diff, True, diff)
+
+
+def _first_at_or_above(sc: Scenario, frequency: float, n: int) -> int:
+    """First sample whose chirp frequency (:func:`chirp_frequency`, evaluated exactly as there) is
+    at least ``frequency``: found near its closed-form estimate, not by a pass over the run."""
+    spec = sc.spec
+    guess = int((frequency - spec.f0) * sc.duration / ((spec.f1 - spec.f0) * sc.dt))
+    lo, hi = max(guess - 4, 0), min(guess + 5, n)
+    if lo >= hi:
+        return min(max(guess, 0), n)
+    idx = np.arange(lo, hi)
+    freq = chirp_frequency(idx * sc.dt, sc.duration, spec)
+    above = np.nonzero(freq >= frequency)[0]
+    if above.size == 0:
+        return hi
+    first = lo + int(above[0])
+    if first == lo and lo > 0:  # the window started too late; fall back to a full search
+        freq = chirp_frequency(np.arange(n) * sc.dt, sc.duration, spec)
+        return int(np.searchsorted(freq, frequency, side="left"))
+    return first
 
 
 def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_written: int, settle_tol: float,
@@ -75,14 +91,18 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
     dt = sc.dt
     valid = slice(0, n_written)
     e_valid = e[valid]
+    # The kernel stops at the first sample whose state is not finite and below its bounds, so a
+    # run that did not diverge holds finite values only.
+    finite = n_written == len(e)
+    scratch = np.empty(n_written)
     m: dict[str, Any] = {
-        "rms_error": _rms(e_valid),
+        "rms_error": _rms(e_valid, finite, scratch),
         "max_error": float(max(np.max(e_valid), -np.min(e_valid))) if n_written else None,
         "settling_time": [],
         "steady_state_error": [],
-        "observer_rms_error_v": _none_if_nan(_rms_of_difference(out["v_hat"], out["v"], n_written)),
-        "observer_rms_error_f": _none_if_nan(_rms_of_difference(out["f_hat"], out["f"], n_written)),
-        "diverged": bool(n_written < len(e)),
+        "observer_rms_error_v": _rms_of_difference(out["v_hat"][valid], out["v"][valid], finite, scratch),
+        "observer_rms_error_f": _rms_of_difference(out["f_hat"][valid], out["f"][valid], finite, scratch),
+        "diverged": not finite,
         "sim_wall_s": wall,
     }
     for start, end in sc.holds:
@@ -102,9 +122,8 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
         m["steady_state_error"].append(float(np.mean(e[tail])) if np.all(np.isfinite(e[tail])) else None)
     if sc.name == "tracking":
         # The chirp's frequency rises monotonically, so each band is a contiguous run of samples.
-        freq = chirp_frequency(np.arange(len(e)) * dt, sc.duration, sc.spec)
         m["rms_error_per_band"] = {}
         for label, lo, hi in CHIRP_BAND_LABELS:
-            i0, i1 = np.searchsorted(freq, (lo, hi), side="left")
-            m["rms_error_per_band"][label] = _rms(e[i0:i1])
+            i0, i1 = (_first_at_or_above(sc, f, len(e)) for f in (lo, hi))
+            m["rms_error_per_band"][label] = _rms(e[i0:i1], finite, scratch)
     return m
