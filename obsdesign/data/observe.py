@@ -65,7 +65,8 @@ from ..sim import kernel
 from ..sim.registry import ESTIMATORS, SCHEDULES
 from .trace import REVERSAL_THRESHOLD, Trace, zero_phase_velocity
 
-__all__ = ["Observation", "observe", "OBSERVATION_COLUMNS", "DT_TOLERANCE", "presliding_stiffness_along"]
+__all__ = ["Observation", "observe", "model_friction_state", "OBSERVATION_COLUMNS", "DT_TOLERANCE",
+           "presliding_stiffness_along"]
 
 #: Columns of :meth:`Observation.columns` (CSV/NPZ exports), in order (SI units).
 OBSERVATION_COLUMNS = ("t", "x_meas", "u", "v_hat", "f_hat", "f_hat_filtered", "stiffness")
@@ -95,8 +96,8 @@ def presliding_stiffness_along(x, v, Cf, s, kappa):
     >>> import numpy as np
     >>> k = presliding_stiffness_along(np.array([0.0, 0.0, 1e-5, 1.0]), np.array([0.0, 1.0, 1.0, 1.0]),
     ...                                1.0, 1e3, 5e3)
-    >>> [round(float(x), 3) for x in k]    # before motion: kappa; at the reversal: kappa; 2 Cf s ln(1/z); gross sliding
-    [5000.0, 5000.0, 4000.0, 0.0]
+    >>> [round(float(x), 2) for x in k]    # at rest: kappa; start: kappa; s Cf ln(1/z), z = 0.01; sliding
+    [5000.0, 5000.0, 4605.17, 0.0]
     """
     out = np.empty(x.shape[0])
     direction, x_r, f_r = 0.0, x[0], 0.0
@@ -301,3 +302,44 @@ def observe(cfg: Config, trace: Trace, *, stiffness: str = "estimated") -> Obser
     return Observation(t=trace.t, x_meas=trace.position, u=trace.force, config=cfg, stiffness_schedule=stiffness,
                        source=trace.source, reversals=trace.reversals, **out)
 
+
+
+def model_friction_state(ident, trace: Trace, cfg: Config) -> np.ndarray:
+    """What an identified model says the observer's friction state ``w3`` is along a trace [N].
+
+    Parameters
+    ----------
+    ident : Identification
+        The identified model (``m a + Cf sign(v) + sigma v + offset``, per direction for
+        ``asymmetric``).
+    trace : Trace
+        The trace; ``v`` is its zero-phase velocity at the identification's cut-off.
+    cfg : Config
+        The observer's config: its load ``G`` is fed forward and, for the ``static``
+        variant, its viscous term ``sigma v`` is modelled, so neither is in ``w3``.
+
+    Returns
+    -------
+    ndarray
+        ``ident.friction(v) + offset - G`` minus ``cfg.friction.sigma v`` for ``static``.
+        With ``cfg = ident.to_config()`` (``G = offset``, same ``sigma``) and the
+        ``coulomb-viscous`` model this is ``Cf sign(v)``: the Coulomb friction without offset.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from obsdesign.data import Identification
+    >>> ident = Identification(model="coulomb-viscous", m=2.0, sigma=20.0, Cf=1.0, offset=0.5, m_std=0.0,
+    ...                        sigma_std=0.0, Cf_std=0.0, offset_std=0.0, nrmse_percent=1.0,
+    ...                        condition_number=2.0, samples=1000, sample_time=1e-3, force_peak=5.0)
+    >>> t = np.arange(1000) * 1e-3
+    >>> tr = Trace(t=t, position=0.01 * np.sin(2 * np.pi * t), force=np.zeros(1000), sample_time=1e-3)
+    >>> w3 = model_friction_state(ident, tr, ident.to_config())
+    >>> sorted(set(np.round(w3[100:900], 9).tolist()))      # Cf sign(v)
+    [-1.0, 1.0]
+    """
+    v = zero_phase_velocity(trace.position, trace.sample_time, ident.filter_hz)
+    w3 = ident.friction(v) + ident.offset - cfg.plant.G
+    if cfg.observer.variant == "static":
+        w3 = w3 - cfg.friction.sigma * v
+    return np.asarray(w3, dtype=float)
