@@ -11,9 +11,11 @@ from __future__ import annotations
 from .identify import Identification as Identification
 from .identify import identify as identify
 from .observe import Observation as Observation
+from .observe import model_friction_state as model_friction_state
 from .observe import observe as observe
 from .rules import config_from as config_from
 from .trace import Trace as Trace
 from .trace import load_trace as load_trace
 
-__all__ = ["Trace", "load_trace", "Identification", "identify", "config_from", "Observation", "observe"]
+__all__ = ["Trace", "load_trace", "Identification", "identify", "config_from", "Observation", "observe",
+           "model_friction_state"]
