@@ -274,3 +274,16 @@ def test_cli_subprocess_sample_time_mismatch(record, tmp_path):
     assert proc.stderr.count("\n") == 1 and "trace's sample time wins" in proc.stderr
     assert "set dt = 0.001" in proc.stderr
     assert not (tmp_path / "o.csv").exists()
+
+
+@needs_emps
+def test_analysis_emps_script(tmp_path):
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, PYTHONPATH=str(root))
+    proc = subprocess.run([sys.executable, str(root / "analysis" / "emps.py"), str(EMPS), "--out", str(tmp_path)],
+                          capture_output=True, text=True, env=env, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "every stability condition holds" in proc.stdout
+    for name in ("emps.toml", "emps_fit.png", "emps_observer.png", "emps_observer.csv"):
+        assert (tmp_path / name).is_file(), name
+    assert od.load_config(tmp_path / "emps.toml").plant.K == EMPS_GAIN
