@@ -252,6 +252,7 @@ def _bad_cases(record, tmp_path):
         (["identify", r, *FLAGS, "-o", str(tmp_path / "c.json")], ".toml"),
         (["identify", r, *FLAGS, "--sample-time", "0.002"], "agree"),
         (["report", "--data", r, "-o", str(tmp_path / "r.html")], "--position NAME and --input NAME"),
+        (["report", "--position", "x", "-o", str(tmp_path / "r.html")], "need --data FILE"),
     ]
 
 

@@ -32,6 +32,9 @@ def _cmd_report(args: argparse.Namespace) -> int:
         raise UsageError(f"obsdesign report: argument -o/--output: expected a file, found the directory {args.output!r}")
     if args.data and (args.position is None or args.input is None):
         raise UsageError("obsdesign report: argument --data: expected --position NAME and --input NAME with it")
+    if not args.data and (args.position or args.input or args.time or args.sample_time):
+        raise UsageError("obsdesign report: the column flags (--position, --input, --time, --sample-time) "
+                         "need --data FILE")
     cfg = load(args)
     trace = load_trace_args(args, args.data) if args.data else None
     label = f"config file {args.config}" if args.config else f"preset {cfg.name}"
