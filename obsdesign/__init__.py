@@ -43,6 +43,8 @@ _LAZY = {
     "identify": "data",
     "Trace": "data",
     "Identification": "data",
+    "observe": "data",
+    "Observation": "data",
 }
 
 __all__ = [

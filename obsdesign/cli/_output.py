@@ -8,6 +8,7 @@ from pathlib import Path
 from ..export import FORMATS as EXPORT_FORMATS
 from ..params import VARIANTS
 from ._common import POSITIVE_ARG, UsageError, add_config_flags, load
+from ._data import add_trace_flags, load_trace_args
 
 __all__ = ["add_commands"]
 
@@ -27,9 +28,17 @@ def _cmd_report(args: argparse.Namespace) -> int:
     out = Path(args.output)
     if not out.parent.is_dir():
         raise UsageError(f"obsdesign report: argument -o/--output: directory {str(out.parent)!r} does not exist")
+    if out.is_dir():
+        raise UsageError(f"obsdesign report: argument -o/--output: expected a file, found the directory {args.output!r}")
+    if args.data and (args.position is None or args.input is None):
+        raise UsageError("obsdesign report: argument --data: expected --position NAME and --input NAME with it")
+    if not args.data and (args.position or args.input or args.time or args.sample_time):
+        raise UsageError("obsdesign report: the column flags (--position, --input, --time, --sample-time) "
+                         "need --data FILE")
     cfg = load(args)
+    trace = load_trace_args(args, args.data) if args.data else None
     label = f"config file {args.config}" if args.config else f"preset {cfg.name}"
-    write_report(cfg, out, source_label=label, progress=not args.quiet, sweep_dir=args.sweep)
+    write_report(cfg, out, source_label=label, progress=not args.quiet, sweep_dir=args.sweep, data=trace)
     print(args.output)
     return 0
 
@@ -50,4 +59,6 @@ def add_commands(sub) -> None:
     p.add_argument("-o", "--output", default="report.html", metavar="FILE", help="output file (default report.html)")
     p.add_argument("--sweep", metavar="DIR", help="add the summary of an 'obsdesign sweep' folder")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--data", metavar="FILE", help="add 'Validation on measured data' for a record (.csv or .mat)")
+    add_trace_flags(p, required=False)
     p.set_defaults(run=_cmd_report)

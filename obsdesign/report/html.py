@@ -31,6 +31,7 @@ from ..params import Config
 from ..sweeps.summary import check_summary
 from ..symbolic import derive
 from ..symbolic.printing import derivation_html
+from .data_section import data_section
 from .figures import figure_svg
 from .study_figures import convergence_figure, experiments_figure, friction_loops_figure
 
@@ -121,7 +122,7 @@ def _sweep_section(sweep_dir) -> dict | None:
 
 
 def render_report(cfg: Config, *, source_label: str | None = None, progress: bool = False,
-                  sweep_dir=None) -> str:
+                  sweep_dir=None, data=None) -> str:
     """Render the report of a config as one HTML string.
 
     Parameters
@@ -133,6 +134,9 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
         Show a progress bar (tqdm) on the terminal.
     sweep_dir : path, optional
         A folder written by ``obsdesign sweep``; its summary is added as a section.
+    data : Trace, optional
+        A measured trace; adds "Validation on measured data"
+        (:func:`obsdesign.report.data_section.data_section`).
     """
     from tqdm import tqdm
 
@@ -204,6 +208,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     ctx["explorer_params"] = _explorer_params(cfg, variant)
     ctx["explorer_fixed"] = {"sigma": cfg.friction.sigma, "beta": cfg.friction.beta}
     ctx["sweep"] = sweep_section
+    ctx["data"] = data_section(data) if data is not None else None
     ctx["elapsed"] = time.perf_counter() - t0
     env = Environment(loader=PackageLoader("obsdesign.report", "templates"), undefined=StrictUndefined,
                       autoescape=select_autoescape(default=True, default_for_string=True))
@@ -216,7 +221,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
 
 
 def write_report(cfg: Config, path: str | os.PathLike, *, source_label: str | None = None,
-                 progress: bool = False, sweep_dir=None) -> None:
+                 progress: bool = False, sweep_dir=None, data=None) -> None:
     """Render and write the report atomically (temporary file, then rename).
 
     Parameters
@@ -225,7 +230,8 @@ def write_report(cfg: Config, path: str | os.PathLike, *, source_label: str | No
         The design.
     path : str or os.PathLike
         Output HTML file.
-    source_label, progress, sweep_dir : optional
+    source_label, progress, sweep_dir, data : optional
         As for :func:`render_report`.
     """
-    atomic_write(path, render_report(cfg, source_label=source_label, progress=progress, sweep_dir=sweep_dir))
+    atomic_write(path, render_report(cfg, source_label=source_label, progress=progress, sweep_dir=sweep_dir,
+                                     data=data))
