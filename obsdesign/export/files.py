@@ -53,7 +53,7 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, variant: str | 
     elif fmt == "octave":
         files = octave_files(spec)
     else:
-        files = {"obsdesign_observer.mjs": js_module(spec.variant)}
+        files = {"obsdesign_observer.mjs": js_module(spec.variant, name=spec.cfg.name)}
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ValueError(f"output: expected a directory, found the file {str(out)!r}")
