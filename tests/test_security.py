@@ -214,3 +214,152 @@ def test_latex_export_does_not_depend_on_the_name(exported):
     plain = next(f for n, f in exported if n == "").joinpath("obsdesign_static.tex").read_text(encoding="utf-8")
     for name, folder in exported:
         assert (folder / "obsdesign_static.tex").read_text(encoding="utf-8") == plain, name
+
+
+# ----------------------------------------------------------------------------------------------
+# The report with hostile sweep figures, opened in headless Chromium.
+CHROMIUM, DRIVER = shutil.which("chromium"), shutil.which("chromedriver")
+MARK = "document.documentElement.setAttribute('data-pwned', '{id}')"
+
+
+def _hostile_svgs(base: str) -> list[str]:
+    """SVG documents that run script or fetch ``base/<id>`` by every trick of the review (E6-E14) and more."""
+    run = lambda i: MARK.format(id=i)  # noqa: E731
+    return [
+        f'<svg xmlns="http://www.w3.org/2000/svg"><script>{run("e6")}</script></svg>',
+        f'<svg xmlns="http://www.w3.org/2000/svg"><SCRIPT>{run("e8")}</SCRIPT></svg>',
+        f'<svg xmlns="http://www.w3.org/2000/svg" onload ="{run("e9")}"><rect width="9" height="9"/></svg>',
+        f"<svg xmlns=\"http://www.w3.org/2000/svg\" xmlns:xlink=\"http://www.w3.org/1999/xlink\">"
+        "<a href='javascript:document.documentElement.dataset.pwned=\"e10\"'>"
+        "<rect width='99' height='99'/></a></svg>",
+        f'<svg xmlns="http://www.w3.org/2000/svg"><foreignObject width="9" height="9">'
+        f'<img xmlns="http://www.w3.org/1999/xhtml" src="{base}/e11" onerror\t="{run("e11")}"/></foreignObject></svg>',
+        f'<svg xmlns="http://www.w3.org/2000/svg"><foreignObject><iframe xmlns="http://www.w3.org/1999/xhtml" '
+        f'src={base}/e12></iframe></foreignObject></svg>',
+        f'<svg xmlns="http://www.w3.org/2000/svg"><style>@import url({base}/e13);</style></svg>',
+        f'<svg xmlns="http://www.w3.org/2000/svg"></svg></figure><ScRiPt>{run("e14")}</ScRiPt><figure><svg>',
+        f'<svg xmlns="http://www.w3.org/2000/svg"><image href="{base}/x1" width="9" height="9"/>'
+        f'<use href="{base}/x2#a"/><rect fill="url({base}/x3#p)" width="9" height="9"/></svg>',
+        f'<svg xmlns="http://www.w3.org/2000/svg"><style>rect {{ fill: url("{base}/x4"); }} '
+        f'@font-face {{ font-family: q; src: url({base}/x5); }} text {{ font-family: q; }}</style>'
+        f'<rect width="9" height="9"/><text>x</text></svg>',
+        f'<svg xmlns="http://www.w3.org/2000/svg"><animate attributeName="href" values="javascript:{run("x6")}"/>'
+        f'<set attributeName="onmouseover" to="{run("x7")}"/></svg>',
+        f'<?xml version="1.0"?><!DOCTYPE svg [<!ENTITY x SYSTEM "{base}/x8">]>'
+        f'<svg xmlns="http://www.w3.org/2000/svg"><text>&x;</text></svg>',
+        f'<svg xmlns="http://www.w3.org/2000/svg"><iframe srcdoc="&lt;script&gt;parent.{run("x9")}&lt;/script&gt;"/>'
+        f'<img src=x onerror={run("x10")}></svg>',
+        f"<svg/onload={run('x11')}>",
+        f'<svg xmlns="http://www.w3.org/2000/svg"><meta http-equiv="refresh" content="0;url={base}/x12"/></svg>',
+    ]
+
+
+class _Recorder:
+    """A local HTTP server on 127.0.0.1 that records every path requested (and answers 404)."""
+
+    def __enter__(self):
+        import http.server
+        import threading
+
+        paths = self.paths = []
+
+        class Handler(http.server.BaseHTTPRequestHandler):
+            def do_GET(self):  # noqa: N802
+                paths.append(self.path)
+                self.send_response(404)
+                self.end_headers()
+
+            def log_message(self, *args):
+                pass
+
+        self.server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+        self.base = f"http://127.0.0.1:{self.server.server_address[1]}"
+        threading.Thread(target=self.server.serve_forever, daemon=True).start()
+        return self
+
+    def __exit__(self, *exc):
+        self.server.shutdown()
+        self.server.server_close()
+
+
+def _chrome():
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = CHROMIUM
+    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-sync",
+                 "--disable-background-networking", "--disable-component-update", "--window-size=1280,900"):
+        opts.add_argument(flag)
+    driver = webdriver.Chrome(service=Service(DRIVER), options=opts)
+    driver.set_page_load_timeout(30)
+    return driver
+
+
+def _visit(driver, path, server, wait=2.0):
+    import time
+
+    driver.get(path.as_uri())
+    driver.execute_script("window.scrollTo(0, document.body.scrollHeight);")
+    time.sleep(wait)  # bounded: give any fetch or timer the time to fire
+    return driver.execute_script("return document.documentElement.getAttribute('data-pwned');"), list(server.paths)
+
+
+@pytest.mark.skipif(not (CHROMIUM and DRIVER), reason="headless Chromium not installed")
+def test_report_with_hostile_sweep_figures_runs_and_fetches_nothing(tmp_path):
+    pytest.importorskip("selenium")
+    from obsdesign.report.html import render_report
+    from obsdesign.sweeps.summary import make_summary
+
+    with _Recorder() as server:
+        svgs = _hostile_svgs(server.base)
+        sweep_dir = tmp_path / "sweep"
+        sweep_dir.mkdir()
+        summary = make_summary([{"status": "ok", "rho": 2.0, "rms_error": 1e-5}], ["rho"], metric="rms_error",
+                               resumed_runs=0, wall_s=1.0)
+        (sweep_dir / "summary.json").write_text(json.dumps(summary), encoding="utf-8")
+        (sweep_dir / "summary_map.svg").write_text("".join(svgs), encoding="utf-8")
+        (sweep_dir / "summary_distributions.svg").write_text(svgs[1], encoding="utf-8")
+        html = render_report(od.load_preset("vcm"), sweep_dir=sweep_dir)
+        for svg in svgs:
+            assert svg not in html
+        report = tmp_path / "report.html"
+        report.write_text(html, encoding="utf-8")
+        # Defense in depth: the same report with the payloads pasted raw into its body (as if an
+        # escaping bug let them through) is held by the Content-Security-Policy alone. A policy
+        # cannot stop a navigation (<meta http-equiv="refresh">), so that payload is left out here;
+        # only the base64 embedding keeps it inert.
+        raw = tmp_path / "raw.html"
+        pasted = "".join(svg for svg in svgs if "refresh" not in svg)
+        raw.write_text(html.replace("</body>", pasted + f'<img src="{server.base}/raw">'
+                                    f"<script>{MARK.format(id='raw')}</script></body>"), encoding="utf-8")
+        # Control: without the policy the detector sees both the script and the fetch.
+        control = tmp_path / "control.html"
+        control.write_text(f'<html><body><img src="{server.base}/control"><script>{MARK.format(id="control")}'
+                           "</script></body></html>", encoding="utf-8")
+        driver = _chrome()
+        try:
+            assert _visit(driver, control, server) == ("control", ["/control"])
+            server.paths.clear()
+            assert _visit(driver, report, server) == (None, [])
+            assert driver.execute_script("return document.getElementById('verdict').textContent") == "stable"
+            assert _visit(driver, raw, server) == (None, [])
+            assert driver.execute_script("return document.getElementById('verdict').textContent") == "stable"
+        finally:
+            driver.quit()
+
+
+def test_report_refuses_a_sweep_folder_with_a_figure_that_is_not_svg(tmp_path):
+    from obsdesign.report.html import _sweep_section
+
+    for name, text in (("summary.json", "{"), ("summary.json", "[]"), ("summary_map.svg", "<html>")):
+        folder = tmp_path / name / str(len(text))
+        folder.mkdir(parents=True)
+        (folder / "summary.json").write_text(json.dumps({"runs": 0, "ok": 0, "diverged": 0, "failed": 0,
+                                                         "resumed_runs": 0, "wall_s": 0.0, "metric": "rms_error",
+                                                         "best": {}}), encoding="utf-8")
+        for svg in ("summary_map.svg", "summary_distributions.svg"):
+            (folder / svg).write_text("<svg></svg>", encoding="utf-8")
+        (folder / name).write_text(text, encoding="utf-8")
+        with pytest.raises(ValueError, match=str(folder / name).replace("\\", "\\\\")):
+            _sweep_section(folder)
