@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ..export import FORMATS as EXPORT_FORMATS
 from ..params import VARIANTS
-from ._common import POSITIVE_ARG, UsageError, add_config_flags, load
+from ._common import POSITIVE_ARG, add_config_flags, check_output_dir, check_output_file, load
 
 __all__ = ["add_commands"]
 
@@ -15,6 +15,7 @@ __all__ = ["add_commands"]
 def _cmd_export(args: argparse.Namespace) -> int:
     from ..export import export
 
+    check_output_dir("export", "-o/--output", args.output)
     paths = export(load(args), args.format, args.output, variant=args.variant, rho=args.rho, dt=args.dt)
     for path in paths:
         print(path)
@@ -25,8 +26,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
     from ..report.html import write_report
 
     out = Path(args.output)
-    if not out.parent.is_dir():
-        raise UsageError(f"obsdesign report: argument -o/--output: directory {str(out.parent)!r} does not exist")
+    check_output_file("report", "-o/--output", args.output, None)
     cfg = load(args)
     label = f"config file {args.config}" if args.config else f"preset {cfg.name}"
     write_report(cfg, out, source_label=label, progress=not args.quiet, sweep_dir=args.sweep)

@@ -10,9 +10,9 @@ from pathlib import Path
 from .._validate import parse_number
 from ..params import VARIANTS
 from ..sim.registry import CONTROLLERS, PLANTS, SCHEDULES
-from ..sim.scenarios import SCENARIOS
+from ..sim.scenarios import DEFAULT_DURATION, SCENARIOS
 from ._common import (FINITE_ARG, NONNEGATIVE_ARG, POSITIVE_ARG, UsageError, add_config_flags, add_design_flags,
-                      check_output_file, emit, integer, load)
+                      check_output_file, check_samples, emit, integer, load)
 
 __all__ = ["add_commands", "parse_vary", "parse_uncertain"]
 
@@ -36,6 +36,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     cfg = load(args).override(noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
                               quantization=args.quantization, dt=args.dt, rho=args.rho, kappa=args.kappa,
                               variant=args.variant)
+    check_samples(args.duration or DEFAULT_DURATION[args.scenario], cfg.observer.dt)
     options = {field: getattr(args, flag) for flag, field in _SPEC_FLAGS[args.scenario].items()
                if getattr(args, flag) is not None}
     spec = type(scenario_spec(args.scenario))(**options)
