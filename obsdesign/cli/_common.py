@@ -118,8 +118,8 @@ def finite_design(args: argparse.Namespace, flags: tuple[str, ...]):
     """
     try:
         yield
-    except (ValueError, ArithmeticError) as e:
-        if not (isinstance(e, ArithmeticError) or "infs or NaNs" in str(e)):
+    except (ValueError, OverflowError, FloatingPointError) as e:
+        if not (isinstance(e, (OverflowError, FloatingPointError)) or "infs or NaNs" in str(e)):
             raise
         given = ", ".join(f"--{f.replace('_', '-')} {getattr(args, f):g}" for f in flags
                           if getattr(args, f, None) is not None)
