@@ -224,3 +224,20 @@ def test_warnings_of_a_successful_command_are_one_line_each(capsys, monkeypatch)
     monkeypatch.setattr(design, "design_pid", lambda **kw: (warnings.warn("dropped"), 1 / 0))
     code, out, err = run(capsys, "pid")
     assert code == 3 and len(err) == 1 and "ZeroDivisionError" in err[0]  # warnings of a failed run are dropped
+
+
+def test_unstable_designs_are_flagged_by_noise_and_export(capsys, tmp_path):  # n8, e7
+    code, out, err = run(capsys, "noise", "--rho", "0.5", "--json")
+    assert code == 0 and isinstance(json.loads(out), dict)  # still one strict JSON object on stdout
+    assert len(err) == 1 and err[0].startswith("obsdesign: warning: the observer design fails check (")
+    assert "Proposition 1: L_2" in err[0]  # rho < 1 makes L2 = kappa (1 - rho^2) > 0 fail the bound
+    code, out, err = run(capsys, "export", "--format", "c", "--rho", "0.5", "-o", str(tmp_path / "ex"))
+    assert code == 0 and len(err) == 1 and "the exported observer diverges" in err[0]
+    assert (tmp_path / "ex" / "obsdesign_observer.c").is_file()
+    code, out, err = run(capsys, "noise", "--rho", "4", "--json")
+    assert code == 0 and err == []
+
+
+def test_vary_with_a_non_ascii_digit_names_the_flag(capsys):  # w21
+    one_line(capsys, ["sweep", "--scenario", "positioning", "--vary", "rho=1:2:\u00b2", "--out", "x"],
+             "--vary rho: expected an integer N >= 1, found '\u00b2'")

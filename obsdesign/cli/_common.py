@@ -16,7 +16,7 @@ from ..params import VARIANTS, load_config, load_preset, preset_names
 
 __all__ = ["UsageError", "Parser", "number", "POSITIVE_ARG", "NONNEGATIVE_ARG", "FINITE_ARG", "PHASE_ARG",
            "integer", "add_config_flags", "add_design_flags", "load", "emit", "check_output_file", "check_output_dir",
-           "check_samples", "MAX_SAMPLES", "finite_design"]
+           "check_samples", "MAX_SAMPLES", "finite_design", "warn_unstable"]
 
 #: Most samples one ``simulate`` run may hold (about 13 GB of trace arrays at 16 doubles per sample).
 MAX_SAMPLES = 10**8
@@ -125,6 +125,31 @@ def finite_design(args: argparse.Namespace, flags: tuple[str, ...]):
                           if getattr(args, f, None) is not None)
         raise ValueError(f"the design overflows to non-finite numbers with {given or 'this config'}; "
                          "use values of a physically meaningful size") from None
+
+
+def warn_unstable(cfg, what: str, **overrides) -> None:
+    """One ``obsdesign: warning:`` line on stderr if the observer design fails ``check``.
+
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+    what : str
+        What the result means for an unstable design (ends the message).
+    **overrides
+        ``rho``, ``kappa``, ``variant`` as given to :func:`obsdesign.design.check_stability`.
+    """
+    import sys
+    import warnings
+
+    from ..design import check_stability
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        report = check_stability(cfg, **overrides)
+    if not report.all_hold:
+        print(f"obsdesign: warning: the observer design fails check ({', '.join(report.failed())}); {what}",
+              file=sys.stderr)
 
 
 def emit(args: argparse.Namespace, result, payload: dict) -> None:

@@ -7,7 +7,7 @@ import json
 
 from ..params import VARIANTS
 from ._common import (NONNEGATIVE_ARG, PHASE_ARG, POSITIVE_ARG, add_config_flags, add_design_flags, emit,
-                      finite_design, load)
+                      finite_design, load, warn_unstable)
 
 __all__ = ["add_commands"]
 
@@ -70,6 +70,8 @@ def _cmd_noise(args: argparse.Namespace) -> int:
         na = noise_analysis(cfg, rho=args.rho, kappa=args.kappa, variant=args.variant,
                             noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
                             stiffness=args.stiffness)
+        warn_unstable(cfg, "the noise variance of an unstable observer is unbounded, the values are not meaningful",
+                      rho=args.rho, kappa=args.kappa, variant=args.variant)
     emit(args, na, na.to_dict())
     return 0
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ..export import FORMATS as EXPORT_FORMATS
 from ..params import VARIANTS
-from ._common import POSITIVE_ARG, add_config_flags, check_output_dir, check_output_file, load
+from ._common import POSITIVE_ARG, add_config_flags, check_output_dir, check_output_file, load, warn_unstable
 
 __all__ = ["add_commands"]
 
@@ -16,7 +16,9 @@ def _cmd_export(args: argparse.Namespace) -> int:
     from ..export import export
 
     check_output_dir("export", "-o/--output", args.output)
-    paths = export(load(args), args.format, args.output, variant=args.variant, rho=args.rho, dt=args.dt)
+    cfg = load(args)
+    paths = export(cfg, args.format, args.output, variant=args.variant, rho=args.rho, dt=args.dt)
+    warn_unstable(cfg, "the exported observer diverges", rho=args.rho, variant=args.variant)
     for path in paths:
         print(path)
     return 0

@@ -77,7 +77,7 @@ def parse_vary(items: list[str]) -> dict[str, tuple[float, float, int]]:
     for item in items:
         name, parts = _split(item, "--vary", "NAME=LO:HI:N", 3)
         lo, hi = (parse_number(p, f"--vary {name}") for p in parts[:2])
-        n = int(parts[2]) if parts[2].strip().isdigit() else 0
+        n = int(parts[2]) if parts[2].strip().isdecimal() else 0
         if n < 1:
             raise ValueError(f"--vary {name}: expected an integer N >= 1, found {parts[2]!r}")
         out[name] = (lo, hi, n)
