@@ -473,9 +473,18 @@ def load_config(path: str | os.PathLike) -> Config:
     Raises
     ------
     ValueError
-        If the file does not exist, is not TOML, or holds invalid values.
+        If the file does not exist, cannot be read, is not UTF-8 TOML, or holds invalid values.
     """
     p = Path(path)
-    if not p.is_file():
+    try:
+        data = p.read_bytes() if p.is_file() else None
+    except OSError as e:
+        raise ValueError(f"config: cannot read {str(p)!r} ({e.strerror or type(e).__name__})") from None
+    if data is None:
         raise ValueError(f"config: expected an existing TOML file, found {str(p)!r}")
-    return Config.from_toml(p.read_text(encoding="utf-8"), source=str(p))
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise ValueError(f"{p}: expected UTF-8 text (TOML), found the byte 0x{data[e.start]:02x} at offset "
+                         f"{e.start}") from None
+    return Config.from_toml(text, source=str(p))

@@ -6,6 +6,9 @@ commands: :mod:`~obsdesign.cli._design` (derive, check, pid, noise),
 :mod:`~obsdesign.cli._sim` (simulate, sweep), :mod:`~obsdesign.cli._output`
 (export, report), :mod:`~obsdesign.cli._data` (identify, observe); shared argument types in :mod:`~obsdesign.cli._common`.
 
+Exit statuses: 0 success, 1 a check failed (``check`` only), 2 bad input or an
+environment problem, 3 an internal error (see :mod:`~obsdesign.cli._errors`).
+
 Examples
 --------
 >>> main(["derive", "--variant", "static", "--format", "json"])  # doctest: +ELLIPSIS
@@ -18,11 +21,16 @@ Examples
 from __future__ import annotations
 
 import argparse
+import io
+import os
 import sys
+import traceback
+import warnings
 from typing import Sequence
 
 from . import _data, _design, _output, _sim
 from ._common import Parser, UsageError
+from ._errors import BAD_INPUT, describe, exit_status
 
 __all__ = ["main", "build_parser", "UsageError"]
 
@@ -41,6 +49,9 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit status.
 
+    Every error ends as one line on stderr, never a traceback (``OBSDESIGN_DEBUG=1``
+    adds it); see :mod:`obsdesign.cli._errors` for the statuses.
+
     Parameters
     ----------
     argv : sequence of str, optional
@@ -49,19 +60,90 @@ def main(argv: Sequence[str] | None = None) -> int:
     Returns
     -------
     int
-        0 success, 1 a check failed, 2 bad input.
+        0 success, 1 a check failed (``check`` only), 2 bad input or an environment
+        problem, 3 an internal error, 130 interrupted.
     """
-    parser = build_parser()
+    stdout = sys.stdout
     try:
-        args = parser.parse_args(argv)
-        return args.run(args)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("default")
+            parser = build_parser()
+            args = parser.parse_args(argv)
+            sys.stdout = _Output(stdout)
+            try:
+                status = args.run(args)
+                sys.stdout.flush()
+            finally:
+                sys.stdout = stdout
+    except SystemExit as e:  # --help, --version
+        return e.code if isinstance(e.code, int) else (0 if e.code is None else 2)
     except UsageError as e:
-        print(str(e), file=sys.stderr)
-        return 2
-    except (ValueError, TypeError) as e:
-        print(f"obsdesign: error: {e}".splitlines()[0], file=sys.stderr)
-        return 2
+        _say(str(e))
+        return BAD_INPUT
+    except BaseException as e:  # noqa: BLE001 (every error becomes one line)
+        if os.environ.get("OBSDESIGN_DEBUG") == "1":
+            traceback.print_exc()
+        if isinstance(e, OutputError):
+            _silence(stdout)
+            _say(f"obsdesign: error: cannot write to standard output ({e.strerror or e})")
+            return BAD_INPUT
+        if isinstance(e, KeyboardInterrupt):
+            _say("obsdesign: interrupted")
+        else:
+            _say(describe(e))
+        return exit_status(e)
+    for w in _unique(caught):
+        _say(f"obsdesign: warning: {w}")
+    return status
 
 
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+def _unique(caught) -> list[str]:
+    seen: list[str] = []
+    for w in caught:
+        text = str(w.message).strip().splitlines()[0] if str(w.message).strip() else w.category.__name__
+        if text not in seen:
+            seen.append(text)
+    return seen
+
+
+class OutputError(OSError):
+    """Writing to standard output failed (a full disk, a closed pipe)."""
+
+
+class _Output:
+    """Standard output that tags its write errors as :class:`OutputError`."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text):
+        try:
+            return self._stream.write(text)
+        except OSError as e:
+            raise OutputError(e.errno, e.strerror) from e
+
+    def flush(self):
+        try:
+            self._stream.flush()
+        except OSError as e:
+            raise OutputError(e.errno, e.strerror) from e
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
+def _silence(stream) -> None:
+    """Point a broken standard output at the null device, so the exit flush raises nothing."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, stream.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
+        pass
+
+
+def _say(line: str) -> None:
+    try:
+        print(line, file=sys.stderr)
+    except (OSError, ValueError):
+        pass

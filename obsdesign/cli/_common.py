@@ -3,15 +3,23 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import os
 import re
+import tempfile
+from pathlib import Path
 
 from .._format import jsonable
 from .._validate import FINITE, NONNEGATIVE, POSITIVE, Range, parse_number
 from ..params import VARIANTS, load_config, load_preset, preset_names
 
 __all__ = ["UsageError", "Parser", "number", "POSITIVE_ARG", "NONNEGATIVE_ARG", "FINITE_ARG", "PHASE_ARG",
-           "integer", "add_config_flags", "add_design_flags", "load", "emit", "check_output_file"]
+           "integer", "add_config_flags", "add_design_flags", "load", "emit", "check_output_file", "check_output_dir",
+           "check_samples", "MAX_SAMPLES", "finite_design", "warn_unstable"]
+
+#: Most samples one ``simulate`` run may hold (about 13 GB of trace arrays at 16 doubles per sample).
+MAX_SAMPLES = 10**8
 
 
 class UsageError(Exception):
@@ -80,11 +88,68 @@ def add_design_flags(p: argparse.ArgumentParser, *, json_flag: str | None = "pri
         p.add_argument("--json", action="store_true", help=json_flag)
 
 
+def shown(path: str, limit: int = 120) -> str:
+    """A path for a message: quoted, and shortened in the middle if very long."""
+    text = str(path)
+    return repr(text if len(text) <= limit else text[:limit // 2] + "..." + text[-limit // 2:])
+
+
 def load(args: argparse.Namespace):
     """The config of ``--config`` or ``--preset`` (or the command's default preset)."""
-    if getattr(args, "config", None):
-        return load_config(args.config)
+    config = getattr(args, "config", None)
+    if config is not None:
+        if not config.strip():
+            raise UsageError(f"obsdesign {args.command}: argument --config: expected the path of a TOML file, "
+                             f"found {config!r}")
+        return load_config(config)
     return load_preset(args.preset or args.default_preset)
+
+
+@contextlib.contextmanager
+def finite_design(args: argparse.Namespace, flags: tuple[str, ...]):
+    """Turn a numerical library's "infs or NaNs" error (values that overflow) into a message naming the flags.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments.
+    flags : tuple of str
+        Attribute names of the numeric flags of the command (``max_s`` is shown as ``--max-s``).
+    """
+    try:
+        yield
+    except (ValueError, OverflowError, FloatingPointError) as e:
+        if not (isinstance(e, (OverflowError, FloatingPointError)) or "infs or NaNs" in str(e)):
+            raise
+        given = ", ".join(f"--{f.replace('_', '-')} {getattr(args, f):g}" for f in flags
+                          if getattr(args, f, None) is not None)
+        raise ValueError(f"the design overflows to non-finite numbers with {given or 'this config'}; "
+                         "use values of a physically meaningful size") from None
+
+
+def warn_unstable(cfg, what: str, **overrides) -> None:
+    """One ``obsdesign: warning:`` line on stderr if the observer design fails ``check``.
+
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+    what : str
+        What the result means for an unstable design (ends the message).
+    **overrides
+        ``rho``, ``kappa``, ``variant`` as given to :func:`obsdesign.design.check_stability`.
+    """
+    import sys
+    import warnings
+
+    from ..design import check_stability
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        report = check_stability(cfg, **overrides)
+    if not report.all_hold:
+        print(f"obsdesign: warning: the observer design fails check ({', '.join(report.failed())}); {what}",
+              file=sys.stderr)
 
 
 def emit(args: argparse.Namespace, result, payload: dict) -> None:
@@ -95,15 +160,129 @@ def emit(args: argparse.Namespace, result, payload: dict) -> None:
         print(result)
 
 
-def check_output_file(command: str, flag: str, path: str | None, exts: tuple[str, ...]) -> None:
-    """An output file's suffix is one of ``exts`` and its folder exists (before any work)."""
-    from pathlib import Path
+def _probe(folder: Path, name: str, command: str, flag: str, path: str) -> None:
+    """Create and remove a file named like the output's temporary file in ``folder``."""
+    try:
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{name}.", suffix=Path(name).suffix + ".tmp")
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as e:
+        raise UsageError(f"obsdesign {command}: argument {flag}: cannot write {shown(path)} "
+                         f"({e.strerror or type(e).__name__})") from None
 
+
+def check_output_file(command: str, flag: str, path: str | None, exts: tuple[str, ...] | None) -> None:
+    """An output file can be written: not empty, suffix in ``exts``, its folder exists and is
+    writable, and it is not a folder. Called before any work.
+
+    Parameters
+    ----------
+    command : str
+        The subcommand (for the message).
+    flag : str
+        The flag of the path (for the message).
+    path : str or None
+        The output file (None: nothing to check).
+    exts : tuple of str or None
+        Admissible suffixes (lower case), or None for any.
+    """
     if path is None:
         return
+    if not path.strip():
+        raise UsageError(f"obsdesign {command}: argument {flag}: expected a file name, found {path!r}")
     p = Path(path)
-    if p.suffix.lower() not in exts:
+    if exts is not None and p.suffix.lower() not in exts:
         raise UsageError(f"obsdesign {command}: argument {flag}: expected a file ending in "
-                         f"{' or '.join(exts)}, found {path!r}")
-    if not p.parent.is_dir():
-        raise UsageError(f"obsdesign {command}: argument {flag}: directory {str(p.parent)!r} does not exist")
+                         f"{' or '.join(exts)}, found {shown(path)}")
+    try:
+        parent_ok, is_dir = p.parent.is_dir(), p.is_dir()
+    except OSError as e:
+        raise UsageError(f"obsdesign {command}: argument {flag}: cannot use {shown(path)} "
+                         f"({e.strerror or type(e).__name__})") from None
+    if not parent_ok:
+        raise UsageError(f"obsdesign {command}: argument {flag}: directory {shown(str(p.parent))} does not exist")
+    if is_dir:
+        raise UsageError(f"obsdesign {command}: argument {flag}: expected a file, found the folder {shown(path)}")
+    _probe(p.parent, p.name, command, flag, path)
+
+
+def check_output_dir(command: str, flag: str, path: str) -> None:
+    """An output folder can be used: not empty, not a file, and it (or the nearest existing
+    folder above it, if it is to be created) is writable. Called before any work.
+
+    Parameters
+    ----------
+    command : str
+        The subcommand (for the message).
+    flag : str
+        The flag of the path (for the message).
+    path : str
+        The output folder.
+    """
+    if not path.strip():
+        raise UsageError(f"obsdesign {command}: argument {flag}: expected a folder name, found {path!r}")
+    p = Path(path)
+    try:
+        exists, is_dir = p.exists(), p.is_dir()
+        base = p
+        while not base.exists() and base != base.parent:
+            base = base.parent
+    except OSError as e:
+        raise UsageError(f"obsdesign {command}: argument {flag}: cannot use {shown(path)} "
+                         f"({e.strerror or type(e).__name__})") from None
+    if exists and not is_dir:
+        raise UsageError(f"obsdesign {command}: argument {flag}: expected a directory, found the file {shown(path)}")
+    if not base.is_dir():
+        raise UsageError(f"obsdesign {command}: argument {flag}: expected a directory, found the file "
+                         f"{shown(str(base))} in {shown(path)}")
+    _probe(base, "obsdesign_probe", command, flag, path)
+
+
+def check_samples(duration: float, dt: float, *, limit: int = MAX_SAMPLES) -> int:
+    """The samples of a run, refused before any allocation if above ``limit`` or the available memory.
+
+    Parameters
+    ----------
+    duration : float
+        Simulated time [s].
+    dt : float
+        Sample time [s].
+    limit : int
+        Most samples allowed.
+
+    Returns
+    -------
+    int
+        ``round(duration / dt)``.
+
+    Examples
+    --------
+    >>> check_samples(6.0, 1e-4)
+    60000
+    >>> check_samples(1e9, 1e-4)
+    Traceback (most recent call last):
+    ...
+    ValueError: --duration/--dt: expected at most 1e+08 samples (duration / dt), found 1e+13 (duration 1e+09 s, dt 0.0001 s)
+    """
+    ratio = duration / dt
+    available = _available_memory()
+    need = ratio * 16 * 8  # about 16 float64 arrays per sample (trace, scenario, noise)
+    if not ratio <= limit:
+        raise ValueError(f"--duration/--dt: expected at most {limit:.0e} samples (duration / dt), found {ratio:.3g} "
+                         f"(duration {duration:g} s, dt {dt:g} s)")
+    if available is not None and need > available:
+        raise ValueError(f"--duration/--dt: {ratio:.3g} samples need about {need / 1e9:.2g} GB, "
+                         f"{available / 1e9:.2g} GB available")
+    return int(round(ratio))
+
+
+def _available_memory() -> float | None:
+    """Bytes the kernel could give (``MemAvailable`` of Linux), or None if unknown."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024.0
+    except (OSError, ValueError, IndexError):
+        pass
+    return None

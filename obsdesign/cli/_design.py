@@ -7,7 +7,7 @@ import json
 
 from ..params import VARIANTS
 from ._common import (NONNEGATIVE_ARG, PHASE_ARG, POSITIVE_ARG, add_config_flags, add_design_flags, emit,
-                      load)
+                      finite_design, load, warn_unstable)
 
 __all__ = ["add_commands"]
 
@@ -34,7 +34,8 @@ def _cmd_check(args: argparse.Namespace) -> int:
     cfg = load(args)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # reported in the output instead
-        report = check_stability(cfg, rho=args.rho, kappa=args.kappa, variant=args.variant)
+        with finite_design(args, ("rho", "kappa")):
+            report = check_stability(cfg, rho=args.rho, kappa=args.kappa, variant=args.variant)
     emit(args, report, report.to_dict())
     if not args.json:
         for note in report.warnings:
@@ -46,23 +47,31 @@ def _cmd_pid(args: argparse.Namespace) -> int:
     from ..design import design_pid
 
     cfg = load(args)
-    pid = design_pid(
+    with finite_design(args, ("phi", "tau", "max_s", "phase_margin")):
+        pid = _design_pid(args, cfg, design_pid)
+    emit(args, pid, pid.to_dict())
+    return 0
+
+
+def _design_pid(args, cfg, design_pid):
+    return design_pid(
         phi=args.phi if args.phi is not None else (cfg.phi if args.tau is None else cfg.plant.K * args.tau / cfg.plant.m),
         tau=args.tau if args.tau is not None else cfg.pid.tau,
         max_S=args.max_s if args.max_s is not None else cfg.pid.max_S,
         phase_margin_deg=args.phase_margin if args.phase_margin is not None else cfg.pid.phase_margin_deg,
     )
-    emit(args, pid, pid.to_dict())
-    return 0
 
 
 def _cmd_noise(args: argparse.Namespace) -> int:
     from ..design import noise_analysis
 
     cfg = load(args)
-    na = noise_analysis(cfg, rho=args.rho, kappa=args.kappa, variant=args.variant,
-                        noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
-                        stiffness=args.stiffness)
+    with finite_design(args, ("rho", "kappa", "noise_rms", "noise_bandwidth", "stiffness")):
+        na = noise_analysis(cfg, rho=args.rho, kappa=args.kappa, variant=args.variant,
+                            noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
+                            stiffness=args.stiffness)
+        warn_unstable(cfg, "the noise variance of an unstable observer is unbounded, the values are not meaningful",
+                      rho=args.rho, kappa=args.kappa, variant=args.variant)
     emit(args, na, na.to_dict())
     return 0
 

@@ -7,7 +7,8 @@ from pathlib import Path
 
 from ..export import FORMATS as EXPORT_FORMATS
 from ..params import VARIANTS
-from ._common import POSITIVE_ARG, UsageError, add_config_flags, load
+from ._common import (POSITIVE_ARG, UsageError, add_config_flags, check_output_dir, check_output_file, load,
+                      warn_unstable)
 from ._data import add_trace_flags, load_trace_args
 
 __all__ = ["add_commands"]
@@ -16,7 +17,10 @@ __all__ = ["add_commands"]
 def _cmd_export(args: argparse.Namespace) -> int:
     from ..export import export
 
-    paths = export(load(args), args.format, args.output, variant=args.variant, rho=args.rho, dt=args.dt)
+    check_output_dir("export", "-o/--output", args.output)
+    cfg = load(args)
+    paths = export(cfg, args.format, args.output, variant=args.variant, rho=args.rho, dt=args.dt)
+    warn_unstable(cfg, "the exported observer diverges", rho=args.rho, variant=args.variant)
     for path in paths:
         print(path)
     return 0
@@ -26,10 +30,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
     from ..report.html import write_report
 
     out = Path(args.output)
-    if not out.parent.is_dir():
-        raise UsageError(f"obsdesign report: argument -o/--output: directory {str(out.parent)!r} does not exist")
-    if out.is_dir():
-        raise UsageError(f"obsdesign report: argument -o/--output: expected a file, found the directory {args.output!r}")
+    check_output_file("report", "-o/--output", args.output, None)
     if args.data and (args.position is None or args.input is None):
         raise UsageError("obsdesign report: argument --data: expected --position NAME and --input NAME with it")
     if not args.data and (args.position or args.input or args.time or args.sample_time):

@@ -10,9 +10,9 @@ from pathlib import Path
 from .._validate import parse_number
 from ..params import VARIANTS
 from ..sim.registry import CONTROLLERS, PLANTS, SCHEDULES
-from ..sim.scenarios import SCENARIOS
+from ..sim.scenarios import DEFAULT_DURATION, SCENARIOS
 from ._common import (FINITE_ARG, NONNEGATIVE_ARG, POSITIVE_ARG, UsageError, add_config_flags, add_design_flags,
-                      check_output_file, emit, integer, load)
+                      check_output_file, check_samples, emit, integer, load)
 
 __all__ = ["add_commands", "parse_vary", "parse_uncertain"]
 
@@ -36,6 +36,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     cfg = load(args).override(noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
                               quantization=args.quantization, dt=args.dt, rho=args.rho, kappa=args.kappa,
                               variant=args.variant)
+    check_samples(args.duration or DEFAULT_DURATION[args.scenario], cfg.observer.dt)
     options = {field: getattr(args, flag) for flag, field in _SPEC_FLAGS[args.scenario].items()
                if getattr(args, flag) is not None}
     spec = type(scenario_spec(args.scenario))(**options)
@@ -76,7 +77,7 @@ def parse_vary(items: list[str]) -> dict[str, tuple[float, float, int]]:
     for item in items:
         name, parts = _split(item, "--vary", "NAME=LO:HI:N", 3)
         lo, hi = (parse_number(p, f"--vary {name}") for p in parts[:2])
-        n = int(parts[2]) if parts[2].strip().isdigit() else 0
+        n = int(parts[2]) if parts[2].strip().isdecimal() else 0
         if n < 1:
             raise ValueError(f"--vary {name}: expected an integer N >= 1, found {parts[2]!r}")
         out[name] = (lo, hi, n)

@@ -42,7 +42,6 @@ ValueError: compensation.gain: expected a number in (0, 1], found 1.5
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass
 
 from ..design.pid import pid_gains
@@ -51,6 +50,8 @@ from ..design import discretize
 from ..design.discretize import lowpass_arrays
 from ..friction import presliding as friction
 from .codegen import _plain_source, export_spec
+from .literals import NAME_MAX as _NAME_MAX
+from .literals import comment_text
 
 __all__ = ["CompensationSpec", "controller_files", "controller_constants", "sanitize_comment", "LANGUAGES",
            "CONTROLLERS"]
@@ -58,8 +59,7 @@ __all__ = ["CompensationSpec", "controller_files", "controller_constants", "sani
 LANGUAGES = ("c", "python", "octave", "js")
 CONTROLLERS = ("pid", "pid+observer")
 #: Longest sanitized config name placed in a comment or docstring.
-NAME_MAX = 64
-_UNSAFE = re.compile(r"[^A-Za-z0-9 _.,+\-]")
+NAME_MAX = _NAME_MAX
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -113,6 +113,8 @@ def _real(name: str, value) -> float:
 def sanitize_comment(text: str, *, limit: int = NAME_MAX) -> str:
     """A user string made safe for any comment or docstring of the generated code.
 
+    The one function for comments of every export (:func:`obsdesign.export.literals.comment_text`).
+
     Parameters
     ----------
     text : str
@@ -122,12 +124,10 @@ def sanitize_comment(text: str, *, limit: int = NAME_MAX) -> str:
 
     Keeps ``[A-Za-z0-9 _.,+-]``, replaces every other character with ``_`` and caps the length.
 
-    >>> sanitize_comment("a */ b\\nc\\u2028d")
+    >>> sanitize_comment("a */ b" + chr(10) + "c" + chr(0x2028) + "d")
     'a __ b_c_d'
     """
-    if not isinstance(text, str):
-        raise TypeError(f"name: expected a string, found {type(text).__name__}")
-    return _UNSAFE.sub("_", text)[:limit]
+    return comment_text(text, limit=limit)
 
 
 def _choice(name: str, value, options) -> str:

@@ -32,7 +32,7 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, variant: str | 
     fmt : {'latex', 'python', 'c', 'octave', 'js'}
         The format (:data:`obsdesign.export.FORMATS`).
     out_dir : path
-        Output folder (created if missing).
+        Output folder (created if missing); a file of the export's names there must not be a folder.
     variant, rho, dt : optional
         Overrides of the config.
 
@@ -53,10 +53,13 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, variant: str | 
     elif fmt == "octave":
         files = octave_files(spec)
     else:
-        files = {"obsdesign_observer.mjs": js_module(spec.variant)}
+        files = {"obsdesign_observer.mjs": js_module(spec.variant, name=spec.cfg.name)}
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ValueError(f"output: expected a directory, found the file {str(out)!r}")
+    for name in files:
+        if (out / name).is_dir():
+            raise ValueError(f"output: expected {name!r} in {str(out)!r} to be a file, found a folder")
     out.mkdir(parents=True, exist_ok=True)
     paths = []
     for name, text in files.items():
