@@ -246,7 +246,7 @@ def _bad_cases(record, tmp_path):
         (["observe", r, *cfg, *FLAGS], "the trace's sample time wins"),
         (["observe", r, *good, *FLAGS, "--out", str(tmp_path / "o.txt")], ".csv or .npz"),
         (["observe", r, *good, *FLAGS, "--out", str(tmp_path / "no" / "o.csv")], "does not exist"),
-        (["observe", r, *good, *FLAGS, "--out", str(tmp_path / "dir.csv")], "found the directory"),
+        (["observe", r, *good, *FLAGS, "--out", str(tmp_path / "dir.csv")], "found the folder"),
         (["observe", r, *good, *FLAGS, "--plot", str(tmp_path / "o.pdf")], ".svg or .png"),
         (["observe", r, *FLAGS], "one of the arguments --preset --config is required"),
         (["identify", r, *FLAGS, "-o", str(tmp_path / "c.json")], ".toml"),

@@ -9,7 +9,7 @@ from ..params import preset_names
 from ..sim.registry import SCHEDULES
 from ._common import FINITE_ARG, POSITIVE_ARG, UsageError, check_output_file, emit
 
-__all__ = ["add_commands", "add_trace_flags", "load_trace_args", "check_output_path"]
+__all__ = ["add_commands", "add_trace_flags", "load_trace_args"]
 
 
 def add_trace_flags(p: argparse.ArgumentParser, *, required: bool = True) -> None:
@@ -34,13 +34,6 @@ def load_trace_args(args: argparse.Namespace, path: str):
                       sample_time=args.sample_time, input_gain=args.input_gain)
 
 
-def check_output_path(command: str, flag: str, path: str | None, exts: tuple[str, ...]) -> None:
-    """Suffix one of ``exts``, folder exists, not a directory: checked before any work."""
-    check_output_file(command, flag, path, exts)
-    if path is not None and Path(path).is_dir():
-        raise UsageError(f"obsdesign {command}: argument {flag}: expected a file, found the directory {path!r}")
-
-
 def _load_config(args: argparse.Namespace):
     from ..params import load_config, load_preset
 
@@ -50,7 +43,7 @@ def _load_config(args: argparse.Namespace):
 def _cmd_identify(args: argparse.Namespace) -> int:
     from ..data import identify
 
-    check_output_path("identify", "-o/--output", args.output, (".toml",))
+    check_output_file("identify", "-o/--output", args.output, (".toml",))
     trace = load_trace_args(args, args.data)
     ident = identify(trace, model="asymmetric" if args.asymmetric else "coulomb-viscous")
     if args.output:
@@ -64,8 +57,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
 def _cmd_observe(args: argparse.Namespace) -> int:
     from ..data import observe
 
-    check_output_path("observe", "--out", args.out, (".csv", ".npz"))
-    check_output_path("observe", "--plot", args.plot, (".svg", ".png"))
+    check_output_file("observe", "--out", args.out, (".csv", ".npz"))
+    check_output_file("observe", "--plot", args.plot, (".svg", ".png"))
     cfg = _load_config(args)
     trace = load_trace_args(args, args.data)
     if abs(cfg.observer.dt - trace.sample_time) > 1e-6 * trace.sample_time:
