@@ -26,7 +26,8 @@ _SPEC_FLAGS = {
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from ..sim import simulate
+    from ..design import design_warnings
+    from ..sim import prepare, run
     from ..sim.scenarios import scenario_spec
 
     check_output_file("simulate", "--out", args.out, (".csv", ".npz"))
@@ -39,9 +40,11 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     options = {field: getattr(args, flag) for flag, field in _SPEC_FLAGS[args.scenario].items()
                if getattr(args, flag) is not None}
     spec = type(scenario_spec(args.scenario))(**options)
-    res = simulate(cfg, spec, controller=args.controller, stiffness=args.stiffness, plant=args.plant,
-                   duration=args.duration, seed=args.seed, settle_tol=args.settle_tol,
-                   keep_trace=bool(args.out or args.plot))
+    loop = prepare(cfg, spec, controller=args.controller, stiffness=args.stiffness, plant=args.plant,
+                   duration=args.duration, seed=args.seed, settle_tol=args.settle_tol)
+    for note in design_warnings(cfg):  # after the refusals of prepare, before the run
+        print(f"warning: {note}", file=sys.stderr)
+    res = run(loop, keep_trace=bool(args.out or args.plot))
     if args.out:
         (res.to_npz if args.out.lower().endswith(".npz") else res.to_csv)(args.out)
     if args.plot:
