@@ -260,16 +260,31 @@ def _alive(pid: int) -> bool:
 
 
 def _start_long(out: Path, min_rows: int = 3):
+    """The LONG sweep, once it has written ``min_rows`` rows; stderr goes to a file (no pipe that
+    a leaked worker could hold open)."""
+    err = open(out.parent / f"{out.name}.stderr", "w")
     proc = subprocess.Popen([sys.executable, "-m", "obsdesign", *LONG, "--out", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.DEVNULL, stderr=err, text=True)
+    err.close()
     deadline = time.time() + 180
     results = out / "results.csv"
     while time.time() < deadline:
         if results.exists() and results.read_text().count("\n") > min_rows:
             break
-        assert proc.poll() is None, proc.communicate()
+        assert proc.poll() is None, (out.parent / f"{out.name}.stderr").read_text()
         time.sleep(0.05)
     return proc
+
+
+def _reap(pids) -> list[int]:
+    """The pids still alive after 10 s; killed, so that a failure does not leak them."""
+    deadline = time.time() + 10
+    while time.time() < deadline and any(_alive(p) for p in pids):
+        time.sleep(0.1)
+    left = [p for p in pids if _alive(p)]
+    for p in left:
+        os.kill(p, signal.SIGKILL)
+    return left
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
@@ -279,14 +294,8 @@ def test_killing_the_sweep_leaves_no_worker_behind(tmp_path, sig):
     kids = _children(proc.pid)
     assert len(kids) >= 2  # the two pool workers (and the resource tracker)
     proc.send_signal(sig)
-    proc.communicate(timeout=30)
-    deadline = time.time() + 10
-    while time.time() < deadline and any(_alive(p) for p in kids):
-        time.sleep(0.1)
-    left = [p for p in kids if _alive(p)]
-    for p in left:  # do not leak them into the rest of the suite
-        os.kill(p, signal.SIGKILL)
-    assert left == []
+    proc.wait(timeout=30)
+    assert _reap(kids) == []
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
@@ -296,15 +305,18 @@ def test_sigint_to_the_parent_alone_stops_within_3_s_and_keeps_rows(tmp_path):
     kids = _children(proc.pid)
     t0 = time.monotonic()
     proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=60)
+    try:
+        proc.wait(timeout=60)
+    finally:
+        left = _reap(kids)
     elapsed = time.monotonic() - t0
+    err = (tmp_path / "i.stderr").read_text()
     assert proc.returncode == 130, err
     assert elapsed < 3.0, elapsed
     assert one_line(err).startswith("obsdesign sweep: interrupted")
     rows = list(csv.DictReader((out / "results.csv").read_text().splitlines()))
     assert 3 <= len(rows) < 400 and {r["status"] for r in rows} == {"ok"}
-    time.sleep(0.5)
-    assert not [p for p in kids if _alive(p)]
+    assert left == []
 
 
 # -- --scheduler at a port that is not a Dask scheduler --------------------------------------------------
