@@ -141,3 +141,12 @@ def test_simulate_refusal_is_one_line_exit_2(tmp_path):
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "more than 1000 substeps" in lines[0] and "plant.m = 1e-06" in lines[0]
+
+
+def test_clipped_open_loop_force_is_warned():
+    """table1: K = 3.28 N/V, u_max = 10 V, G = 0, so the actuator gives at most 32.8 N."""
+    proc = cli("simulate", "constant", "--input-force", "1e30", "--duration", "0.1", "--json")
+    assert proc.returncode == 0
+    line = proc.stderr.strip().splitlines()
+    assert len(line) == 1 and "reaches 1e+30 N" in line[0] and "[-32.8, 32.8] N" in line[0]
+    assert cli("simulate", "constant", "--input-force", "32", "--duration", "0.1", "--json").stderr == ""

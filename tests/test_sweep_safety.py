@@ -380,3 +380,35 @@ def test_scheduler_port_that_is_closed_is_one_line(tmp_path):
     s.close()  # nothing listens there now
     proc = cli(*SMALL, "--out", str(tmp_path / "d"), "--scheduler", f"tcp://127.0.0.1:{port}", timeout=60)
     assert proc.returncode == 2 and "cannot reach" in one_line(proc.stderr)
+
+
+DASK = Path(sys.executable).parent / "dask"
+
+
+@pytest.mark.skipif(not DASK.exists(), reason="dask[distributed] not installed")
+def test_a_dask_cluster_without_workers_ends_the_sweep(tmp_path, monkeypatch):
+    """All workers gone: before, the sweep waited forever; now it ends after STALL_S without a worker."""
+    import importlib
+    import json
+
+    from distributed import Client
+
+    pool = importlib.import_module("obsdesign.sweeps.pool")
+    monkeypatch.setattr(pool, "STALL_S", 3.0)
+    sched_file = tmp_path / "scheduler.json"
+    sched = subprocess.Popen([str(DASK), "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                              "--scheduler-file", str(sched_file)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.time() + 60
+        while not sched_file.exists() and time.time() < deadline:
+            time.sleep(0.2)
+        address = json.loads(sched_file.read_text())["address"]
+        with Client(address, timeout="30s") as client:
+            t0 = time.monotonic()
+            with pytest.raises(pool.NoWorkersError, match="no worker for 3 s with 1 batches pending"):
+                od.sweep(od.load_preset("vcm"), "constant", vary={"rho": (2.0, 3.0, 2)}, duration=0.2,
+                         executor=client, out_dir=tmp_path / "o")
+            assert time.monotonic() - t0 < 20
+    finally:
+        sched.terminate()
+        sched.wait(30)

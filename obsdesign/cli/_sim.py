@@ -28,6 +28,7 @@ _SPEC_FLAGS = {
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from ..design import design_warnings
     from ..sim import prepare, run
+    from ..sim.numerics import saturation_warning
     from ..sim.scenarios import scenario_spec
 
     check_output_file("simulate", "--out", args.out, (".csv", ".npz"))
@@ -42,7 +43,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     spec = type(scenario_spec(args.scenario))(**options)
     loop = prepare(cfg, spec, controller=args.controller, stiffness=args.stiffness, plant=args.plant,
                    duration=args.duration, seed=args.seed, settle_tol=args.settle_tol)
-    for note in design_warnings(cfg):  # after the refusals of prepare, before the run
+    clipped = saturation_warning(loop)
+    for note in (*design_warnings(cfg), *([clipped] if clipped else [])):  # after prepare's refusals, before the run
         print(f"warning: {note}", file=sys.stderr)
     res = run(loop, keep_trace=bool(args.out or args.plot))
     if args.out:
@@ -185,7 +187,9 @@ def _connect(address: str):
 def _is_worker_failure(e: BaseException) -> bool:
     import concurrent.futures
 
-    if isinstance(e, concurrent.futures.BrokenExecutor):
+    from ..sweeps.pool import NoWorkersError
+
+    if isinstance(e, (concurrent.futures.BrokenExecutor, NoWorkersError)):
         return True
     return type(e).__module__.startswith("distributed") or type(e).__name__ in ("KilledWorker", "CommClosedError")
 

@@ -50,7 +50,8 @@ import math
 from .._validate import check_integer
 from ..params import Config
 
-__all__ = ["MAX_SUBSTEPS", "MAX_STEP_RATE", "plant_rates", "fastest_rate", "substeps_for", "step_is_stable"]
+__all__ = ["MAX_SUBSTEPS", "MAX_STEP_RATE", "plant_rates", "fastest_rate", "substeps_for", "step_is_stable",
+           "saturation_warning"]
 
 #: Largest number of Heun substeps per sample chosen or accepted.
 MAX_SUBSTEPS = 1000
@@ -188,3 +189,38 @@ def step_is_stable(*, dt: float, n_sub: int, m: float, sigma: float, kappa: floa
     """
     rate = max(plant_rates(m=m, sigma=sigma, kappa=kappa, beta=beta, model_lag=model_lag).values())
     return dt / n_sub * rate <= MAX_STEP_RATE * (1.0 + 1e-9)
+
+
+def saturation_warning(loop) -> str | None:
+    """A warning when an open-loop force exceeds what the saturated actuator can apply (else None).
+
+    The kernel applies ``u = K clip((u_open + G)/K, -u_max, u_max) - G``, so the net force lies
+    in ``[-K u_max - G, K u_max - G]``; a larger requested force is clipped.
+
+    Parameters
+    ----------
+    loop : LoopInputs
+        The inputs of a run (:func:`obsdesign.sim.prepare`).
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> from obsdesign.sim import prepare
+    >>> from obsdesign.sim.scenarios import ConstantForce
+    >>> cfg = od.load_preset("vcm")
+    >>> saturation_warning(prepare(cfg, "constant", duration=0.01)) is None
+    True
+    >>> print(saturation_warning(prepare(cfg, ConstantForce(force=1e30), duration=0.01)))
+    the open-loop force reaches 1e+30 N, beyond the saturated actuator's range [-38.07, 27.53] N (K = 3.28 N/V, u_max = 10 V, G = 5.27 N): it is clipped
+    """
+    if loop.controller != "open-loop" or len(loop.u_open) == 0:
+        return None
+    import numpy as np
+
+    low, high = -loop.K * loop.u_max - loop.G, loop.K * loop.u_max - loop.G
+    peak_hi, peak_lo = float(np.max(loop.u_open)), float(np.min(loop.u_open))
+    if peak_hi <= high * (1 + 1e-12) and peak_lo >= low * (1 + 1e-12):
+        return None
+    peak = peak_hi if peak_hi - high >= low - peak_lo else peak_lo
+    return (f"the open-loop force reaches {peak:.4g} N, beyond the saturated actuator's range [{low:.4g}, {high:.4g}] N "
+            f"(K = {loop.K:g} N/V, u_max = {loop.u_max:g} V, G = {loop.G:g} N): it is clipped")

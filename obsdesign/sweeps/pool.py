@@ -16,7 +16,14 @@ import sys
 import threading
 import time
 
-__all__ = ["Executor", "die_with_parent"]
+__all__ = ["Executor", "die_with_parent", "NoWorkersError", "STALL_S"]
+
+#: Seconds a Dask sweep waits with no worker in the cluster before it gives up.
+STALL_S = 60.0
+
+
+class NoWorkersError(RuntimeError):
+    """The Dask cluster has had no worker for :data:`STALL_S` seconds while runs were pending."""
 
 
 def _watch_parent(parent: int) -> None:
@@ -90,11 +97,31 @@ class Executor:
             return
         self.futures = [self.pool.submit(fn, batch) for batch in batches]
         if self.dask:
-            from distributed import as_completed
-        else:
-            as_completed = concurrent.futures.as_completed
-        for fut in as_completed(self.futures):
+            yield from self._dask_results()
+            return
+        for fut in concurrent.futures.as_completed(self.futures):
             yield fut.result()
+
+    def _dask_results(self):
+        """Results as they complete; ``NoWorkersError`` when the cluster stays without workers."""
+        from distributed import wait
+
+        pending = set(self.futures)
+        idle_since = None
+        while pending:
+            try:
+                done, pending = wait(pending, timeout=2.0, return_when="FIRST_COMPLETED")
+            except TimeoutError:  # distributed's TimeoutError is the builtin one
+                done = set()
+            for fut in done:
+                yield fut.result()
+            if done or self.pool.nthreads():
+                idle_since = None
+            elif idle_since is None:
+                idle_since = time.monotonic()
+            elif time.monotonic() - idle_since > STALL_S:
+                raise NoWorkersError(f"the Dask cluster has had no worker for {STALL_S:g} s with "
+                                     f"{len(pending)} batches pending")
 
     def abort(self) -> None:
         """Cancel what is pending and stop our own workers at once (their batches are lost)."""
