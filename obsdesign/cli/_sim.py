@@ -113,10 +113,7 @@ def parse_uncertain(items: list[str]) -> dict[str, tuple[float, float]]:
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
     from .._io import atomic_write
-    from ..report.figures import save_figure
-    from ..report.sweep_figures import sweep_distribution_figure, sweep_map_figure
     from ..sweeps import make_summary, sweep
-
     from ..sweeps.run import metric_columns
 
     vary = parse_vary(args.vary or [])
@@ -153,6 +150,9 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     finally:
         if client is not None:
             client.close()
+    from ..report.figures import save_figure  # matplotlib: only once there is something to draw
+    from ..report.sweep_figures import sweep_distribution_figure, sweep_map_figure
+
     summary = make_summary(res.rows, list(vary), metric=args.metric, resumed_runs=res.skipped, wall_s=res.wall_s)
     save_figure(sweep_map_figure(res, list(vary), args.metric), out / "summary_map.svg")
     save_figure(sweep_distribution_figure(res, args.metric), out / "summary_distributions.svg")
@@ -163,17 +163,18 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
 def _connect(address: str):
     """A ``distributed.Client`` of ``address``, or one line (``UsageError``) within about 15 s."""
-    try:
-        from distributed import Client
-    except ImportError:
-        raise UsageError("obsdesign sweep: argument --scheduler: needs dask[distributed] "
-                         "(pip install 'obsdesign[distributed]')") from None
+    import importlib.util
+
     from ..sweeps.scheduler import probe_scheduler
 
+    if importlib.util.find_spec("distributed") is None:
+        raise UsageError("obsdesign sweep: argument --scheduler: needs dask[distributed] "
+                         "(pip install 'obsdesign[distributed]')")
     try:
-        probe_scheduler(address, timeout=5.0)
+        probe_scheduler(address, timeout=5.0)  # before the (slow) import of distributed
     except ValueError as e:
         raise UsageError(f"obsdesign sweep: argument --{e}") from None
+    from distributed import Client
     import logging
 
     logging.getLogger("distributed").setLevel(logging.CRITICAL)  # failures are reported in one line

@@ -51,9 +51,9 @@ def probe_scheduler(address: str, *, timeout: float = 5.0) -> None:
     if not colon or not host or not port_text.isdigit() or not 0 < int(port_text) < 65536:
         raise ValueError(f"scheduler: expected an address tcp://HOST:PORT, found {address!r}")
     host = host.strip("[]")
-    deadline = time.monotonic() + 2 * timeout
     try:
         with socket.create_connection((host, int(port_text)), timeout=timeout) as sock:
+            deadline = time.monotonic() + timeout
             head = b""
             while len(head) < 8:
                 sock.settimeout(max(0.01, deadline - time.monotonic()))
