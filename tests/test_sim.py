@@ -240,7 +240,7 @@ def test_band_limited_noise_has_no_power_above_its_band():
         (dict(scenario="constant", plant="real"), ValueError, r"plant: expected one of physical, model, found 'real'"),
         (dict(scenario="constant", duration=-1.0), ValueError, r"duration: expected a finite number > 0, found -1\.0"),
         (dict(scenario=od.sim.Positioning(step_up=4.0)), ValueError, r"step_down: expected step_up < step_down < duration"),
-        (dict(scenario="constant", substeps=0), ValueError, r"substeps: expected an integer >= 1, found 0"),
+        (dict(scenario="constant", substeps=0), ValueError, r"substeps: expected an integer >= 1 and <= 1000, found 0"),
     ],
 )
 def test_simulate_rejects_bad_input(kwargs, exc, match):

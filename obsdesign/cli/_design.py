@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 
 from ..params import VARIANTS
 from ._common import (NONNEGATIVE_ARG, PHASE_ARG, POSITIVE_ARG, add_config_flags, add_design_flags, emit,
@@ -73,6 +74,8 @@ def _cmd_noise(args: argparse.Namespace) -> int:
         warn_unstable(cfg, "the noise variance of an unstable observer is unbounded, the values are not meaningful",
                       rho=args.rho, kappa=args.kappa, variant=args.variant)
     emit(args, na, na.to_dict())
+    for note in na.warnings:
+        print(f"warning: {note}", file=sys.stderr)
     return 0
 
 

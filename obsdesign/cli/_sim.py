@@ -26,7 +26,9 @@ _SPEC_FLAGS = {
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from ..sim import simulate
+    from ..design import design_warnings
+    from ..sim import prepare, run
+    from ..sim.numerics import saturation_warning
     from ..sim.scenarios import scenario_spec
 
     check_output_file("simulate", "--out", args.out, (".csv", ".npz"))
@@ -40,9 +42,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     options = {field: getattr(args, flag) for flag, field in _SPEC_FLAGS[args.scenario].items()
                if getattr(args, flag) is not None}
     spec = type(scenario_spec(args.scenario))(**options)
-    res = simulate(cfg, spec, controller=args.controller, stiffness=args.stiffness, plant=args.plant,
-                   duration=args.duration, seed=args.seed, settle_tol=args.settle_tol,
-                   keep_trace=bool(args.out or args.plot))
+    loop = prepare(cfg, spec, controller=args.controller, stiffness=args.stiffness, plant=args.plant,
+                   duration=args.duration, seed=args.seed, settle_tol=args.settle_tol)
+    clipped = saturation_warning(loop)
+    for note in (*design_warnings(cfg), *([clipped] if clipped else [])):  # after prepare's refusals, before the run
+        print(f"warning: {note}", file=sys.stderr)
+    res = run(loop, keep_trace=bool(args.out or args.plot))
     if args.out:
         (res.to_npz if args.out.lower().endswith(".npz") else res.to_csv)(args.out)
     if args.plot:
@@ -77,9 +82,12 @@ def parse_vary(items: list[str]) -> dict[str, tuple[float, float, int]]:
     for item in items:
         name, parts = _split(item, "--vary", "NAME=LO:HI:N", 3)
         lo, hi = (parse_number(p, f"--vary {name}") for p in parts[:2])
-        n = int(parts[2]) if parts[2].strip().isdecimal() else 0
+        digits = parts[2].strip()
+        n = int(digits) if digits.isascii() and digits.isdigit() else 0
         if n < 1:
             raise ValueError(f"--vary {name}: expected an integer N >= 1, found {parts[2]!r}")
+        if name in out:
+            raise ValueError(f"--vary {name}: expected each parameter once, found it twice")
         out[name] = (lo, hi, n)
     return check_names("--vary", out)
 
@@ -98,38 +106,37 @@ def parse_uncertain(items: list[str]) -> dict[str, tuple[float, float]]:
         lo, hi = (parse_number(p, f"--uncertain {name}") for p in parts)
         if hi < lo:
             raise ValueError(f"--uncertain {name}: expected LO <= HI, found {lo:g} > {hi:g}")
+        if name in out:
+            raise ValueError(f"--uncertain {name}: expected each parameter once, found it twice")
         out[name] = (lo, hi)
     return check_names("--uncertain", out)
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
     from .._io import atomic_write
-    from ..report.figures import save_figure
-    from ..report.sweep_figures import sweep_distribution_figure, sweep_map_figure
     from ..sweeps import make_summary, sweep
+    from ..sweeps.run import metric_columns
 
     vary = parse_vary(args.vary or [])
     uncertain = parse_uncertain(args.uncertain or [])
+    for name in uncertain:
+        if name in vary:
+            raise UsageError(f"obsdesign sweep: argument --uncertain: {name!r} is given with --vary too; "
+                             "expected each parameter in one of them")
+    metrics = metric_columns(args.scenario)
+    if args.metric not in metrics:
+        raise UsageError(f"obsdesign sweep: argument --metric: expected one of {', '.join(metrics)}, "
+                         f"found {args.metric!r}")
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UsageError(f"obsdesign sweep: argument --out: expected a directory, found the file {args.out!r}")
     if args.resume and not (out / "results.csv").exists():
         raise UsageError(f"obsdesign sweep: argument --resume: no results.csv in {args.out!r} to resume")
     cfg = load(args)
-    client = None
-    if args.scheduler:
-        try:
-            from distributed import Client
-        except ImportError:
-            raise UsageError("obsdesign sweep: argument --scheduler: needs dask[distributed] "
-                             "(pip install 'obsdesign[distributed]')") from None
-        try:
-            client = Client(args.scheduler, timeout="10s")
-        except OSError as e:
-            raise UsageError(f"obsdesign sweep: argument --scheduler: cannot reach {args.scheduler!r} ({e})") from None
+    client = _connect(args.scheduler) if args.scheduler else None
     try:
         res = sweep(cfg, args.scenario, vary=vary, uncertain=uncertain, samples=args.samples, seed=args.seed,
-                    executor=client, workers=args.workers, out_dir=out, resume=args.resume,
+                    executor=client, workers=args.workers, out_dir=out, resume=args.resume, force=args.force,
                     progress=sys.stderr.isatty(), duration=args.duration, variant=args.variant)
     except KeyboardInterrupt:
         print(f"obsdesign sweep: interrupted; finished runs are in {str(out / 'results.csv')!r}, "
@@ -144,9 +151,9 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     finally:
         if client is not None:
             client.close()
-    if res.rows and args.metric not in res.columns:
-        raise UsageError(f"obsdesign sweep: argument --metric: expected one of "
-                         f"{', '.join(c for c in res.columns if c not in ('status', 'error'))}, found {args.metric!r}")
+    from ..report.figures import save_figure  # matplotlib: only once there is something to draw
+    from ..report.sweep_figures import sweep_distribution_figure, sweep_map_figure
+
     summary = make_summary(res.rows, list(vary), metric=args.metric, resumed_runs=res.skipped, wall_s=res.wall_s)
     save_figure(sweep_map_figure(res, list(vary), args.metric), out / "summary_map.svg")
     save_figure(sweep_distribution_figure(res, args.metric), out / "summary_distributions.svg")
@@ -155,10 +162,36 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     return 0
 
 
+def _connect(address: str):
+    """A ``distributed.Client`` of ``address``, or one line (``UsageError``) within about 15 s."""
+    import importlib.util
+
+    from ..sweeps.scheduler import probe_scheduler
+
+    if importlib.util.find_spec("distributed") is None:
+        raise UsageError("obsdesign sweep: argument --scheduler: needs dask[distributed] "
+                         "(pip install 'obsdesign[distributed]')")
+    try:
+        probe_scheduler(address, timeout=5.0)  # before the (slow) import of distributed
+    except ValueError as e:
+        raise UsageError(f"obsdesign sweep: argument --{e}") from None
+    from distributed import Client
+    import logging
+
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)  # failures are reported in one line
+    try:
+        return Client(address, timeout="10s")
+    except (OSError, ValueError, TypeError, MemoryError) as e:
+        raise UsageError(f"obsdesign sweep: argument --scheduler: cannot reach {address!r} "
+                         f"({type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''})") from None
+
+
 def _is_worker_failure(e: BaseException) -> bool:
     import concurrent.futures
 
-    if isinstance(e, concurrent.futures.BrokenExecutor):
+    from ..sweeps.pool import NoWorkersError
+
+    if isinstance(e, (concurrent.futures.BrokenExecutor, NoWorkersError)):
         return True
     return type(e).__module__.startswith("distributed") or type(e).__name__ in ("KilledWorker", "CommClosedError")
 
@@ -201,6 +234,8 @@ def add_commands(sub) -> None:
     p.add_argument("--out", required=True, metavar="DIR", help="folder for results.csv and the summary")
     p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://127.0.0.1:8786")
     p.add_argument("--workers", type=integer(1), help="local processes (default: all cores)")
-    p.add_argument("--resume", action="store_true", help="finish an interrupted sweep in --out")
+    again = p.add_mutually_exclusive_group()
+    again.add_argument("--resume", action="store_true", help="finish an interrupted sweep in --out")
+    again.add_argument("--force", action="store_true", help="replace the results of another sweep in --out")
     p.add_argument("--metric", default="rms_error", help="metric for the best design (default rms_error)")
     p.set_defaults(run=_cmd_sweep)

@@ -1,5 +1,6 @@
 """Numeric design: observer gains and stability verdicts, PID, noise (python-control)."""
 
+from .advisories import design_warnings as design_warnings
 from .noise import NoiseAnalysis as NoiseAnalysis
 from .noise import band_limited_rms as band_limited_rms
 from .noise import lowpass as lowpass
@@ -21,4 +22,5 @@ __all__ = [
     "NoiseAnalysis", "band_limited_rms", "lowpass", "noise_analysis",
     "FrozenSystems", "ObserverArrays", "ObserverDesign", "is_stable", "StabilityReport", "check_stability", "design_observer",
     "PIDDesign", "design_pid", "pid_from_config", "pid_from_gains", "Condition",
+    "design_warnings",
 ]

@@ -18,6 +18,10 @@ Examples
 -120000.0
 >>> na.rms_filtered < na.rms_raw
 True
+>>> na.warnings
+()
+>>> od.noise_analysis(od.load_preset("vcm"), rho=0.5).warnings[0].startswith("the design fails check")
+True
 """
 
 from __future__ import annotations
@@ -34,6 +38,7 @@ from .._validate import NONNEGATIVE, POSITIVE, Range
 from ..params import Config
 from .numeric import poly_coeffs
 from .observer import design_observer
+from .advisories import design_warnings
 
 __all__ = ["NoiseAnalysis", "noise_analysis", "lowpass", "band_limited_rms"]
 
@@ -116,6 +121,10 @@ class NoiseAnalysis(ResultDisplay):
     rms_velocity_raw : float
         RMS of the velocity estimate's noise [m/s].
     G_friction, G_velocity, lowpass : control.TransferFunction
+    warnings : tuple of str
+        The design's warnings (:func:`obsdesign.design.design_warnings`): for a design that
+        fails ``check`` the observer is not stable for every stiffness and the RMS values,
+        computed at one stiffness, do not bound the estimates' noise (its variance is unbounded).
     """
 
     _title = "Measurement noise propagation"
@@ -131,6 +140,7 @@ class NoiseAnalysis(ResultDisplay):
     G_friction: ct.TransferFunction = field(repr=False, compare=False)
     G_velocity: ct.TransferFunction = field(repr=False, compare=False)
     lowpass: ct.TransferFunction = field(repr=False, compare=False)
+    warnings: tuple = field(default=(), repr=False, compare=False)
 
     def to_dict(self) -> dict:
         """JSON-ready values (the keys of ``obsdesign noise --json`` and more)."""
@@ -183,4 +193,5 @@ def noise_analysis(cfg: Config, *, rho: float | None = None, kappa: float | None
         direct_gain=design.L2, velocity_direct_gain=design.L1,
         rms_raw=band_limited_rms(G_f, eta, B), rms_filtered=band_limited_rms(F * G_f, eta, B),
         rms_velocity_raw=band_limited_rms(G_v, eta, B), G_friction=G_f, G_velocity=G_v, lowpass=F,
+        warnings=design_warnings(cfg, rho=rho, kappa=kappa, variant=variant),
     )

@@ -179,7 +179,7 @@ def run_loop(
         # 1. measurement
         xm = x + noise[n]
         if quantization > 0.0:
-            xm = quantization * math.floor(xm / quantization + 0.5)
+            xm = quantization * np.floor(xm / quantization + 0.5)  # float: no int64 overflow
         # 2. observer, filter and stiffness schedule
         k_true = stiffness(x, p_dir, p_xr, p_fr, Cf, s, kappa) if schedule == SCHEDULE_TRUE else 0.0
         ost, vh, fh, ff, k_now = observer_sample(ost, n, xm, u_prev, k_true, dt, Cf, s, kappa,

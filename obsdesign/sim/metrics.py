@@ -11,6 +11,10 @@ key                        meaning
 ``observer_rms_error_v``   RMS of ``v_hat - v`` [m/s]
 ``observer_rms_error_f``   RMS of ``f_hat - f`` [N] (``f``: the plant's value of the estimated state)
 ``diverged``               the run stopped early because a state left its bounds
+``divergence``             ``None`` (no divergence), ``'numerical'`` (the plant's explicit step
+                           ``dt / n_sub`` broke the rule of :mod:`obsdesign.sim.numerics`, so
+                           the integrator, not the design, blew up) or ``'physical'`` (the
+                           step was stable: the loop itself diverged)
 ``sim_wall_s``             wall time of the kernel [s]
 ``rms_error_per_band``     tracking only: RMS of ``e`` per chirp-frequency band [m]
 =========================  =====================================================================
@@ -70,7 +74,7 @@ def _first_at_or_above(sc: Scenario, frequency: float, n: int) -> int:
 
 
 def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_written: int, settle_tol: float,
-                 wall: float) -> dict[str, Any]:
+                 wall: float, *, step_stable: bool = True) -> dict[str, Any]:
     """The metrics of a run from the kernel's outputs (see the module docstring).
 
     Parameters
@@ -87,6 +91,8 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
         Settling band [m].
     wall : float
         Wall time of the kernel [s].
+    step_stable : bool
+        Whether the plant's integration step met the numerical rule (labels a divergence).
     """
     dt = sc.dt
     valid = slice(0, n_written)
@@ -103,6 +109,7 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
         "observer_rms_error_v": _rms_of_difference(out["v_hat"][valid], out["v"][valid], finite, scratch),
         "observer_rms_error_f": _rms_of_difference(out["f_hat"][valid], out["f"][valid], finite, scratch),
         "diverged": not finite,
+        "divergence": None if finite else ("physical" if step_stable else "numerical"),
         "sim_wall_s": wall,
     }
     for start, end in sc.holds:

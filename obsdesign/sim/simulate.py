@@ -36,6 +36,7 @@ from ..params import Config
 from . import kernel
 from ..design.discretize import lowpass_arrays
 from .metrics import loop_metrics
+from .numerics import step_is_stable, substeps_for
 from .registry import CONTROLLERS, ESTIMATORS, PLANTS, SCHEDULES
 from .result import SimResult
 from .scenarios import Scenario, band_limited_noise, build_scenario, scenario_spec
@@ -144,13 +145,16 @@ def prepare(
     duration : float, optional
         Length [s] (the scenario's default).
     seed : int
-        Seed of the measurement noise and the excitation (``numpy.random.SeedSequence``).
+        Seed of the measurement noise and the excitation (``numpy.random.SeedSequence``), an
+        integer >= 0 (``None`` is refused: a run is reproducible from its arguments).
     settle_tol : float
         Band [m] for the settling time (default 2 um).
     initial_estimate : (float, float)
         Observer's initial ``(v_hat, f_hat)``; the plant starts at rest.
     substeps : int
-        Heun substeps of the plant per sample (default 10).
+        Heun substeps of the plant per sample (default 10, at most 1000), raised where the
+        explicit step would be unstable for the plant's time constants
+        (:func:`obsdesign.sim.numerics.substeps_for`, which refuses a plant needing more than 1000).
 
     Returns
     -------
@@ -169,11 +173,16 @@ def prepare(
         expected = "'open-loop'" if spec.open_loop else "'pid' or 'pid+observer'"
         raise ValueError(f"controller: scenario {spec.name!r} needs {expected}, found {controller!r}")
     settle_tol = POSITIVE.check("settle_tol", settle_tol)
-    substeps = check_integer("substeps", substeps, minimum=1)
+    seed = check_integer("seed", seed, minimum=0)
+    if isinstance(initial_estimate, (str, bytes)) or not hasattr(initial_estimate, "__len__") \
+            or len(initial_estimate) != 2:
+        raise ValueError(f"initial_estimate: expected a pair (v_hat, f_hat) of finite numbers, "
+                         f"found {initial_estimate!r}")
     v_hat0, f_hat0 = (FINITE.check("initial_estimate", x) for x in initial_estimate)
     if plant == "model" and cfg.observer.variant == "lag" and cfg.friction.beta is None:
         raise ValueError("plant: the 'model' plant of variant 'lag' needs friction.beta")
     dt = cfg.observer.dt
+    substeps = substeps_for(cfg, dt, substeps, plant=plant)
     noise_seed, signal_seed = np.random.SeedSequence(seed).spawn(2)
     sc = build_scenario(spec, dt=dt, duration=duration, seed=signal_seed)
 
@@ -224,7 +233,9 @@ def run(loop: LoopInputs, keep_trace: bool = True) -> SimResult:
         for arr in out.values():
             arr[n_written:] = np.nan
     e = loop.x_ref - out["x"]
-    metrics = loop_metrics(loop.scenario, out, e, n_written, loop.settle_tol, wall)
+    stable_step = step_is_stable(dt=loop.dt, n_sub=loop.n_sub, m=loop.m, sigma=loop.sigma, kappa=loop.kappa,
+                                 beta=loop.beta, model_lag=loop.mode == kernel.PLANT_MODEL and loop.lag_model)
+    metrics = loop_metrics(loop.scenario, out, e, n_written, loop.settle_tol, wall, step_stable=stable_step)
     traces = {}
     if keep_trace:
         traces = dict(out, t=np.arange(n) * loop.dt, x_ref=loop.x_ref, e=e)

@@ -18,9 +18,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._validate import FINITE, check_integer
 from ..params import PARAMETERS
 
-__all__ = ["RunSpec", "make_plan", "check_names"]
+__all__ = ["RunSpec", "make_plan", "check_names", "check_axes", "MAX_RUNS"]
+
+#: Most runs a sweep may plan (a plan holds one seed per run in memory).
+MAX_RUNS = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -51,6 +55,65 @@ def check_names(kind: str, spec: dict) -> dict[str, tuple]:
             raise ValueError(f"{kind}: unknown parameter {name!r}; expected a numeric config field such as "
                              "rho, omega_co, kappa, Cf, sigma, m")
     return spec
+
+
+def _bounds(kind: str, name: str, value, n_items: int, syntax: str) -> tuple:
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != n_items:
+        raise TypeError(f"{kind} {name}: expected {syntax}, found {value!r}")
+    lo = FINITE.check(f"{kind} {name} LO", value[0])
+    hi = FINITE.check(f"{kind} {name} HI", value[1])
+    return lo, hi
+
+
+def check_axes(vary: dict, uncertain: dict, samples: int) -> tuple[dict, dict]:
+    """Validated ``vary`` and ``uncertain`` (the checks of the command line, for the API too).
+
+    Every name a numeric config field and in at most one of the two; ``vary`` values
+    ``(LO, HI, N)`` with finite bounds and an integer ``N >= 1``; ``uncertain`` values
+    ``(LO, HI)`` with ``LO <= HI``; at most :data:`MAX_RUNS` runs in all.
+
+    Parameters
+    ----------
+    vary : dict
+        ``{name: (low, high, n)}``.
+    uncertain : dict
+        ``{name: (low, high)}``.
+    samples : int
+        Draws per grid point.
+
+    Examples
+    --------
+    >>> check_axes({"rho": (1, 2, 3)}, {"Cf": (0.3, 0.4)}, 2)
+    ({'rho': (1.0, 2.0, 3)}, {'Cf': (0.3, 0.4)})
+    >>> check_axes({"rho": (1, 2, 0)}, {}, 1)
+    Traceback (most recent call last):
+    ...
+    ValueError: vary rho N: expected an integer >= 1, found 0
+    >>> check_axes({"rho": (1, 2, 2)}, {"rho": (3, 4)}, 1)
+    Traceback (most recent call last):
+    ...
+    ValueError: uncertain: 'rho' is varied already; expected each parameter in vary or in uncertain, not both
+    """
+    vary, uncertain = check_names("vary", vary), check_names("uncertain", uncertain)
+    out_vary = {}
+    for name, value in vary.items():
+        lo, hi = _bounds("vary", name, value, 3, "(LO, HI, N)")
+        out_vary[name] = (lo, hi, check_integer(f"vary {name} N", value[2], minimum=1))
+    out_unc = {}
+    for name, value in uncertain.items():
+        if name in vary:
+            raise ValueError(f"uncertain: {name!r} is varied already; expected each parameter in vary or in "
+                             "uncertain, not both")
+        lo, hi = _bounds("uncertain", name, value, 2, "(LO, HI)")
+        if hi < lo:
+            raise ValueError(f"uncertain {name}: expected LO <= HI, found {lo:g} > {hi:g}")
+        out_unc[name] = (lo, hi)
+    runs = samples
+    for _, _, n in out_vary.values():
+        runs *= n
+    if runs > MAX_RUNS:
+        raise ValueError(f"vary, samples: expected at most {MAX_RUNS} runs in all, found {runs}")
+    return out_vary, out_unc
 
 
 def make_plan(vary: dict, uncertain: dict, samples: int, seed: int) -> list[RunSpec]:

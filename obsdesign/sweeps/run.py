@@ -24,10 +24,14 @@ from .._io import atomic_write
 from .._validate import check_integer
 from ..design.observer import is_stable
 from ..params import Config
-from ..sim.scenarios import CHIRP_BAND_LABELS, build_scenario
+from ..sim.registry import CONTROLLERS
+from ..sim.scenarios import CHIRP_BAND_LABELS, build_scenario, scenario_spec
 from ..sim.simulate import simulate
-from .plan import RunSpec, check_names, make_plan
-from .store import FIXED_COLUMNS, TAIL_COLUMNS, csv_line, csv_text, read_rows, typed_row
+from .folder import SweepLock, check_start, read_manifest
+from .plan import RunSpec, check_axes, make_plan
+from .pool import Executor as _Executor
+from .store import (FIXED_COLUMNS, TAIL_COLUMNS, checksum_line, checksums_text, csv_line, csv_text, read_rows,
+                    typed_row)
 from .summary import best_value
 
 __all__ = ["sweep", "SweepResult", "run_one", "metric_columns", "band_column"]
@@ -136,116 +140,76 @@ class SweepResult:
         return best_value(self.rows, parameter, metric)
 
 
-class _Executor:
-    """One adapter over the ways to run batches: in this process, a process pool of our own,
-    a ``concurrent.futures.Executor`` or a ``dask.distributed.Client`` given by the caller."""
-
-    def __init__(self, executor, workers: int | None) -> None:
-        self.owned = executor is None
-        if executor is None:
-            n = workers if workers is not None else (os.cpu_count() or 1)
-            if n > 1:
-                import multiprocessing
-
-                executor = concurrent.futures.ProcessPoolExecutor(
-                    max_workers=n, mp_context=multiprocessing.get_context("spawn"))
-            self.workers = n
-        else:
-            self.workers = self._count_workers(executor)
-        self.pool = executor
-        self.dask = executor is not None and hasattr(executor, "scheduler_info") and hasattr(executor, "gather")
-        self.futures: list = []
-
-    @staticmethod
-    def _count_workers(executor) -> int:
-        if hasattr(executor, "nthreads"):  # dask.distributed.Client
-            return max(1, sum(executor.nthreads().values()))
-        return max(1, getattr(executor, "_max_workers", 1))
-
-    def map_batches(self, fn, batches):
-        """Results of ``fn(batch)`` as they complete (in this process: in order)."""
-        if self.pool is None:
-            for batch in batches:
-                yield fn(batch)
-            return
-        self.futures = [self.pool.submit(fn, batch) for batch in batches]
-        if self.dask:
-            from distributed import as_completed
-        else:
-            as_completed = concurrent.futures.as_completed
-        for fut in as_completed(self.futures):
-            yield fut.result()
-
-    def abort(self) -> None:
-        if self.pool is None:
-            return
-        if self.owned:
-            self.pool.shutdown(wait=False, cancel_futures=True)
-        elif self.dask:
-            self.pool.cancel(self.futures)
-        else:
-            for fut in self.futures:
-                fut.cancel()
-
-    def close(self) -> None:
-        if self.owned and self.pool is not None:
-            self.pool.shutdown()
-
-
 def sweep(cfg: Config, scenario: str, *, vary: dict | None = None, uncertain: dict | None = None,
           samples: int = 1, seed: int = 0, executor=None, workers: int | None = None,
-          out_dir: str | os.PathLike | None = None, resume: bool = False, progress: bool = False,
-          duration: float | None = None, variant: str | None = None, controller: str | None = None,
-          chunk: int = 8) -> SweepResult:
+          out_dir: str | os.PathLike | None = None, resume: bool = False, force: bool = False,
+          progress: bool = False, duration: float | None = None, variant: str | None = None,
+          controller: str | None = None, chunk: int = 8) -> SweepResult:
     """Run a design sweep with Monte-Carlo draws.
 
     A sweep is a grid over the ``vary`` parameters (``numpy.linspace`` of each
     ``(low, high, n)``) times ``samples`` Monte-Carlo draws of the ``uncertain``
     parameters (uniform on ``(low, high)``) per grid point (:mod:`obsdesign.sweeps.plan`).
     Each run is reduced to its metrics, one row of ``out_dir/results.csv``
-    (:mod:`obsdesign.sweeps.store`).
+    (:mod:`obsdesign.sweeps.store`). Every argument is checked before the first run.
+    The folder is locked for the whole sweep, and a folder holding results is refused
+    unless ``resume`` or ``force`` is given (:mod:`obsdesign.sweeps.folder`).
 
     Parameters
     ----------
     cfg : Config
+        The design every run starts from.
     scenario : str
         Scenario of :func:`obsdesign.simulate`.
     vary : dict, optional
-        ``{name: (low, high, n)}``: grid axes over config fields (e.g. ``rho``, ``omega_co``, ``kappa``).
+        ``{name: (low, high, n)}``: grid axes over config fields (e.g. ``rho``, ``omega_co``, ``kappa``);
+        ``n`` an integer >= 1.
     uncertain : dict, optional
-        ``{name: (low, high)}``: uniform draws per grid point.
+        ``{name: (low, high)}`` with ``low <= high``: uniform draws per grid point (names not in ``vary``).
     samples : int
         Draws per grid point (at least 1).
     seed : int
-        Sweep seed; per-run seeds are spawned from it.
+        Sweep seed (integer >= 0); per-run seeds are spawned from it.
     executor : optional
         A ``dask.distributed.Client`` or a ``concurrent.futures.Executor``; default: a process
         pool with ``workers`` processes (default all cores; ``workers=1`` runs in this process).
     workers : int, optional
-        Local processes when no executor is given.
+        Local processes when no executor is given (at least 1).
     out_dir : path, optional
-        Folder for ``results.csv`` and ``sweep.json``; needed for ``resume``.
+        Folder for ``results.csv`` and ``sweep.json``; needed for ``resume`` and ``force``.
     resume : bool
-        Continue an interrupted sweep in ``out_dir`` (same settings required).
+        Continue an interrupted sweep in ``out_dir`` (same settings required; every row is checked).
+    force : bool
+        Replace the results in ``out_dir`` of another sweep.
     progress : bool
         Progress bar with ETA (tqdm).
-    duration, variant, controller : optional
-        The run length [s], the model variant (applied to the config) and the controller.
+    duration : float, optional
+        The run length [s] (the scenario's default).
+    variant : str, optional
+        The model variant, applied to the config.
+    controller : str, optional
+        The controller; it must suit the scenario (``open-loop`` for excitation/constant).
     chunk : int
-        Runs per task sent to a worker (amortizes the scheduling overhead).
+        Runs per task sent to a worker (at least 1; amortizes the scheduling overhead).
 
     Returns
     -------
     SweepResult
     """
-    from tqdm import tqdm
-
-    vary = check_names("vary", dict(vary or {}))
-    uncertain = check_names("uncertain", dict(uncertain or {}))
     samples = check_integer("samples", samples, minimum=1)
     seed = check_integer("seed", seed, minimum=0)
-    if resume and out_dir is None:
-        raise ValueError("resume: needs out_dir, the folder of the interrupted sweep")
+    chunk = check_integer("chunk", chunk, minimum=1)
+    if workers is not None:
+        workers = check_integer("workers", workers, minimum=1)
+    vary, uncertain = check_axes(dict(vary or {}), dict(uncertain or {}), samples)
+    if (resume or force) and out_dir is None:
+        raise ValueError(f"{'resume' if resume else 'force'}: needs out_dir, the folder of the sweep")
+    spec = scenario_spec(scenario)
+    if controller is not None:
+        CONTROLLERS.check(controller)
+        if spec.open_loop != (controller == "open-loop"):
+            expected = "'open-loop'" if spec.open_loop else "'pid' or 'pid+observer'"
+            raise ValueError(f"controller: scenario {spec.name!r} needs {expected}, found {controller!r}")
     options = {k: v for k, v in (("duration", duration), ("variant", variant), ("controller", controller))
                if v is not None}
     run_cfg = cfg.override(variant=variant)
@@ -253,34 +217,44 @@ def sweep(cfg: Config, scenario: str, *, vary: dict | None = None, uncertain: di
     build_scenario(scenario, dt=run_cfg.observer.dt, duration=duration)  # bad scenario or duration: fail now
     plan = make_plan(vary, uncertain, samples, seed)
     columns = [*FIXED_COLUMNS, *vary, *uncertain, *metric_columns(scenario), *TAIL_COLUMNS]
-    t0 = time.perf_counter()
-
-    done: dict[int, dict] = {}
-    results_path = None
-    if out_dir is not None:
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        results_path = out / "results.csv"
-        manifest = {"scenario": scenario, "config": cfg.to_toml(), "vary": {k: list(v) for k, v in vary.items()},
-                    "uncertain": {k: list(v) for k, v in uncertain.items()}, "samples": samples, "seed": seed,
-                    "options": options, "columns": columns}
-        manifest_path = out / "sweep.json"
+    if out_dir is None:
+        return _execute(run_cfg, scenario, run_options, plan, columns, None, {}, executor, workers, chunk, progress)
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"out_dir: expected a folder, found the file {str(out)!r}")
+    manifest = {"scenario": scenario, "config": cfg.to_toml(), "vary": {k: list(v) for k, v in vary.items()},
+                "uncertain": {k: list(v) for k, v in uncertain.items()}, "samples": samples, "seed": seed,
+                "options": options, "columns": columns}
+    with SweepLock(out):
+        check_start(out, resume=resume, force=force)
+        results_path, sums_path = out / "results.csv", out / ".checksums"
+        done: dict[int, dict] = {}
         if resume and results_path.exists():
-            old = json.loads(manifest_path.read_text()) if manifest_path.exists() else None
-            if old != manifest:
-                raise ValueError(f"resume: the sweep in {str(out)!r} was started with different settings")
-            done = read_rows(results_path, columns)
+            read_manifest(out / "sweep.json", manifest)
+            done = read_rows(results_path, columns, plan)
             # Rewrite the completed rows cleanly (drops a torn tail) before appending.
-            atomic_write(results_path, csv_text(columns, [done[r] for r in sorted(done)]))
+            ordered = [done[r] for r in sorted(done)]
+            atomic_write(results_path, csv_text(columns, ordered))
+            atomic_write(sums_path, checksums_text(columns, ordered))
         else:
-            atomic_write(manifest_path, json.dumps(manifest, indent=1))
+            atomic_write(out / "sweep.json", json.dumps(manifest, indent=1))
             atomic_write(results_path, csv_text(columns, []))
+            atomic_write(sums_path, "")
+        return _execute(run_cfg, scenario, run_options, plan, columns, out, done, executor, workers, chunk, progress)
+
+
+def _execute(run_cfg, scenario, run_options, plan, columns, out, done, executor, workers, chunk, progress):
+    """Run the runs of ``plan`` not in ``done``, appending rows to ``out`` (if given)."""
+    from tqdm import tqdm
+
+    t0 = time.perf_counter()
     todo = [spec for spec in plan if spec.run not in done]
     rows: dict[int, dict] = dict(done)
     pool = _Executor(executor, workers)
     bar = tqdm(total=len(plan), initial=len(done), desc="sweep", unit="run", disable=not progress, smoothing=0.05)
     walls = []
-    sink = open(results_path, "a", encoding="utf-8") if results_path is not None else None
+    sink = open(out / "results.csv", "a", encoding="utf-8") if out is not None else None
+    sums = open(out / ".checksums", "a", encoding="utf-8") if out is not None else None
 
     def record(row: dict) -> None:
         walls.append(row.pop("_wall", 0.0))
@@ -288,6 +262,8 @@ def sweep(cfg: Config, scenario: str, *, vary: dict | None = None, uncertain: di
         if sink is not None:
             sink.write(csv_line(columns, row))
             sink.flush()  # complete line handed to the OS: survives Ctrl-C or a killed process
+            sums.write(checksum_line(columns, row))
+            sums.flush()
         bar.update()
 
     try:
@@ -301,16 +277,17 @@ def sweep(cfg: Config, scenario: str, *, vary: dict | None = None, uncertain: di
         raise
     finally:
         bar.close()
-        if sink is not None:
-            sink.close()
+        for fh in (sink, sums):
+            if fh is not None:
+                fh.close()
     pool.close()
     ordered = [rows[r] for r in sorted(rows)]
-    if results_path is not None:
-        atomic_write(results_path, csv_text(columns, ordered))
+    if out is not None:
+        atomic_write(out / "results.csv", csv_text(columns, ordered))
+        atomic_write(out / ".checksums", checksums_text(columns, ordered))
     wall = time.perf_counter() - t0
     overhead = (wall * max(1, pool.workers) - sum(walls)) / len(todo) if todo else float("nan")
-    return SweepResult([typed_row(r, columns) for r in ordered], tuple(columns),
-                       Path(out_dir) if out_dir is not None else None, len(done), wall, overhead)
+    return SweepResult([typed_row(r, columns) for r in ordered], tuple(columns), out, len(done), wall, overhead)
 
 
 @dataclass(frozen=True)

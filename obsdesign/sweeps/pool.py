@@ -1,0 +1,146 @@
+"""Executors of a sweep: in this process, a process pool of our own, or one given by the caller.
+
+The pool's worker processes die with the sweep: each worker asks the kernel for
+``SIGKILL`` when its parent ends (Linux ``prctl(PR_SET_PDEATHSIG)``), and elsewhere
+watches its parent's pid from a thread. So a sweep killed with ``kill -9`` or
+``SIGTERM`` leaves no orphans, and an interrupted sweep (``SIGINT``) cancels the
+pending batches and terminates the workers instead of waiting for them.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import os
+import signal
+import sys
+import threading
+import time
+
+__all__ = ["Executor", "die_with_parent", "NoWorkersError", "STALL_S"]
+
+#: Seconds a Dask sweep waits with no worker in the cluster before it gives up.
+STALL_S = 60.0
+
+
+class NoWorkersError(RuntimeError):
+    """The Dask cluster has had no worker for :data:`STALL_S` seconds while runs were pending."""
+
+
+def _watch_parent(parent: int) -> None:
+    while os.getppid() == parent:
+        time.sleep(0.5)
+    os._exit(1)
+
+
+def die_with_parent(parent: int) -> None:
+    """Pool initializer: end this worker process when the process ``parent`` ends.
+
+    Parameters
+    ----------
+    parent : int
+        The pid of the sweep's process.
+    """
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG = 1
+        except (OSError, AttributeError):
+            threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
+    else:
+        threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
+    if os.getppid() != parent:  # the parent ended before the request took effect
+        os._exit(1)
+
+
+class Executor:
+    """One adapter over the ways to run batches: in this process, a process pool of our own,
+    a ``concurrent.futures.Executor`` or a ``dask.distributed.Client`` given by the caller.
+
+    Parameters
+    ----------
+    executor : object or None
+        The caller's executor, or None for our own pool.
+    workers : int or None
+        Processes of our own pool (default: all cores; 1 runs in this process).
+    """
+
+    def __init__(self, executor, workers: int | None) -> None:
+        self.owned = executor is None
+        if executor is None:
+            n = workers if workers is not None else (os.cpu_count() or 1)
+            if n > 1:
+                import multiprocessing
+
+                executor = concurrent.futures.ProcessPoolExecutor(
+                    max_workers=n, mp_context=multiprocessing.get_context("spawn"),
+                    initializer=die_with_parent, initargs=(os.getpid(),))
+            self.workers = n
+        else:
+            self.workers = self._count_workers(executor)
+        self.pool = executor
+        self.dask = executor is not None and hasattr(executor, "scheduler_info") and hasattr(executor, "gather")
+        self.futures: list = []
+
+    @staticmethod
+    def _count_workers(executor) -> int:
+        if hasattr(executor, "nthreads"):  # dask.distributed.Client
+            return max(1, sum(executor.nthreads().values()))
+        return max(1, getattr(executor, "_max_workers", 1))
+
+    def map_batches(self, fn, batches):
+        """Results of ``fn(batch)`` as they complete (in this process: in order)."""
+        if self.pool is None:
+            for batch in batches:
+                yield fn(batch)
+            return
+        self.futures = [self.pool.submit(fn, batch) for batch in batches]
+        if self.dask:
+            yield from self._dask_results()
+            return
+        for fut in concurrent.futures.as_completed(self.futures):
+            yield fut.result()
+
+    def _dask_results(self):
+        """Results as they complete; ``NoWorkersError`` when the cluster stays without workers."""
+        from distributed import wait
+
+        pending = set(self.futures)
+        idle_since = None
+        while pending:
+            try:
+                done, pending = wait(pending, timeout=2.0, return_when="FIRST_COMPLETED")
+            except TimeoutError:  # distributed's TimeoutError is the builtin one
+                done = set()
+            for fut in done:
+                yield fut.result()
+            if done or self.pool.nthreads():
+                idle_since = None
+            elif idle_since is None:
+                idle_since = time.monotonic()
+            elif time.monotonic() - idle_since > STALL_S:
+                raise NoWorkersError(f"the Dask cluster has had no worker for {STALL_S:g} s with "
+                                     f"{len(pending)} batches pending")
+
+    def abort(self) -> None:
+        """Cancel what is pending and stop our own workers at once (their batches are lost)."""
+        if self.pool is None:
+            return
+        if self.owned:
+            processes = list((getattr(self.pool, "_processes", None) or {}).values())
+            self.pool.shutdown(wait=False, cancel_futures=True)
+            for proc in processes:
+                proc.terminate()
+            for proc in processes:
+                proc.join(2.0)
+        elif self.dask:
+            self.pool.cancel(self.futures)
+        else:
+            for fut in self.futures:
+                fut.cancel()
+
+    def close(self) -> None:
+        """Shut our own pool down (waits for idle workers to exit)."""
+        if self.owned and self.pool is not None:
+            self.pool.shutdown()
