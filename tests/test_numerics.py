@@ -112,7 +112,7 @@ def _closed_form_unstable(rho, m=0.538, kappa=8000.0):
 @pytest.mark.parametrize("rho", [0.5, 0.9, 1.5, 4.0])
 def test_design_warnings_flag_exactly_the_unstable_designs(rho):
     notes = od.design.design_warnings(od.load_preset("vcm"), rho=rho)
-    assert any(n.startswith("the design fails check") for n in notes) == _closed_form_unstable(rho)
+    assert any(n.startswith("the observer design fails check") for n in notes) == _closed_form_unstable(rho)
 
 
 def test_simulate_prints_the_checks_warning_once_and_keeps_exit_0():
@@ -120,7 +120,7 @@ def test_simulate_prints_the_checks_warning_once_and_keeps_exit_0():
     assert proc.returncode == 0, proc.stderr
     lines = proc.stderr.strip().splitlines()
     # fastest pole of vcm: -rho sqrt(kappa/m) - sqrt(kappa/m) = -5 * 121.94 = -609.7 1/s; times 0.01 s = 6.1
-    assert len(lines) == 1 and lines[0].startswith("warning: fastest observer pole -609.7 1/s") and "6.1 > 1" in lines[0]
+    assert len(lines) == 1 and lines[0].startswith("obsdesign: warning: fastest observer pole -609.7 1/s") and "6.1 > 1" in lines[0]
     proc = cli("simulate", "positioning", "--duration", "3.5", "--json")
     assert proc.returncode == 0 and proc.stderr == ""
 
@@ -129,7 +129,7 @@ def test_noise_warns_for_an_unstable_design():
     proc = cli("noise", "--preset", "vcm", "--rho", "0.5")
     assert proc.returncode == 0
     lines = proc.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("warning: the design fails check")
+    assert len(lines) == 1 and lines[0].startswith("obsdesign: warning: the observer design fails check")
     assert cli("noise", "--preset", "vcm").stderr == ""
 
 

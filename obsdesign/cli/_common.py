@@ -14,7 +14,7 @@ from .._format import jsonable
 from .._validate import FINITE, NONNEGATIVE, POSITIVE, Range, parse_number
 from ..params import VARIANTS, load_config, load_preset, preset_names
 
-__all__ = ["UsageError", "Parser", "number", "POSITIVE_ARG", "NONNEGATIVE_ARG", "FINITE_ARG", "PHASE_ARG",
+__all__ = ["print_warnings", "UsageError", "Parser", "number", "POSITIVE_ARG", "NONNEGATIVE_ARG", "FINITE_ARG", "PHASE_ARG",
            "integer", "add_config_flags", "add_design_flags", "load", "emit", "check_output_file", "check_output_dir",
            "check_samples", "MAX_SAMPLES", "finite_design", "warn_unstable"]
 
@@ -139,17 +139,28 @@ def warn_unstable(cfg, what: str, **overrides) -> None:
     **overrides
         ``rho``, ``kappa``, ``variant`` as given to :func:`obsdesign.design.check_stability`.
     """
+    from ..design import design_warnings
+
+    print_warnings(design_warnings(cfg, **overrides), what)
+
+
+def print_warnings(notes, what: str = "") -> None:
+    """Each note as one ``obsdesign: warning:`` line on stderr; ``what`` (what the result means for
+    a design that fails check) follows the note of the failed conditions.
+
+    Parameters
+    ----------
+    notes : iterable of str
+        Notes of :func:`obsdesign.design.design_warnings` (or any one-line notes).
+    what : str
+        Appended to the note of a failed check.
+    """
     import sys
-    import warnings
 
-    from ..design import check_stability
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        report = check_stability(cfg, **overrides)
-    if not report.all_hold:
-        print(f"obsdesign: warning: the observer design fails check ({', '.join(report.failed())}); {what}",
-              file=sys.stderr)
+    for note in notes:
+        if what and note.startswith("the observer design fails check"):
+            note = f"{note}; {what}"
+        print(f"obsdesign: warning: {note}", file=sys.stderr)
 
 
 def emit(args: argparse.Namespace, result, payload: dict) -> None:

@@ -74,8 +74,6 @@ def _cmd_noise(args: argparse.Namespace) -> int:
         warn_unstable(cfg, "the noise variance of an unstable observer is unbounded, the values are not meaningful",
                       rho=args.rho, kappa=args.kappa, variant=args.variant)
     emit(args, na, na.to_dict())
-    for note in na.warnings:
-        print(f"warning: {note}", file=sys.stderr)
     return 0
 
 

@@ -12,7 +12,7 @@ from ..params import VARIANTS
 from ..sim.registry import CONTROLLERS, PLANTS, SCHEDULES
 from ..sim.scenarios import DEFAULT_DURATION, SCENARIOS
 from ._common import (FINITE_ARG, NONNEGATIVE_ARG, POSITIVE_ARG, UsageError, add_config_flags, add_design_flags,
-                      check_output_file, check_samples, emit, integer, load)
+                      check_output_file, check_samples, emit, integer, load, print_warnings)
 
 __all__ = ["add_commands", "parse_vary", "parse_uncertain"]
 
@@ -45,8 +45,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     loop = prepare(cfg, spec, controller=args.controller, stiffness=args.stiffness, plant=args.plant,
                    duration=args.duration, seed=args.seed, settle_tol=args.settle_tol)
     clipped = saturation_warning(loop)
-    for note in (*design_warnings(cfg), *([clipped] if clipped else [])):  # after prepare's refusals, before the run
-        print(f"warning: {note}", file=sys.stderr)
+    print_warnings((*design_warnings(cfg), *([clipped] if clipped else [])))  # after prepare's refusals, before the run
     res = run(loop, keep_trace=bool(args.out or args.plot))
     if args.out:
         (res.to_npz if args.out.lower().endswith(".npz") else res.to_csv)(args.out)

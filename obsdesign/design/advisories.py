@@ -15,7 +15,7 @@ Examples
 >>> design_warnings(od.load_preset("vcm"))
 ()
 >>> notes = design_warnings(od.load_preset("vcm"), rho=0.5)   # an unstable observer
->>> len(notes), notes[0].startswith("the design fails check: "), "discrete poles inside unit circle" in notes[0]
+>>> len(notes), notes[0].startswith("the observer design fails check ("), "discrete poles inside unit circle" in notes[0]
 (1, True, True)
 >>> print(design_warnings(od.load_preset("vcm").override(dt=0.01))[0][:61])
 fastest observer pole -609.7 1/s times dt = 0.01 s is 6.1 > 1
@@ -54,5 +54,5 @@ def design_warnings(cfg: Config, *, rho: float | None = None, kappa: float | Non
     notes = list(report.warnings)
     failed = report.failed()
     if failed:
-        notes.append(f"the design fails check: {'; '.join(failed)} (see obsdesign check)")
+        notes.append(f"the observer design fails check ({', '.join(failed)}; see obsdesign check)")
     return tuple(notes)

@@ -20,7 +20,7 @@ Examples
 True
 >>> na.warnings
 ()
->>> od.noise_analysis(od.load_preset("vcm"), rho=0.5).warnings[0].startswith("the design fails check")
+>>> od.noise_analysis(od.load_preset("vcm"), rho=0.5).warnings[0].startswith("the observer design fails check")
 True
 """
 
