@@ -12,7 +12,7 @@ from ..params import VARIANTS
 from ..sim.registry import CONTROLLERS, PLANTS, SCHEDULES
 from ..sim.scenarios import DEFAULT_DURATION, SCENARIOS
 from ._common import (FINITE_ARG, NONNEGATIVE_ARG, POSITIVE_ARG, UsageError, add_config_flags, add_design_flags,
-                      check_output_file, check_samples, emit, integer, load)
+                      check_output_file, check_runs, check_samples, emit, integer, load)
 
 __all__ = ["add_commands", "parse_vary", "parse_uncertain"]
 
@@ -110,6 +110,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
     vary = parse_vary(args.vary or [])
     uncertain = parse_uncertain(args.uncertain or [])
+    check_runs(vary, args.samples)
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UsageError(f"obsdesign sweep: argument --out: expected a directory, found the file {args.out!r}")
