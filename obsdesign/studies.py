@@ -152,25 +152,32 @@ def experiments_study(cfg: Config | None = None) -> ExperimentsStudy:
     faster = all(a is not None and (b is None or a < b)
                  for a, b in zip(pos["pid+observer"]["settling_time"], pos["pid"]["settling_time"]))
     bands = trk["pid"]["rms_error_per_band"]
-    better = all(trk["pid+observer"]["rms_error_per_band"][b] < bands[b] for b in bands)
+    obs_bands = trk["pid+observer"]["rms_error_per_band"]
+    better = all(obs_bands[b] is not None and (bands[b] is None or obs_bands[b] < bands[b]) for b in bands)
     fmt = lambda xs: ", ".join("never" if x is None else f"{x:.3f} s" for x in xs)  # noqa: E731
     q = cfg.sensor.quantization
-    zero_ss = all(abs(e) <= q for e in pos["pid+observer"]["steady_state_error"])
+    within = lambda xs: all(e is not None and abs(e) <= q for e in xs)  # noqa: E731 (None: a diverged run)
+    um = lambda xs: ", ".join("none (diverged)" if e is None else f"{e * 1e6:.2f} um" for e in xs)  # noqa: E731
+    zero_ss = within(pos["pid+observer"]["steady_state_error"])
     claims = (
         Claim("sec:4:2", "observer compensation shortens the positioning transients",
               "shorter (Fig. experror a)", f"settling {fmt(pos['pid+observer']['settling_time'])} vs PID "
               f"{fmt(pos['pid']['settling_time'])}", faster),
         Claim("sec:4:2", "observer compensation reaches zero steady-state error, PID does not",
               "zero vs nonzero", "mean error in the last 10 % of each hold: "
-              + ", ".join(f"{e * 1e6:.2f} um" for e in pos["pid+observer"]["steady_state_error"]) + " vs PID "
-              + ", ".join(f"{e * 1e6:.2f} um" for e in pos["pid"]["steady_state_error"]),
-              zero_ss and not all(abs(e) <= q for e in pos["pid"]["steady_state_error"])),
+              + um(pos["pid+observer"]["steady_state_error"]) + " vs PID " + um(pos["pid"]["steady_state_error"]),
+              zero_ss and not within(pos["pid"]["steady_state_error"])),
         Claim("sec:4:2", "tracking improves at all chirp frequencies",
               "all frequencies", "RMS per band [um]: " + ", ".join(
-                  f"{b}: {trk['pid+observer']['rms_error_per_band'][b] * 1e6:.1f} vs {bands[b] * 1e6:.1f}" for b in bands),
+                  f"{b}: {_um1(obs_bands[b])} vs {_um1(bands[b])}" for b in bands),
               better),
     )
     return ExperimentsStudy(positioning=pos, tracking=trk, claims=claims, runs=runs)
+
+
+def _um1(value) -> str:
+    """A length in um with one decimal, or ``diverged`` for a missing metric (None)."""
+    return "diverged" if value is None else f"{value * 1e6:.1f}"
 
 
 @dataclass(frozen=True)

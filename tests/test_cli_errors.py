@@ -241,3 +241,22 @@ def test_unstable_designs_are_flagged_by_noise_and_export(capsys, tmp_path):  # 
 def test_vary_with_a_non_ascii_digit_names_the_flag(capsys):  # w21
     one_line(capsys, ["sweep", "--scenario", "positioning", "--vary", "rho=1:2:\u00b2", "--out", "x"],
              "--vary rho: expected an integer N >= 1, found '\u00b2'")
+
+
+@pytest.mark.parametrize("argv", [["--vary", "rho=1:2:100000000"], ["--samples", str(10**12)],
+                                  ["--vary", "rho=1:2:4000", "--vary", "kappa=1:2:4000"]])  # w30, w31
+def test_huge_sweeps_are_refused_before_the_plan(capsys, tmp_path, argv):
+    one_line(capsys, ["sweep", "--scenario", "positioning", *argv, "--out", str(tmp_path / "sw")],
+             "--vary/--samples: expected at most 1e+06 runs (grid points x samples)")
+    assert not (tmp_path / "sw").exists()
+
+
+def test_the_report_study_of_a_diverging_design_says_so():  # m5, m6 (the report failed on None metrics)
+    from obsdesign import studies
+
+    cfg = od.load_preset("vcm").override(m=1e-6)
+    study = studies.experiments_study(cfg)
+    assert any(None in metrics["steady_state_error"] for metrics in study.positioning.values())
+    texts = {c.statement: c for c in study.claims}
+    ss = texts["observer compensation reaches zero steady-state error, PID does not"]
+    assert "none (diverged)" in ss.measured and ss.reproduced is False

@@ -16,7 +16,7 @@ from ..params import VARIANTS, load_config, load_preset, preset_names
 
 __all__ = ["print_warnings", "UsageError", "Parser", "number", "POSITIVE_ARG", "NONNEGATIVE_ARG", "FINITE_ARG", "PHASE_ARG",
            "integer", "add_config_flags", "add_design_flags", "load", "emit", "check_output_file", "check_output_dir",
-           "check_samples", "MAX_SAMPLES", "finite_design", "warn_unstable"]
+           "check_samples", "MAX_SAMPLES", "check_runs", "finite_design", "warn_unstable"]
 
 #: Most samples one ``simulate`` run may hold (about 13 GB of trace arrays at 16 doubles per sample).
 MAX_SAMPLES = 10**8
@@ -285,6 +285,39 @@ def check_samples(duration: float, dt: float, *, limit: int = MAX_SAMPLES) -> in
         raise ValueError(f"--duration/--dt: {ratio:.3g} samples need about {need / 1e9:.2g} GB, "
                          f"{available / 1e9:.2g} GB available")
     return int(round(ratio))
+
+
+def check_runs(vary: dict, samples: int, *, limit: int | None = None) -> int:
+    """The runs of a sweep (grid points times samples), refused before the plan is built if above ``limit``.
+
+    Parameters
+    ----------
+    vary : dict
+        ``{name: (lo, hi, n)}`` grid axes.
+    samples : int
+        Draws per grid point.
+    limit : int, optional
+        Most runs allowed (default: :data:`obsdesign.sweeps.plan.MAX_RUNS`, the API's own bound).
+
+    Examples
+    --------
+    >>> check_runs({"rho": (1.0, 2.0, 10)}, 4)
+    40
+    >>> check_runs({"rho": (1.0, 2.0, 10**8)}, 1)
+    Traceback (most recent call last):
+    ...
+    ValueError: --vary/--samples: expected at most 1e+06 runs (grid points x samples), found 1e+08
+    """
+    from ..sweeps.plan import MAX_RUNS
+
+    limit = MAX_RUNS if limit is None else limit
+    runs = samples
+    for _, _, n in vary.values():
+        runs *= n
+    if runs > limit:
+        raise ValueError(f"--vary/--samples: expected at most {limit:.0e} runs (grid points x samples), "
+                         f"found {float(runs):.3g}")
+    return runs
 
 
 def _available_memory() -> float | None:
