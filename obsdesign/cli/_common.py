@@ -6,7 +6,6 @@ import argparse
 import json
 import re
 
-from .._format import jsonable
 from .._validate import FINITE, NONNEGATIVE, POSITIVE, Range, parse_number
 from ..params import VARIANTS, load_config, load_preset, preset_names
 
@@ -90,6 +89,8 @@ def load(args: argparse.Namespace):
 def emit(args: argparse.Namespace, result, payload: dict) -> None:
     """Print the result as text, or its payload as one strict JSON object with ``--json``."""
     if args.json:
+        from .._format import jsonable  # numpy: loaded only when a command prints
+
         print(json.dumps(jsonable(payload), allow_nan=False))
     else:
         print(result)

@@ -8,10 +8,18 @@ into a complete design config. See ``docs/measured-data.md``.
 
 from __future__ import annotations
 
-from .identify import Identification as Identification
-from .identify import identify as identify
-from .rules import config_from as config_from
-from .trace import Trace as Trace
-from .trace import load_trace as load_trace
+from .._lazy import keep_functions, lazy_names
+
 
 __all__ = ["Trace", "load_trace", "Identification", "identify", "config_from"]
+
+#: Public name -> module it comes from; loaded on first use (obsdesign._lazy).
+_LAZY = {
+    'Identification': '.identify',
+    'identify': '.identify',
+    'config_from': '.rules',
+    'Trace': '.trace',
+    'load_trace': '.trace',
+}
+__getattr__, __dir__ = lazy_names(__name__, _LAZY)
+keep_functions(__name__, ('identify',))
