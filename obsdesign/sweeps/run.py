@@ -15,6 +15,7 @@ from __future__ import annotations
 import concurrent.futures
 import json
 import os
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -194,7 +195,7 @@ class _Executor:
 
 def sweep(cfg: Config, scenario: str, *, vary: dict | None = None, uncertain: dict | None = None,
           samples: int = 1, seed: int = 0, executor=None, workers: int | None = None,
-          out_dir: str | os.PathLike | None = None, resume: bool = False, progress: bool = False,
+          out_dir: str | os.PathLike | None = None, resume: bool = False, progress: bool | int = False,
           duration: float | None = None, variant: str | None = None, controller: str | None = None,
           chunk: int = 8) -> SweepResult:
     """Run a design sweep with Monte-Carlo draws.
@@ -227,8 +228,9 @@ def sweep(cfg: Config, scenario: str, *, vary: dict | None = None, uncertain: di
         Folder for ``results.csv`` and ``sweep.json``; needed for ``resume``.
     resume : bool
         Continue an interrupted sweep in ``out_dir`` (same settings required).
-    progress : bool
-        Progress bar with ETA (tqdm).
+    progress : bool or int
+        ``True``: progress bar with ETA (tqdm); an integer N >= 1: one line on stderr every N
+        runs (for logs, where a bar would not render); ``False``: quiet.
     duration, variant, controller : optional
         The run length [s], the model variant (applied to the config) and the controller.
     chunk : int
@@ -278,7 +280,9 @@ def sweep(cfg: Config, scenario: str, *, vary: dict | None = None, uncertain: di
     todo = [spec for spec in plan if spec.run not in done]
     rows: dict[int, dict] = dict(done)
     pool = _Executor(executor, workers)
-    bar = tqdm(total=len(plan), initial=len(done), desc="sweep", unit="run", disable=not progress, smoothing=0.05)
+    every = 0 if isinstance(progress, bool) else check_integer("progress", progress, minimum=1)
+    bar = tqdm(total=len(plan), initial=len(done), desc="sweep", unit="run", disable=progress is not True,
+               smoothing=0.05)
     walls = []
     sink = open(results_path, "a", encoding="utf-8") if results_path is not None else None
 
@@ -289,6 +293,8 @@ def sweep(cfg: Config, scenario: str, *, vary: dict | None = None, uncertain: di
             sink.write(csv_line(columns, row))
             sink.flush()  # complete line handed to the OS: survives Ctrl-C or a killed process
         bar.update()
+        if every and ((len(rows) - len(done)) % every == 0 or len(rows) == len(plan)):
+            print(f"sweep: {len(rows)}/{len(plan)} runs, {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
 
     try:
         batches = [todo[i:i + chunk] for i in range(0, len(todo), chunk)] if pool.pool is not None else \
