@@ -58,7 +58,8 @@ def metric_columns(scenario: str) -> list[str]:
     """
     cols = ["stable", *_METRIC_KEYS]
     if scenario == "positioning":
-        cols += ["settling_time_1", "settling_time_2", "steady_state_error_1", "steady_state_error_2"]
+        cols += ["settling_time_1", "settling_time_2", "steady_state_error_1", "steady_state_error_2",
+                 "overshoot_1", "overshoot_2", "rise_time_1", "rise_time_2"]
     if scenario == "tracking":
         cols += [band_column(label) for label, _, _ in CHIRP_BAND_LABELS]
     return cols
@@ -90,6 +91,9 @@ def run_one(cfg: Config, scenario: str, spec: RunSpec, options: dict) -> dict:
             row[f"settling_time_{i}"] = value
         for i, value in enumerate(m["steady_state_error"], 1):
             row[f"steady_state_error_{i}"] = value
+        for key in ("overshoot", "rise_time"):
+            for i, value in enumerate(m.get(key, ()), 1):
+                row[f"{key}_{i}"] = value
         for band, value in m.get("rms_error_per_band", {}).items():
             row[band_column(band)] = value
         row["status"] = "diverged" if m["diverged"] else "ok"
