@@ -378,3 +378,42 @@ def test_sweep_reports_progress_lines_when_not_a_terminal(tmp_path):
     assert lines and lines[-1].startswith("sweep: 2/2 runs")
     rows = (tmp_path / "s" / "results.csv").read_text().splitlines()
     assert len(rows) == 3 and rows[0].split(",").count("gain") == 1  # the knob is a sweep axis
+
+
+# ---------------------------------------------------------------------------------------------
+# Claims: exactly as strong as the evidence
+def test_claim_verdicts_are_checked():
+    from obsdesign.studies import Claim
+
+    assert Claim("x", "s", "p", "m", True).verdict == "reproduced"
+    assert Claim("x", "s", "p", "m", False).verdict == "not reproduced"
+    with pytest.raises(ValueError, match="verdict: expected one of reproduced, partly reproduced, consistent, "
+                                         "not reproduced, found 'yes'"):
+        Claim("x", "s", "p", "m", True, "yes")
+
+
+def test_back_solved_and_formula_claims_say_consistent():
+    from obsdesign import studies
+
+    pid = studies.pid_claims()
+    assert [c.verdict for c in pid[:3]] == ["consistent"] * 3 and all("back-solved" in c.statement for c in pid[:3])
+    dominant, sign, dc, noise = studies.derivation_claims()
+    assert "prints no value" in dominant.paper
+    # zero DC gain of the noise transfer (eq:3:4:4), recomputed here from the transfer itself
+    for variant in ("lag", "static"):
+        nt = od.derive(variant).noise
+        assert nt.friction.subs(nt.laplace, 0).simplify() == 0
+    assert dc.source == "eq:3:4:4" and dc.verdict == "reproduced" and "G(0) = 0" in dc.measured
+
+
+def test_convergence_claims_state_what_is_and_is_not_reproduced():
+    from obsdesign import studies
+
+    study = studies.convergence_study(seeds=2, duration=8.0, long_duration=20.0, noise_levels=(1e-6, 1e-4))
+    paper_setting, slow, long_run, velocity = study.claims[2:6]
+    assert paper_setting.verdict == "not reproduced"
+    assert slow.verdict == "partly reproduced" and "Not reproduced: the 4.3 s" in slow.measured
+    times = [t for (rho, _), t in study.slow_excitation.items() if rho == 0.98]
+    assert all(t is not None and 1.0 < t < 4.3 for t in times)  # diverges, but earlier than the paper's 4.3 s
+    assert long_run.verdict == "reproduced" and "noise 0.0001 m" in long_run.measured
+    assert velocity.source == "fig:simconv" and velocity.verdict == "consistent"
