@@ -417,3 +417,30 @@ def test_convergence_claims_state_what_is_and_is_not_reproduced():
     assert all(t is not None and 1.0 < t < 4.3 for t in times)  # diverges, but earlier than the paper's 4.3 s
     assert long_run.verdict == "reproduced" and "noise 0.0001 m" in long_run.measured
     assert velocity.source == "fig:simconv" and velocity.verdict == "consistent"
+
+
+# ---------------------------------------------------------------------------------------------
+# Sweep summary: a best design only where the difference exceeds the spread over samples
+@pytest.mark.parametrize("shift, expected", [(0.05, False), (1.0, True)])
+def test_sweep_best_is_named_only_beyond_the_spread(shift, expected):
+    from scipy import stats
+
+    from obsdesign.sweeps.summary import best_with_spread
+
+    rng = np.random.default_rng(3)
+    a, b = rng.normal(1.0, 0.2, 20), rng.normal(1.0 + shift, 0.2, 20)
+    rows = [{"rho": 2.0, "rms_error": float(x), "status": "ok"} for x in a]
+    rows += [{"rho": 4.0, "rms_error": float(x), "status": "ok"} for x in b]
+    best = best_with_spread(rows, "rho")
+    welch = stats.ttest_ind(b, a, equal_var=False).statistic  # difference / its standard error
+    assert best["distinguishable"] == (welch > 2.0) == expected
+    assert best["spread"] == pytest.approx(max(np.std(a, ddof=1), np.std(b, ddof=1)))
+    assert best["difference"] == pytest.approx(abs(b.mean() - a.mean()))
+
+
+def test_sweep_best_without_samples_has_no_spread():
+    from obsdesign.sweeps.summary import best_with_spread
+
+    rows = [{"rho": r, "rms_error": e, "status": "ok"} for r, e in ((1.5, 7.93e-5), (3.0, 7.97e-5))]
+    best = best_with_spread(rows, "rho")
+    assert best["value"] == 1.5 and best["spread"] is None and best["distinguishable"] is False
