@@ -23,7 +23,6 @@ import numpy as np
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
 
 from .. import __version__, studies
-from .._format import report as report_number
 from .._format import with_unit
 from .._io import atomic_write
 from ..design import check_stability, noise_analysis, pid_from_config
@@ -89,6 +88,8 @@ def _quantity(value, unit: str = "") -> str:
     """One number format for the report's prose and tables: 4 significant digits and the unit."""
     if isinstance(value, (list, tuple)):
         return ", ".join(_quantity(v) for v in value) + (f" {unit}" if unit and value else "")
+    if isinstance(value, bool):
+        return "yes" if value else "no"
     if isinstance(value, float) and math.isinf(value):
         return "infinite"
     if isinstance(value, complex):
@@ -224,7 +225,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     ctx["elapsed"] = time.perf_counter() - t0
     env = Environment(loader=PackageLoader("obsdesign.report", "templates"), undefined=StrictUndefined,
                       autoescape=select_autoescape(default=True, default_for_string=True))
-    env.filters["num"] = report_number
+    env.filters["num"] = _quantity  # one number format in the whole report: 4 significant digits
     env.filters["qty"] = _quantity
     env.filters["log10"] = math.log10
     html = env.get_template("report.html.j2").render(**ctx)
