@@ -16,6 +16,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 import bench_data  # noqa: E402
+import bench_cli  # noqa: E402
 import bench_derive  # noqa: E402
 import bench_sim  # noqa: E402
 import bench_sweep  # noqa: E402
@@ -25,6 +26,7 @@ SUITES = {
     "Closed-loop simulator (issue 4)": bench_sim.run,
     "Sweeps (issue 6)": bench_sweep.run,
     "Measured data (issue 10)": bench_data.run,
+    "Command-line start-up (issue 13)": bench_cli.run,
 }
 
 

@@ -4,7 +4,7 @@ Implements M. Ruderman, "Reduced-order asymptotic observer of nonlinear
 friction for precise motion control": symbolic derivation, numeric design and
 stability verdicts, simulation and reports.
 
-``import obsdesign`` loads only the parameters and the symbolic engine; the
+``import obsdesign`` loads only the parameters; the symbolic engine (SymPy), the
 numeric design (python-control) and the simulator (numba) are imported on
 first use of their names.
 """
@@ -22,13 +22,13 @@ from .params import SensorSpec as SensorSpec
 from .params import load_config as load_config
 from .params import load_preset as load_preset
 from .params import preset_names as preset_names
-from .symbolic import Derivation as Derivation
-from .symbolic import derive as derive
 
 __version__ = "0.1.0"
 
 #: Public names provided by subpackages that are imported lazily.
 _LAZY = {
+    "Derivation": "symbolic",
+    "derive": "symbolic",
     "check_stability": "design",
     "design_observer": "design",
     "design_pid": "design",
@@ -57,8 +57,6 @@ __all__ = [
     "load_config",
     "load_preset",
     "preset_names",
-    "Derivation",
-    "derive",
     *_LAZY,
 ]
 

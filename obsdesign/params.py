@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any, Mapping, NamedTuple
 
 from ._io import atomic_write
+from .compensation import CompensationSpec
 from ._validate import FINITE, NONNEGATIVE, POSITIVE, Choice, FrozenMap, Range, Text
 
 __all__ = [
@@ -42,6 +43,7 @@ __all__ = [
     "SensorSpec",
     "ObserverSpec",
     "PIDSpec",
+    "CompensationSpec",
     "Config",
     "load_preset",
     "load_config",
@@ -208,7 +210,10 @@ _SECTIONS: dict[str, type] = {
     "sensor": SensorSpec,
     "observer": ObserverSpec,
     "pid": PIDSpec,
+    "compensation": CompensationSpec,
 }
+#: Sections that may be left out of a TOML file (their defaults apply).
+_OPTIONAL_SECTIONS = ("sensor", "compensation")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -229,6 +234,7 @@ class Config:
     observer: ObserverSpec
     pid: PIDSpec
     sensor: SensorSpec = field(default_factory=SensorSpec)
+    compensation: CompensationSpec = field(default_factory=CompensationSpec)
     sources: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -263,7 +269,7 @@ class Config:
         >>> load_preset("table1").override(mass=1.0)
         Traceback (most recent call last):
         ...
-        ValueError: override: unknown parameter 'mass'; expected one of Cf, G, K, beta, derivative_N, dt, kappa, m, max_S, noise_bandwidth, noise_rms, omega_co, phase_margin_deg, phi, quantization, rho, s, sigma, tau, u_max, variant
+        ValueError: override: unknown parameter 'mass'; expected one of Cf, G, K, beta, deadzone, derivative_N, dt, gain, kappa, m, max_S, noise_bandwidth, noise_rms, omega_co, phase_margin_deg, phi, quantization, rho, s, sigma, tau, u_max, variant, viscous
         """
         changes: dict[str, dict[str, Any]] = {}
         for name, value in values.items():
@@ -306,7 +312,7 @@ class Config:
         for key, section in _SECTIONS.items():
             table = data.get(key)
             if table is None:
-                if key == "sensor":
+                if key in _OPTIONAL_SECTIONS:
                     continue
                 raise ValueError(f"{source}: missing section [{key}]")
             if not isinstance(table, dict):
@@ -417,6 +423,8 @@ def _check_sources(sources: Any) -> dict[str, str]:
 
 def _toml_value(value: Any) -> str:
     """A TOML literal: strings as basic strings with every control character escaped."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
     if isinstance(value, str):
         out = []
         for ch in value:

@@ -22,19 +22,50 @@ from .friction.presliding import coulomb_along
 from .sim.scenarios import ConstantForce, Excitation
 from .sim.simulate import simulate
 
-__all__ = ["Claim", "convergence_study", "experiments_study", "friction_loops_study", "noise_study", "pid_claims",
+__all__ = ["Claim", "VERDICTS", "convergence_study", "experiments_study", "friction_loops_study", "noise_study", "pid_claims",
            "derivation_claims", "ConvergenceStudy", "ExperimentsStudy", "FrictionLoopsStudy", "NoiseStudy"]
+
+
+#: Verdicts of a claim, strongest first. ``reproduced``: our independent computation gives the
+#: paper's number or behaviour; ``partly reproduced``: the behaviour holds, a number of the paper
+#: does not; ``consistent``: agrees, but the evidence cannot confirm the paper (our value was
+#: back-solved from the paper's own figures, or the paper only shows a figure or a formula);
+#: ``not reproduced``: our result contradicts the paper.
+VERDICTS = ("reproduced", "partly reproduced", "consistent", "not reproduced")
 
 
 @dataclass(frozen=True)
 class Claim:
-    """One quantitative statement of the paper and what we measured."""
+    """One quantitative statement of the paper and what we measured.
+
+    Parameters
+    ----------
+    source : str
+        Label in the paper (``eq:...``, ``sec:...``, ``fig:...``).
+    statement : str
+        The claim in our words, with the setting it was checked in.
+    paper : str
+        The paper's value (or what it shows).
+    measured : str
+        Our value.
+    reproduced : bool
+        Whether the checked statement holds (the analysis scripts assert it).
+    verdict : str
+        One of :data:`VERDICTS`; default ``reproduced`` or ``not reproduced`` from ``reproduced``.
+    """
 
     source: str
     statement: str
     paper: str
     measured: str
     reproduced: bool
+    verdict: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.verdict:
+            object.__setattr__(self, "verdict", "reproduced" if self.reproduced else "not reproduced")
+        if self.verdict not in VERDICTS:
+            raise ValueError(f"verdict: expected one of {', '.join(VERDICTS)}, found {self.verdict!r}")
 
 
 def _first_exceed(err: np.ndarray, level: float, dt: float, warmup: float = 1.0) -> float | None:
@@ -54,7 +85,8 @@ class ConvergenceStudy:
 
 
 def convergence_study(cfg: Config | None = None, *, seeds: int = 5, duration: float = 20.0,
-                      threshold: float = 1.0) -> ConvergenceStudy:
+                      threshold: float = 1.0, long_duration: float = 60.0,
+                      noise_levels: tuple = (1e-6, 1e-5, 1e-4)) -> ConvergenceStudy:
     """rho 0.98 vs 1.02 on Table 1 (section 3.3, Fig. simconv).
 
     Parameters
@@ -67,6 +99,10 @@ def convergence_study(cfg: Config | None = None, *, seeds: int = 5, duration: fl
         Length of the excitation runs [s].
     threshold : float
         Estimation error [N] that counts as divergence.
+    long_duration : float
+        Length [s] of the long rho = 1.02 runs (the paper: "t > 60 sec").
+    noise_levels : tuple of float
+        Measurement noise RMS values [m] of the long runs ("further increased output noise").
 
     * steady sliding (constant force 1 N, ``true`` stiffness, initial friction error 0.5 N):
       the error's rate against the gross-sliding eigenvalue ``-sqrt(kappa/m)(rho - 1)``. The
@@ -75,7 +111,10 @@ def convergence_study(cfg: Config | None = None, *, seeds: int = 5, duration: fl
     * the paper's random excitation on the 3-state model plant (variant ``lag``), several
       seeds: RMS estimation error and the time at which ``|f_hat_filtered - f|`` first
       exceeds ``threshold`` N (divergence);
-    * a slow (0.2 Hz) excitation with long sliding intervals (``static`` variant, physical plant).
+    * a slow (0.2 Hz) excitation with long sliding intervals (``static`` variant, physical plant);
+    * rho = 1.02 over ``long_duration`` at each of ``noise_levels`` (model plant, the paper's
+      excitation): no divergence and no growth of the error (last 10 s against 10-20 s);
+    * the velocity estimate of rho = 0.98 (Fig. simconv d) on the seed-0 excitation run.
     """
     cfg = cfg or load_preset("table1")
     dt = cfg.observer.dt
@@ -103,6 +142,18 @@ def convergence_study(cfg: Config | None = None, *, seeds: int = 5, duration: fl
             res = simulate(cfg.override(variant="static", rho=rho), Excitation(bandwidth=0.2), seed=seed,
                            duration=duration)
             slow[(rho, seed)] = _first_exceed(res.f_hat_filtered - res.f, threshold, dt)
+    long_runs = {}
+    for noise in noise_levels:
+        res = simulate(cfg.override(rho=1.02, noise_rms=noise), "excitation", plant="model", seed=0,
+                       duration=long_duration, keep_trace=True)
+        err = res.f_hat_filtered - res.f
+        early = float(np.sqrt(np.mean(err[(res.t > 10.0) & (res.t < 20.0)] ** 2)))
+        late = float(np.sqrt(np.mean(err[res.t > long_duration - 10.0] ** 2)))
+        long_runs[noise] = (bool(res.metrics["diverged"]), early, late)
+    long_ok = all(not div and late < 1.5 * early for div, early, late in long_runs.values())
+    vel = runs[("excitation", 0.98)]
+    verr = vel.v_hat - vel.v
+    v_rms = [float(np.sqrt(np.nanmean(x ** 2))) for x in (verr[(vel.t > 1.0) & (vel.t < 4.3)], verr[vel.t >= 4.3], vel.v)]
     diverged = [t for (rho, _), (_, t) in excitation.items() if rho == 0.98 and t is not None]
     slow_div = [t for (rho, _), t in slow.items() if rho == 0.98 and t is not None]
     slow_ok = all(t is None for (rho, _), t in slow.items() if rho == 1.02)
@@ -113,15 +164,29 @@ def convergence_study(cfg: Config | None = None, *, seeds: int = 5, duration: fl
         Claim("prop:2", "rho = 0.98 violates Proposition 2; the error grows in gross sliding",
               f"{rates[0.98][1]:+.3f} 1/s", f"{rates[0.98][0]:+.3f} 1/s",
               abs(rates[0.98][0] / rates[0.98][1] - 1) < 0.05),
-        Claim("sec:3:3", "rho = 0.98 diverges after 4.3 s under the random excitation",
+        Claim("sec:3:3", "rho = 0.98 diverges after 4.3 s under the random excitation (lag variant, model plant, "
+              "5 Hz band-limited force as in the paper)",
               "4.3 s", f"{len(diverged)} of {seeds} seeds diverge within {duration:g} s (model plant, 5 Hz)",
               bool(diverged) and all(abs(t - 4.3) < 1.0 for t in diverged)),
         Claim("sec:3:3", "rho = 0.98 diverges after some seconds, rho = 1.02 does not (slow 0.2 Hz excitation, "
-              "static variant, physical plant)", "4.3 s",
-              f"rho 0.98: {len(slow_div)} of {seeds} seeds, at "
+              "static variant, physical plant)", "diverges after 4.3 s (Fig. simconv c, the paper's excitation)",
+              f"divergence reproduced: rho 0.98 in {len(slow_div)} of {seeds} seeds, at "
               + ", ".join(f"{t:.1f}" for t in sorted(slow_div)) + " s; rho 1.02: "
-              + ("none" if slow_ok else "some") + f" within {duration:g} s",
-              len(slow_div) == seeds and slow_ok),
+              + ("none" if slow_ok else "some") + f" within {duration:g} s. Not reproduced: the 4.3 s, which "
+              "needs the paper's excitation (row above)",
+              len(slow_div) == seeds and slow_ok,
+              "partly reproduced" if len(slow_div) == seeds and slow_ok else "not reproduced"),
+        Claim("sec:3:3", f"rho = 1.02 stays stable over {long_duration:g} s and with larger output noise (lag "
+              "variant, model plant, 5 Hz excitation)", "stable and uniformly converging (t > 60 s, more noise)",
+              "; ".join(f"noise {n:g} m: " + ("diverged" if div else f"RMS error {early:.3g} N (10-20 s), "
+                                                f"{late:.3g} N (last 10 s)")
+                        for n, (div, early, late) in long_runs.items()),
+              long_ok),
+        Claim("fig:simconv", "rho = 0.98: the velocity estimate follows the velocity (Fig. simconv d; lag variant, "
+              "model plant, seed 0, noise of the preset)", "shown as a figure only",
+              f"RMS(v_hat - v) {v_rms[0] * 1e3:.3g} mm/s before 4.3 s, {v_rms[1] * 1e3:.3g} mm/s after; "
+              f"RMS(v) {v_rms[2] * 1e3:.3g} mm/s (the error is mostly the noise through L1)",
+              v_rms[1] < 2.0 * v_rms[0], "consistent" if v_rms[1] < 2.0 * v_rms[0] else "not reproduced"),
     )
     return ConvergenceStudy(rates=rates, excitation=excitation, slow_excitation=slow, claims=claims, runs=runs)
 
@@ -261,12 +326,15 @@ def noise_study(noise_rms: float = 1e-6, bandwidth: float = 1000.0, seed: int = 
         filt = float(np.sqrt(np.mean((noisy.f_hat_filtered - clean.f_hat_filtered)[keep] ** 2)))
         rows[name] = {"rho": cfg.observer.rho, "direct_gain": pred.direct_gain, "predicted_raw": pred.rms_raw,
                       "simulated_raw": raw, "predicted_filtered": pred.rms_filtered, "simulated_filtered": filt}
-        claims.append(Claim("eq:3:4:4", f"{name}: measurement noise enters the friction estimate with the gain "
-                            "kappa (1 - rho^2); the low-pass removes most of it",
+        ok = abs(raw / pred.rms_raw - 1) < 0.05 and abs(filt / pred.rms_filtered - 1) < 0.15
+        claims.append(Claim("eq:3:4:4", f"{name} with the static variant (noise {noise_rms:g} m, open loop): "
+                            "measurement noise enters the friction estimate with the gain kappa (1 - rho^2); the "
+                            "low-pass removes most of it (our LTI prediction against our simulation; the paper "
+                            "prints no number)",
                             f"{pred.direct_gain:.4g} N/m", f"RMS raw {raw * 1e3:.2f} mN (predicted "
                             f"{pred.rms_raw * 1e3:.2f}), filtered {filt * 1e3:.3f} mN (predicted "
                             f"{pred.rms_filtered * 1e3:.3f})",
-                            abs(raw / pred.rms_raw - 1) < 0.05 and abs(filt / pred.rms_filtered - 1) < 0.15))
+                            ok, "consistent" if ok else "not reproduced"))
     return NoiseStudy(rows, tuple(claims))
 
 
@@ -282,7 +350,10 @@ def pid_claims(cfg: Config | None = None) -> tuple:
     out = []
     for name, paper in (("kp", 429.0), ("ki", 4348.0), ("kd", 2.67)):
         ours = getattr(pid, name)
-        out.append(Claim("eq:PIDparams", f"PID gain {name}", f"{paper:g}", f"{ours:.4g}", abs(ours / paper - 1) < 5e-3))
+        ok = abs(ours / paper - 1) < 5e-3
+        out.append(Claim("eq:PIDparams", f"PID gain {name} (tau = {pid.tau:g} s and max|S| were back-solved from "
+                         "these published gains, so agreement is expected)", f"{paper:g}", f"{ours:.4g}", ok,
+                         "consistent" if ok else "not reproduced"))
     out.append(Claim("eq:pidGain", "max|S| <= 1/k", f"{1 / pid.k:.4g} m/V", f"{pid.max_S_achieved:.4g} m/V",
                      pid.max_S_achieved <= 1 / pid.k))
     return tuple(out)
@@ -304,12 +375,24 @@ def derivation_claims() -> tuple:
     cfg = load_preset("table1")
     vals = {d.symbols["sigma"]: cfg.friction.sigma, d.symbols["beta"]: cfg.friction.beta, kap: cfg.friction.kappa, rho: 1.02}
     table1 = check_stability(load_preset("table1").override(rho=1.02))
+    dc, ff = {}, {}
+    for v in ("lag", "static"):
+        nt = derive(v).noise
+        dc[v] = sp.simplify(nt.friction.subs(nt.laplace, 0))
+        ff[v] = nt.friction_feedthrough
     return (
         Claim("eq:3:3:2", "Table 1, rho = 1.02: dominant pole -sqrt(kappa/m)(rho - 1)",
-              "-2.44 1/s", f"{table1.dominant_pole:.4f} 1/s", abs(table1.dominant_pole + 2.44) < 0.005),
+              "-sqrt(kappa/m)(rho - 1) = -2.44 1/s (formula; the paper prints no value)",
+              f"{table1.dominant_pole:.4f} 1/s (eigenvalues of the observer matrix)",
+              abs(table1.dominant_pole + 2.44) < 0.005),
         Claim("eq:3:2:7", "a0' = C1 s x'/z >= 0 after a reversal, so Ignatyev (ii) follows from Proposition 1",
               ">= 0", f"dk/dt = {d.stiffness_rate} ({rate:.3g} at x' = 1, z = 0.5): negative; (ii) holds in "
               f"pre-sliding only for |x'| < {bound * 1e3:.1f} mm/s (Table 1, reversal from sliding)", rate >= 0),
+        Claim("eq:3:4:4", "the noise reaches the friction estimate through a transfer with zero DC gain: "
+              "unbiased noise averages out, the large part is the direct feedthrough L2",
+              "integral of eta averages; kappa >> 1 amplifies",
+              "; ".join(f"{v}: G(0) = {dc[v]}, G(oo) = {ff[v]}" for v in ("lag", "static")),
+              all(x == 0 for x in dc.values())),
         Claim("eq:3:4:3", "noise enters the friction estimate with -kappa (rho^2 - 1) (variant lag)",
               "-kappa (rho^2 - 1)", f"L2 = {L2}; the extra {extra} is {float(extra.subs(vals)):.4g} N/m against "
               f"{float((kap * (rho**2 - 1)).subs(vals)):.4g} N/m for Table 1", extra == 0),

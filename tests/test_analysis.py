@@ -34,7 +34,7 @@ def test_derivation_claims_flag_the_paper_differences():
     """The sign of eq:3:2:7 and the lag noise feedthrough are reported as not reproduced, with numbers."""
     from obsdesign import studies as paper
 
-    _, sign, noise = paper.derivation_claims()
+    _, sign, _, noise = paper.derivation_claims()
     assert not sign.reproduced and "negative" in sign.measured
     sigma_over_beta = 21.1 / 0.001  # Table 1: the term eq:3:4:3 leaves out
     assert not noise.reproduced and "sigma/beta" in noise.measured and f"{sigma_over_beta:.4g} N/m" in noise.measured

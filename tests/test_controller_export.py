@@ -331,14 +331,14 @@ def test_controller_files_errors(args, kwargs, exc, match):
 
 
 @pytest.mark.parametrize("kwargs, exc, match", [
-    ({"gain": 0.0}, ValueError, r"compensation.gain: expected a number in \(0, 1\]"),
+    ({"gain": 0.0}, ValueError, r"compensation.gain: expected a finite number > 0 and <= 1, found 0.0"),
     ({"gain": 1.01}, ValueError, "compensation.gain"),
     ({"gain": math.nan}, ValueError, "compensation.gain"),
-    ({"gain": "1"}, TypeError, "compensation.gain: expected a real number"),
-    ({"viscous": 1}, TypeError, "compensation.viscous: expected True or False"),
+    ({"gain": "1"}, TypeError, "compensation.gain: expected a finite number > 0 and <= 1, found str '1'"),
+    ({"viscous": 1}, TypeError, "compensation.viscous: expected true or false, found int 1"),
     ({"deadzone": -1e-3}, ValueError, "compensation.deadzone: expected a finite number >= 0"),
     ({"deadzone": math.inf}, ValueError, "compensation.deadzone"),
-    ({"deadzone": True}, TypeError, "compensation.deadzone: expected a real number"),
+    ({"deadzone": True}, TypeError, "compensation.deadzone: expected a finite number >= 0, found bool True"),
 ])
 def test_compensation_spec_errors(kwargs, exc, match):
     with pytest.raises(exc, match=match):

@@ -36,7 +36,11 @@ def test_report_contents(report_file):
     for needle in ("eq:3:3:7", "Proposition 1: L_1 &gt; -sigma/m", "PID gain kp", "reproduced", "function gains(m, sigma, kappa, rho)"):
         assert needle in html
     pid = od.pid_from_config(od.load_preset("vcm"))
-    assert f"{pid.kp:.6g}" in html
+    assert f"<td>{pid.kp:.4g}</td>" in html  # one number format: 4 significant digits
+    assert not re.search(r"\d\.\d{4}e[+-]\d\d", html)  # no 5-digit mantissas such as 1.0000e-06
+    for needle in ('<nav class="toc">', 'id="claims"', "Loop view of L = C H", "overshoot (step up, down)",
+                   "partly reproduced", "consistent", 'class="bmatrix"'):
+        assert needle in html
 
 
 def test_values_from_a_config_are_escaped():

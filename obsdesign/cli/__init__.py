@@ -4,7 +4,9 @@ Every subcommand validates its input where it enters; bad input ends with one
 line on stderr and exit status 2, never a traceback. One module per group of
 commands: :mod:`~obsdesign.cli._design` (derive, check, pid, noise),
 :mod:`~obsdesign.cli._sim` (simulate, sweep), :mod:`~obsdesign.cli._output`
-(export, report), :mod:`~obsdesign.cli._data` (identify, observe); shared argument types in :mod:`~obsdesign.cli._common`.
+(export, report), :mod:`~obsdesign.cli._data` (identify, observe), :mod:`~obsdesign.cli._loop` (loop),
+:mod:`~obsdesign.cli._config` (config); shared argument types in :mod:`~obsdesign.cli._common`. Building the
+parser imports no numerical library: the heavy modules load inside the commands.
 
 Exit statuses: 0 success, 1 a check failed (``check`` only), 2 bad input or an
 environment problem, 3 an internal error (see :mod:`~obsdesign.cli._errors`).
@@ -28,7 +30,8 @@ import traceback
 import warnings
 from typing import Sequence
 
-from . import _data, _design, _output, _sim
+from .. import __version__
+from . import _config, _data, _design, _loop, _output, _sim
 from ._common import Parser, UsageError
 from ._errors import BAD_INPUT, describe, exit_status
 
@@ -38,11 +41,14 @@ __all__ = ["main", "build_parser", "UsageError"]
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``obsdesign`` command."""
     parser = Parser(prog="obsdesign", description="Design and verify reduced-order friction observers.")
+    parser.add_argument("--version", action="version", version=f"obsdesign {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
     _design.add_commands(sub)
     _sim.add_commands(sub)
     _output.add_commands(sub)
     _data.add_commands(sub)
+    _loop.add_commands(sub)
+    _config.add_commands(sub)
     return parser
 
 

@@ -10,7 +10,6 @@ import re
 import tempfile
 from pathlib import Path
 
-from .._format import jsonable
 from .._validate import FINITE, NONNEGATIVE, POSITIVE, Range, parse_number
 from ..params import VARIANTS, load_config, load_preset, preset_names
 
@@ -166,6 +165,8 @@ def print_warnings(notes, what: str = "") -> None:
 def emit(args: argparse.Namespace, result, payload: dict) -> None:
     """Print the result as text, or its payload as one strict JSON object with ``--json``."""
     if args.json:
+        from .._format import jsonable  # numpy: loaded only when a command prints
+
         print(json.dumps(jsonable(payload), allow_nan=False))
     else:
         print(result)

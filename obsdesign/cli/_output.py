@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from ..export import FORMATS as EXPORT_FORMATS
+from ..export import WHAT as EXPORT_WHAT
 from ..params import VARIANTS
 from ._common import (POSITIVE_ARG, UsageError, add_config_flags, check_output_dir, check_output_file, load,
                       warn_unstable)
@@ -18,8 +19,12 @@ def _cmd_export(args: argparse.Namespace) -> int:
     from ..export import export
 
     check_output_dir("export", "-o/--output", args.output)
+    if args.what == "controller" and args.format == "latex":
+        raise UsageError("obsdesign export: argument --format: the controller is exported as one of "
+                         "python, c, octave, js, found 'latex'")
     cfg = load(args)
-    paths = export(cfg, args.format, args.output, variant=args.variant, rho=args.rho, dt=args.dt)
+    paths = export(cfg, args.format, args.output, variant=args.variant, rho=args.rho, dt=args.dt,
+                   what=args.what, controller=args.controller)
     warn_unstable(cfg, "the exported observer diverges", rho=args.rho, variant=args.variant)
     for path in paths:
         print(path)
@@ -46,8 +51,13 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
 def add_commands(sub) -> None:
     """Add ``export`` and ``report`` to the subparsers ``sub``."""
-    p = sub.add_parser("export", help="export the derivation or the designed observer as code")
+    p = sub.add_parser("export", help="export the derivation, the designed observer or the whole controller as code")
     p.add_argument("--format", required=True, choices=EXPORT_FORMATS)
+    p.add_argument("--what", choices=EXPORT_WHAT, default="observer",
+                   help="observer (default) or controller: observer, low-pass, PID and compensation of the "
+                        "simulator, step(x_ref, x_meas) -> command [V]")
+    p.add_argument("--controller", choices=("pid+observer", "pid"), default="pid+observer",
+                   help="with --what controller: the simulator's controller to generate (default pid+observer)")
     add_config_flags(p, default_preset="vcm")
     p.add_argument("--variant", choices=VARIANTS, help="override the config's model variant")
     p.add_argument("--rho", type=POSITIVE_ARG, help="gain parameter rho (> 0)")

@@ -8,14 +8,22 @@ into a complete design config; ``observe`` runs the designed observer over a tra
 
 from __future__ import annotations
 
-from .identify import Identification as Identification
-from .identify import identify as identify
-from .observe import Observation as Observation
-from .observe import model_friction_state as model_friction_state
-from .observe import observe as observe
-from .rules import config_from as config_from
-from .trace import Trace as Trace
-from .trace import load_trace as load_trace
+from .._lazy import keep_functions, lazy_names
+
 
 __all__ = ["Trace", "load_trace", "Identification", "identify", "config_from", "Observation", "observe",
            "model_friction_state"]
+
+#: Public name -> module it comes from; loaded on first use (obsdesign._lazy).
+_LAZY = {
+    'Identification': '.identify',
+    'identify': '.identify',
+    'config_from': '.rules',
+    'Trace': '.trace',
+    'load_trace': '.trace',
+    'Observation': '.observe',
+    'observe': '.observe',
+    'model_friction_state': '.observe',
+}
+__getattr__, __dir__ = lazy_names(__name__, _LAZY)
+keep_functions(__name__, ('identify', 'observe'))

@@ -1,22 +1,7 @@
 """Numeric design: observer gains and stability verdicts, PID, noise (python-control)."""
 
-from .advisories import design_warnings as design_warnings
-from .noise import NoiseAnalysis as NoiseAnalysis
-from .noise import band_limited_rms as band_limited_rms
-from .noise import lowpass as lowpass
-from .noise import noise_analysis as noise_analysis
-from .observer import FrozenSystems as FrozenSystems
-from .observer import ObserverDesign as ObserverDesign
-from .observer import StabilityReport as StabilityReport
-from .observer import check_stability as check_stability
-from .observer import design_observer as design_observer
-from .pid import PIDDesign as PIDDesign
-from .pid import design_pid as design_pid
-from .pid import pid_from_config as pid_from_config
-from .pid import pid_from_gains as pid_from_gains
-from .._display import Condition as Condition
-from .observer import ObserverArrays as ObserverArrays
-from .observer import is_stable as is_stable
+from .._lazy import lazy_names
+
 
 __all__ = [
     "NoiseAnalysis", "band_limited_rms", "lowpass", "noise_analysis",
@@ -24,3 +9,25 @@ __all__ = [
     "PIDDesign", "design_pid", "pid_from_config", "pid_from_gains", "Condition",
     "design_warnings",
 ]
+
+#: Public name -> module it comes from; loaded on first use (obsdesign._lazy).
+_LAZY = {
+    'NoiseAnalysis': '.noise',
+    'band_limited_rms': '.noise',
+    'lowpass': '.noise',
+    'noise_analysis': '.noise',
+    'FrozenSystems': '.observer',
+    'ObserverDesign': '.observer',
+    'StabilityReport': '.observer',
+    'check_stability': '.observer',
+    'design_observer': '.observer',
+    'PIDDesign': '.pid',
+    'design_pid': '.pid',
+    'pid_from_config': '.pid',
+    'pid_from_gains': '.pid',
+    'Condition': '.._display',
+    'ObserverArrays': '.observer',
+    'is_stable': '.observer',
+    'design_warnings': '.advisories',
+}
+__getattr__, __dir__ = lazy_names(__name__, _LAZY)

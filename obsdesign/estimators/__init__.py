@@ -16,34 +16,8 @@ Examples
 1.0
 """
 
-from .base import MAX_STATES as MAX_STATES
-from .base import DiscreteEstimator as DiscreteEstimator
-from .base import discretize_observer as discretize_observer
-from .base import estimator_output as estimator_output
-from .base import estimator_step as estimator_step
-from .base import foh_matrices as foh_matrices
-from .base import run_offline as run_offline
-from .dob import build_dob as build_dob
-from .dob import dob_continuous as dob_continuous
-from .dob import q_filter as q_filter
-from .eso import build_eso as build_eso
-from .eso import eso_gains as eso_gains
-from .kalman import build_kalman as build_kalman
-from .kalman import noise_level as noise_level
-from .paper import build_paper as build_paper
-from .paper import build_paper_k0 as build_paper_k0
-from .paper import paper_dominant_pole as paper_dominant_pole
-from .paper import with_lowpass as with_lowpass
-from .registry import ESTIMATORS as ESTIMATORS
-from .registry import EstimatorInfo as EstimatorInfo
-from .registry import build as build
-from .registry import estimator_names as estimator_names
-from .tuning import RULES as RULES
-from .tuning import friction_noise_rms as friction_noise_rms
-from .tuning import reference_estimator as reference_estimator
-from .tuning import reference_noise_rms as reference_noise_rms
-from .tuning import tune as tune
-from .tuning import velocity_noise_rms as velocity_noise_rms
+from .._lazy import lazy_names
+
 
 __all__ = [
     "MAX_STATES", "DiscreteEstimator", "discretize_observer", "estimator_output", "estimator_step",
@@ -52,3 +26,36 @@ __all__ = [
     "EstimatorInfo", "build", "estimator_names", "RULES", "friction_noise_rms", "reference_estimator",
     "reference_noise_rms", "tune", "velocity_noise_rms",
 ]
+
+#: Public name -> module it comes from; loaded on first use (obsdesign._lazy).
+_LAZY = {
+    'MAX_STATES': '.base',
+    'DiscreteEstimator': '.base',
+    'discretize_observer': '.base',
+    'estimator_output': '.base',
+    'estimator_step': '.base',
+    'foh_matrices': '.base',
+    'run_offline': '.base',
+    'build_dob': '.dob',
+    'dob_continuous': '.dob',
+    'q_filter': '.dob',
+    'build_eso': '.eso',
+    'eso_gains': '.eso',
+    'build_kalman': '.kalman',
+    'noise_level': '.kalman',
+    'build_paper': '.paper',
+    'build_paper_k0': '.paper',
+    'paper_dominant_pole': '.paper',
+    'with_lowpass': '.paper',
+    'ESTIMATORS': '.registry',
+    'EstimatorInfo': '.registry',
+    'build': '.registry',
+    'estimator_names': '.registry',
+    'RULES': '.tuning',
+    'friction_noise_rms': '.tuning',
+    'reference_estimator': '.tuning',
+    'reference_noise_rms': '.tuning',
+    'tune': '.tuning',
+    'velocity_noise_rms': '.tuning',
+}
+__getattr__, __dir__ = lazy_names(__name__, _LAZY)

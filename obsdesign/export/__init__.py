@@ -19,8 +19,10 @@ from __future__ import annotations
 
 #: The export formats, in the order the command line lists them.
 FORMATS = ("latex", "python", "c", "octave", "js")
+#: What can be exported: the observer (default) or the whole sampled controller.
+WHAT = ("observer", "controller")
 
-__all__ = ["export", "FORMATS"]
+__all__ = ["export", "FORMATS", "WHAT"]
 
 
 def __getattr__(name: str):

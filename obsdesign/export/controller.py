@@ -19,7 +19,8 @@ One call of the generated ``step(x_ref, x_meas)`` per sample does what
 The returned command [V] is after saturation and includes the feed-forward, so the
 simulator's ``u`` column is ``K * command - G``.
 
-Compensation law (:class:`CompensationSpec`; the defaults give the simulator's law)::
+Compensation law (the config's ``[compensation]`` section, :class:`~obsdesign.params.CompensationSpec`;
+the defaults give the paper's law ``f_hat_filtered / K`` with exactly its operations)::
 
     fade = min(1, |v_hat| / deadzone)  if deadzone > 0 else 1
     comp = gain * (f_hat_filtered + (sigma * v_hat if viscous else 0)) * fade
@@ -33,19 +34,19 @@ Examples
 ['obsdesign_controller.c', 'obsdesign_controller.h']
 >>> sorted(controller_files(od.load_preset("vcm"), "octave"))
 ['obsdesign_controller.m', 'obsdesign_controller_init.m', 'obsdesign_controller_step.m']
->>> CompensationSpec(gain=1.5)
-Traceback (most recent call last):
-...
-ValueError: compensation.gain: expected a number in (0, 1], found 1.5
+>>> consts = controller_constants(od.load_preset("vcm").override(gain=0.5, deadzone=1e-4))
+>>> consts["COMP_GAIN"], consts["COMP_DEADZONE"]
+(0.5, 0.0001)
 """
 
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 from ..design.pid import pid_gains
-from ..params import Config
+from ..params import CompensationSpec, Config
 from ..design import discretize
 from ..design.discretize import lowpass_arrays
 from ..friction import presliding as friction
@@ -60,54 +61,6 @@ LANGUAGES = ("c", "python", "octave", "js")
 CONTROLLERS = ("pid", "pid+observer")
 #: Longest sanitized config name placed in a comment or docstring.
 NAME_MAX = _NAME_MAX
-
-
-@dataclass(frozen=True, kw_only=True)
-class CompensationSpec:
-    """Knobs of the friction compensation law (defaults: the simulator's ``f_hat_filtered / K``).
-
-    Parameters
-    ----------
-    gain : float
-        Fraction of the estimate applied, in (0, 1].
-    viscous : bool
-        Add ``sigma v_hat`` to the filtered friction estimate.
-    deadzone : float
-        Velocity [m/s] below which the compensation fades linearly to zero (``|v_hat| / deadzone``);
-        0 disables the fade.
-
-    Examples
-    --------
-    >>> CompensationSpec(deadzone=1e-4).viscous
-    False
-    >>> CompensationSpec(viscous=1)
-    Traceback (most recent call last):
-    ...
-    TypeError: compensation.viscous: expected True or False, found int 1
-    """
-
-    gain: float = 1.0
-    viscous: bool = False
-    deadzone: float = 0.0
-
-    def __post_init__(self) -> None:
-        gain = _real("compensation.gain", self.gain)
-        if not 0.0 < gain <= 1.0:
-            raise ValueError(f"compensation.gain: expected a number in (0, 1], found {gain!r}")
-        if not isinstance(self.viscous, bool):
-            raise TypeError(f"compensation.viscous: expected True or False, found {type(self.viscous).__name__} "
-                            f"{self.viscous!r}")
-        deadzone = _real("compensation.deadzone", self.deadzone)
-        if not (math.isfinite(deadzone) and deadzone >= 0.0):
-            raise ValueError(f"compensation.deadzone: expected a finite number >= 0 [m/s], found {deadzone!r}")
-        object.__setattr__(self, "gain", gain)
-        object.__setattr__(self, "deadzone", deadzone)
-
-
-def _real(name: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise TypeError(f"{name}: expected a real number, found {type(value).__name__} {value!r}")
-    return float(value)
 
 
 def sanitize_comment(text: str, *, limit: int = NAME_MAX) -> str:
@@ -137,7 +90,7 @@ def _choice(name: str, value, options) -> str:
 
 
 def controller_constants(cfg: Config, *, controller: str = "pid+observer",
-                         compensation: CompensationSpec = CompensationSpec()) -> dict[str, float]:
+                         compensation: CompensationSpec | None = None) -> dict[str, float]:
     """Every number of the generated controller, computed as :func:`obsdesign.simulate` computes it.
 
     Parameters
@@ -146,8 +99,8 @@ def controller_constants(cfg: Config, *, controller: str = "pid+observer",
         The design.
     controller : {'pid+observer', 'pid'}
         The controller.
-    compensation : CompensationSpec
-        The compensation knobs.
+    compensation : CompensationSpec, optional
+        The compensation knobs (default: the config's ``[compensation]`` section).
 
     Keys are the constant names of the generated code (``DT``, ``KP``, ``A0_0``, ...);
     flags (``COMP_ON``, ``COMP_VISCOUS``) are 0.0 or 1.0.
@@ -160,6 +113,8 @@ def controller_constants(cfg: Config, *, controller: str = "pid+observer",
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
     controller = _choice("controller", controller, CONTROLLERS)
+    if compensation is None:
+        compensation = cfg.compensation if controller == "pid+observer" else CompensationSpec()
     if not isinstance(compensation, CompensationSpec):
         raise TypeError(f"compensation: expected a CompensationSpec, found {type(compensation).__name__}")
     if controller == "pid" and compensation != CompensationSpec():
@@ -222,7 +177,7 @@ _TEMPLATES = {
 
 
 def controller_files(cfg: Config, language: str, *, controller: str = "pid+observer",
-                     compensation: CompensationSpec = CompensationSpec()) -> dict[str, str]:
+                     compensation: CompensationSpec | None = None) -> dict[str, str]:
     """The sampled controller of the simulator's closed loop as source files of one language.
 
     Parameters
@@ -233,8 +188,9 @@ def controller_files(cfg: Config, language: str, *, controller: str = "pid+obser
     controller : {'pid+observer', 'pid'}
         As in :func:`obsdesign.simulate`; ``pid`` still runs the observer (for monitoring) but
         does not compensate.
-    compensation : CompensationSpec
-        Knobs of the compensation law (``pid+observer`` only).
+    compensation : CompensationSpec, optional
+        Knobs of the compensation law (``pid+observer`` only; default: the config's
+        ``[compensation]`` section, as the simulator reads it).
 
     Returns
     -------
@@ -263,6 +219,8 @@ def controller_files(cfg: Config, language: str, *, controller: str = "pid+obser
     """
     language = _choice("language", language, LANGUAGES)
     consts = controller_constants(cfg, controller=controller, compensation=compensation)
+    compensation = CompensationSpec(gain=consts["COMP_GAIN"], viscous=consts["COMP_VISCOUS"] != 0.0,
+                                    deadzone=consts["COMP_DEADZONE"])
     ctx = {
         "name": sanitize_comment(cfg.name), "variant": cfg.observer.variant, "controller": controller,
         "compensation": compensation, "consts": {k: _literal(v) for k, v in consts.items()},

@@ -1,4 +1,4 @@
-"""Write the export files of one format into a folder.
+"""Write the export files of one format into a folder: the observer, or the whole controller.
 
 Examples
 --------
@@ -7,6 +7,14 @@ Examples
 ...     paths = export(od.load_preset("vcm"), "c", tmp)
 ...     sorted(p.name for p in paths)
 ['obsdesign_observer.c', 'obsdesign_observer.h']
+>>> with tempfile.TemporaryDirectory() as tmp:
+...     paths = export(od.load_preset("vcm"), "c", tmp, what="controller")
+...     sorted(p.name for p in paths)
+['obsdesign_controller.c', 'obsdesign_controller.h']
+>>> export(od.load_preset("vcm"), "latex", ".", what="controller")
+Traceback (most recent call last):
+...
+ValueError: format: the controller is exported as one of python, c, octave, js, found 'latex'
 """
 
 from __future__ import annotations
@@ -16,14 +24,18 @@ from pathlib import Path
 
 from .._io import atomic_write
 from ..params import Config
-from . import FORMATS
+from . import FORMATS, WHAT
 from .codegen import c_files, export_spec, js_module, latex_document, octave_files, python_module
 
 __all__ = ["export"]
 
+#: Formats the whole controller is exported in (:mod:`obsdesign.export.controller`).
+CONTROLLER_FORMATS = ("python", "c", "octave", "js")
+
 
 def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, variant: str | None = None,
-           rho: float | None = None, dt: float | None = None) -> list[Path]:
+           rho: float | None = None, dt: float | None = None, what: str = "observer",
+           controller: str = "pid+observer") -> list[Path]:
     """Write the export files of one format into ``out_dir`` (created if missing).
 
     Parameters
@@ -35,6 +47,13 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, variant: str | 
         Output folder (created if missing); a file of the export's names there must not be a folder.
     variant, rho, dt : optional
         Overrides of the config.
+    what : {'observer', 'controller'}
+        ``observer``: the derivation (LaTeX) or the discrete observer; ``controller``: the whole
+        sampled controller of the simulator (observer, low-pass, PID, compensation of the config's
+        ``[compensation]`` section, saturation): ``obsdesign_controller.h/.c``, ``obsdesign_controller.py``,
+        ``obsdesign_controller*.m``, ``obsdesign_controller.mjs``.
+    controller : {'pid+observer', 'pid'}
+        With ``what='controller'``: the controller of :func:`obsdesign.simulate` to generate.
 
     Returns
     -------
@@ -43,6 +62,18 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, variant: str | 
     """
     if not isinstance(fmt, str) or fmt not in FORMATS:
         raise ValueError(f"format: expected one of {', '.join(FORMATS)}, found {fmt!r}")
+    if not isinstance(what, str) or what not in WHAT:
+        raise ValueError(f"what: expected one of {', '.join(WHAT)}, found {what!r}")
+    if what == "controller":
+        if fmt not in CONTROLLER_FORMATS:
+            raise ValueError(f"format: the controller is exported as one of {', '.join(CONTROLLER_FORMATS)}, "
+                             f"found {fmt!r}")
+        from .controller import controller_files
+
+        if not isinstance(cfg, Config):
+            raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
+        files = controller_files(cfg.override(variant=variant, rho=rho, dt=dt), fmt, controller=controller)
+        return _write(files, out_dir)
     spec = export_spec(cfg, variant=variant, rho=rho, dt=dt)
     if fmt == "latex":
         files = {f"obsdesign_{spec.variant}.tex": latex_document(spec)}
@@ -54,6 +85,10 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, variant: str | 
         files = octave_files(spec)
     else:
         files = {"obsdesign_observer.mjs": js_module(spec.variant, name=spec.cfg.name)}
+    return _write(files, out_dir)
+
+
+def _write(files: dict[str, str], out_dir) -> list[Path]:
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ValueError(f"output: expected a directory, found the file {str(out)!r}")

@@ -10,29 +10,8 @@
 
 from __future__ import annotations
 
-from .common import DAHL as DAHL
-from .common import GMS as GMS
-from .common import LUGRE as LUGRE
-from .common import PAPER as PAPER
-from .driver import drive_displacement as drive_displacement
-from .driver import simulate_block as simulate_block
-from .kernels import friction_advance as friction_advance
-from .kernels import friction_force as friction_force
-from .kernels import friction_init as friction_init
-from .kernels import friction_n_state as friction_n_state
-from .kernels import friction_stiffness as friction_stiffness
-from .kernels import friction_viscous as friction_viscous
-from .kernels import stribeck as stribeck
-from .presliding import coulomb as coulomb
-from .presliding import coulomb_along as coulomb_along
-from .presliding import coulomb_normalized as coulomb_normalized
-from .presliding import presliding_shape as presliding_shape
-from .presliding import stiffness as stiffness
-from .presliding import track_reversal as track_reversal
-from .registry import FRICTION_MODELS as FRICTION_MODELS
-from .registry import FrictionModelInfo as FrictionModelInfo
-from .registry import ParameterSpec as ParameterSpec
-from .registry import friction_code as friction_code
+from .._lazy import lazy_names
+
 
 __all__ = [
     "PAPER", "LUGRE", "DAHL", "GMS", "FRICTION_MODELS", "FrictionModelInfo", "ParameterSpec",
@@ -40,3 +19,31 @@ __all__ = [
     "friction_viscous", "friction_stiffness", "stribeck", "simulate_block", "drive_displacement",
     "coulomb", "coulomb_along", "coulomb_normalized", "presliding_shape", "stiffness", "track_reversal",
 ]
+
+#: Public name -> module it comes from; loaded on first use (obsdesign._lazy).
+_LAZY = {
+    'DAHL': '.common',
+    'GMS': '.common',
+    'LUGRE': '.common',
+    'PAPER': '.common',
+    'drive_displacement': '.driver',
+    'simulate_block': '.driver',
+    'friction_advance': '.kernels',
+    'friction_force': '.kernels',
+    'friction_init': '.kernels',
+    'friction_n_state': '.kernels',
+    'friction_stiffness': '.kernels',
+    'friction_viscous': '.kernels',
+    'stribeck': '.kernels',
+    'coulomb': '.presliding',
+    'coulomb_along': '.presliding',
+    'coulomb_normalized': '.presliding',
+    'presliding_shape': '.presliding',
+    'stiffness': '.presliding',
+    'track_reversal': '.presliding',
+    'FRICTION_MODELS': '.registry',
+    'FrictionModelInfo': '.registry',
+    'ParameterSpec': '.registry',
+    'friction_code': '.registry',
+}
+__getattr__, __dir__ = lazy_names(__name__, _LAZY)

@@ -29,7 +29,7 @@ import numpy as np
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
 
 from .. import __version__, studies
-from .._format import report as report_number
+from .._format import with_unit
 from .._io import atomic_write
 from ..design import check_stability, noise_analysis, pid_from_config
 from ..export.codegen import js_module
@@ -89,6 +89,20 @@ def _bode_figure(curves, bound=None, ylabel=""):
     ax.set_ylabel(ylabel)
     ax.legend(loc="best")
     return fig
+
+
+def _quantity(value, unit: str = "") -> str:
+    """One number format for the report's prose and tables: 4 significant digits and the unit."""
+    if isinstance(value, (list, tuple)):
+        return ", ".join(_quantity(v) for v in value) + (f" {unit}" if unit and value else "")
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, float) and math.isinf(value):
+        return "infinite"
+    if isinstance(value, complex):
+        text = f"{value.real:.4g}{value.imag:+.4g}j" if value.imag else f"{value.real:.4g}"
+        return f"{text} {unit}" if unit else text
+    return with_unit(value, unit, 4)
 
 
 def _explorer_params(cfg: Config, variant: str) -> list[dict]:
@@ -171,7 +185,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     source_label = source_label or f"preset {cfg.name}"
     sweep_section = _sweep_section(sweep_dir)
     variant = cfg.observer.variant
-    steps = ["derivation", "stability", "PID", "noise", "convergence (Table 1)", "experiments", "friction loops",
+    steps = ["derivation", "stability", "PID and loop", "noise", "convergence (Table 1)", "experiments", "friction loops",
              "noise study", "render"]
     bar = tqdm(steps, desc="obsdesign report", disable=not progress, leave=False)
     ctx: dict = {"cfg": cfg, "version": __version__, "source_label": source_label,
@@ -195,6 +209,10 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     pid = pid_from_config(cfg)
     ctx["pid"] = pid
     ctx["pid_svg"] = _svg(_bode_figure([("|S| = |H/(1+HC)|", pid.S)], bound=1 / pid.k, ylabel="|S| [m/V]"))
+    from ..design.loop import loop_analysis, loop_figure
+
+    ctx["loop_view"] = loop_analysis(cfg)
+    ctx["loop_svg"] = _svg(loop_figure(ctx["loop_view"]))
     bar.update()
 
     bar.set_postfix_str(steps[3])
@@ -240,7 +258,8 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     ctx["elapsed"] = time.perf_counter() - t0
     env = Environment(loader=PackageLoader("obsdesign.report", "templates"), undefined=StrictUndefined,
                       autoescape=select_autoescape(default=True, default_for_string=True))
-    env.filters["num"] = report_number
+    env.filters["num"] = _quantity  # one number format in the whole report: 4 significant digits
+    env.filters["qty"] = _quantity
     env.filters["log10"] = math.log10
     html = _with_csp(env.get_template("report.html.j2").render(csp=_CSP_MARK, **ctx))
     bar.update()

@@ -19,7 +19,8 @@ Per sample ``n`` (time ``n dt``):
    (:func:`observe_loop`), so offline and closed-loop estimates come from one implementation;
 3. controller: open loop, or parallel PID eq:PIDparallel on the measured error
    with a first-order filtered derivative, conditional integration under
-   saturation, plus ``f_hat_filtered / K`` for ``pid+observer``;
+   saturation, plus ``comp / K`` for ``pid+observer`` (``comp = f_hat_filtered`` by default;
+   gain, viscous term and deadzone of :mod:`obsdesign.compensation`);
 4. integrate the plant to ``(n+1) dt`` with the input held: ``n_sub`` substeps of
    Heun's method (explicit trapezoidal rule, order 2), the pre-sliding branch frozen
    within a substep and updated after it (reversals are detected at substep
@@ -151,17 +152,34 @@ def _true_friction(x, v, w, direction, x_r, f_r, mode, lag_model, Cf, s, sigma, 
     return fc + (w if beta > 0.0 else sigma * v)
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _compensation(ff, vh, sigma, gain, viscous, deadzone):
+    """Compensated friction force [N] (:mod:`obsdesign.compensation`); the defaults return ``ff``
+    itself, so the paper's law ``ff / K`` is computed with exactly its own operations."""
+    if gain == 1.0 and not viscous and deadzone == 0.0:
+        return ff
+    fade = 1.0
+    if deadzone > 0.0:
+        fade = abs(vh) / deadzone
+        if not (fade < 1.0):
+            fade = 1.0
+    return gain * (ff + (sigma * vh if viscous else 0.0)) * fade
+
+
 @njit(cache=True, error_model="numpy")
 def run_loop(
     dt, n_sub, mode, lag_model, m, K, G, Cf, s, sigma, beta, kappa,
     A0, A1, b0, b1, g0, g1, L1, L2, schedule, estimator, v_hat0, f_hat0,
     controller, kp, ki, kd, tau_d, u_max, lp_phi, lp_g0, lp_g1,
+    comp_gain, comp_viscous, comp_deadzone,
     x_ref, u_open, noise, quantization,
     out_x, out_xm, out_v, out_f, out_vh, out_fh, out_ff, out_u, out_k,
 ):
     """Run the loop over ``len(x_ref)`` samples, writing the ``out_*`` arrays.
 
     Returns the number of samples written (less than the length when the run diverged).
+    ``comp_gain``, ``comp_viscous`` (bool) and ``comp_deadzone`` [m/s] are the knobs of
+    :class:`obsdesign.params.CompensationSpec` (``pid+observer`` only).
     """
     n_samples = x_ref.shape[0]
     h = dt / n_sub
@@ -196,7 +214,7 @@ def run_loop(
             integ_new = integ + e * dt
             u_volt = kp * e + ki * integ_new + kd * deriv
             if controller == CONTROLLER_PID_OBSERVER:
-                u_volt += ff / K
+                u_volt += _compensation(ff, vh, sigma, comp_gain, comp_viscous, comp_deadzone) / K
             total = u_volt + G / K
             if abs(total) <= u_max:
                 integ = integ_new  # conditional integration (anti-windup)

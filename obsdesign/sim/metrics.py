@@ -8,6 +8,9 @@ key                        meaning
 ``settling_time``          per positioning hold: time after the step until ``|e|`` stays within
                            ``settle_tol`` (``None``: never within the hold) [s]
 ``steady_state_error``     per hold: mean ``e`` over its last 10 % [m]
+``overshoot``              per positioning step: largest excursion of ``x`` beyond the target in
+                           the step direction, as a fraction of the step [-]
+``rise_time``              per positioning step: 10 % to 90 % of the step [s] (``None``: not reached)
 ``observer_rms_error_v``   RMS of ``v_hat - v`` [m/s]
 ``observer_rms_error_f``   RMS of ``f_hat - f`` [N] (``f``: the plant's value of the estimated state)
 ``diverged``               the run stopped early because a state left its bounds
@@ -19,7 +22,9 @@ key                        meaning
 ``rms_error_per_band``     tracking only: RMS of ``e`` per chirp-frequency band [m]
 =========================  =====================================================================
 
-Non-finite samples (after a divergence) are left out of the RMS values.
+Non-finite samples (after a divergence) are left out of the RMS values. ``overshoot`` and
+``rise_time`` come from :func:`obsdesign.sim.step_metrics.step_metrics` on the plant's
+displacement over each hold (``None`` for a hold the run did not reach).
 """
 
 from __future__ import annotations
@@ -29,8 +34,16 @@ from typing import Any
 import numpy as np
 
 from .scenarios import CHIRP_BAND_LABELS, Scenario, chirp_frequency
+from .step_metrics import step_metrics
 
-__all__ = ["loop_metrics"]
+__all__ = ["loop_metrics", "METRIC_UNITS"]
+
+#: Unit of each metric for text output ("-": dimensionless; lists and dicts: of their items).
+METRIC_UNITS = {
+    "rms_error": "m", "max_error": "m", "settling_time": "s", "steady_state_error": "m", "overshoot": "-",
+    "rise_time": "s", "observer_rms_error_v": "m/s", "observer_rms_error_f": "N", "sim_wall_s": "s",
+    "rms_error_per_band": "m",
+}
 
 
 def _rms(x: np.ndarray, finite: bool = False, scratch: np.ndarray | None = None) -> float | None:
@@ -73,6 +86,20 @@ def _first_at_or_above(sc: Scenario, frequency: float, n: int) -> int:
     return first
 
 
+def _step_response(m: dict, sc: Scenario, x: np.ndarray, idx: np.ndarray, start: float, settle_tol: float,
+                   reached: bool) -> None:
+    """Append the overshoot and rise time of the step that starts the hold ``idx``."""
+    y1 = float(sc.x_ref[idx[0]])
+    y0 = float(sc.x_ref[idx[0] - 1]) if idx[0] > 0 else 0.0
+    if not reached or y1 == y0:
+        m["overshoot"].append(None)
+        m["rise_time"].append(None)
+        return
+    sm = step_metrics(idx * sc.dt, x[idx], t_step=start, y0=y0, y1=y1, settle_band=settle_tol)
+    m["overshoot"].append(sm["overshoot"])
+    m["rise_time"].append(sm["rise_time"])
+
+
 def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_written: int, settle_tol: float,
                  wall: float, *, step_stable: bool = True) -> dict[str, Any]:
     """The metrics of a run from the kernel's outputs (see the module docstring).
@@ -106,6 +133,8 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
         "max_error": float(max(np.max(e_valid), -np.min(e_valid))) if n_written else None,
         "settling_time": [],
         "steady_state_error": [],
+        "overshoot": [],
+        "rise_time": [],
         "observer_rms_error_v": _rms_of_difference(out["v_hat"][valid], out["v"][valid], finite, scratch),
         "observer_rms_error_f": _rms_of_difference(out["f_hat"][valid], out["f"][valid], finite, scratch),
         "diverged": not finite,
@@ -125,6 +154,7 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
             m["settling_time"].append(None)  # never settles within the hold
         else:
             m["settling_time"].append(float((outside[-1] + 1) * dt))
+        _step_response(m, sc, out["x"], idx, start, settle_tol, reached=not (m["diverged"] and idx[-1] >= n_written))
         tail = idx[int(0.9 * len(idx)):]
         m["steady_state_error"].append(float(np.mean(e[tail])) if np.all(np.isfinite(e[tail])) else None)
     if sc.name == "tracking":

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._display import ResultDisplay
-from .._format import short
+from .._format import short, with_unit
 from .._io import atomic_write
 from ..params import Config
 
@@ -84,13 +84,19 @@ class SimResult(ResultDisplay):
         return f"simulation: {self.scenario}, {self.controller}"
 
     def _rows(self) -> list[tuple[str, str]]:
+        from .metrics import METRIC_UNITS
+
         rows = []
         for key, value in self.metrics.items():
+            unit = METRIC_UNITS.get(key, "")
+            unit = "" if unit == "-" else unit
             if isinstance(value, list):
-                value = "[" + ", ".join(short(v) for v in value) + "]"
+                value = "[" + ", ".join(short(v) for v in value) + "]" + (f" {unit}" if unit else "")
             elif isinstance(value, dict):
-                value = ", ".join(f"{k}: {short(v)}" for k, v in value.items())
-            rows.append((key, short(value)))
+                value = ", ".join(f"{k}: {with_unit(v, unit, 4)}" for k, v in value.items())
+            else:
+                value = with_unit(value, unit, 4) if isinstance(value, float) else short(value)
+            rows.append((key, value))
         return rows
 
     def __str__(self) -> str:

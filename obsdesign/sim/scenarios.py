@@ -34,11 +34,12 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, Union
-
-import numpy as np
+from typing import TYPE_CHECKING, Any, ClassVar, Union
 
 from .._validate import FINITE, NONNEGATIVE, POSITIVE, check_choice
+
+if TYPE_CHECKING:  # numpy loads on first use: the command line reads SCENARIOS without it
+    import numpy as np
 
 __all__ = ["SCENARIOS", "Scenario", "ScenarioSpec", "Excitation", "ConstantForce", "Positioning", "Chirp",
            "scenario_spec", "build_scenario", "band_limited_noise", "chirp_frequency", "CHIRP_BANDS",
@@ -194,10 +195,12 @@ def band_limited_noise(n: int, dt: float, rms: float, bandwidth: float, seed) ->
 
     Examples
     --------
+    >>> import numpy as np
     >>> x = band_limited_noise(200_000, 1e-4, 2.0, 50.0, seed=1)
     >>> round(float(np.sqrt(np.mean(x * x))), 1)
     2.0
     """
+    import numpy as np
     if rms == 0.0:
         return np.zeros(n)
     rng = np.random.default_rng(seed)
@@ -222,6 +225,7 @@ def chirp_frequency(t: np.ndarray, duration: float, spec: Chirp | None = None) -
     spec : Chirp, optional
         The chirp (default :class:`Chirp`).
     """
+    import numpy as np
     spec = spec or Chirp()
     return spec.f0 + (spec.f1 - spec.f0) * t / duration
 
@@ -265,6 +269,7 @@ def build_scenario(scenario: Any, *, dt: float, duration: float | None = None, s
 
 
 def _zeros(n: int) -> np.ndarray:
+    import numpy as np
     out = np.zeros(n)
     out.flags.writeable = False
     return out
@@ -274,6 +279,7 @@ def _zeros(n: int) -> np.ndarray:
 def _deterministic_signals(spec, dt: float, duration: float, n: int) -> tuple[np.ndarray, np.ndarray]:
     """``(x_ref, u_open)`` of a scenario without random parts, read-only and cached (sweeps and
     repeated runs of one scenario share them)."""
+    import numpy as np
     x_ref, u_open = _signals(spec, dt, duration, n)
     x_ref.flags.writeable = False
     u_open.flags.writeable = False
@@ -281,6 +287,7 @@ def _deterministic_signals(spec, dt: float, duration: float, n: int) -> tuple[np
 
 
 def _signals(spec, dt: float, duration: float, n: int) -> tuple[np.ndarray, np.ndarray]:
+    import numpy as np
     zeros = np.zeros(n)
     if isinstance(spec, ConstantForce):
         return zeros, np.full(n, spec.force)

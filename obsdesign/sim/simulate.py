@@ -47,7 +47,7 @@ __all__ = ["LoopInputs", "KERNEL_ARGS", "prepare", "run", "simulate"]
 KERNEL_ARGS = ("dt", "n_sub", "mode", "lag_model", "m", "K", "G", "Cf", "s", "sigma", "beta", "kappa",
                "A0", "A1", "b0", "b1", "g0", "g1", "L1", "L2", "schedule", "estimator_code", "v_hat0", "f_hat0",
                "controller_code", "kp", "ki", "kd", "tau_d", "u_max", "lp_phi", "lp_g0", "lp_g1",
-               "x_ref", "u_open", "noise", "quantization")
+               "comp_gain", "comp_viscous", "comp_deadzone", "x_ref", "u_open", "noise", "quantization")
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,6 +95,9 @@ class LoopInputs:
     lp_phi: np.ndarray = field(repr=False)
     lp_g0: np.ndarray = field(repr=False)
     lp_g1: np.ndarray = field(repr=False)
+    comp_gain: float
+    comp_viscous: bool
+    comp_deadzone: float
     x_ref: np.ndarray = field(repr=False)
     u_open: np.ndarray = field(repr=False)
     noise: np.ndarray = field(repr=False)
@@ -129,7 +132,8 @@ def prepare(
     Parameters
     ----------
     cfg : Config
-        The design; change parameters with :meth:`obsdesign.Config.override` before.
+        The design; change parameters with :meth:`obsdesign.Config.override` before. Its
+        ``[compensation]`` section sets the compensation law of ``pid+observer``.
     scenario : str or scenario spec
         A name of :data:`obsdesign.sim.SCENARIOS` (its default options) or a spec such as
         ``Positioning(step_size=2e-3)`` (see :mod:`obsdesign.sim.scenarios`).
@@ -197,6 +201,7 @@ def prepare(
                                      phase_margin_deg=cfg.pid.phase_margin_deg)
         tau_d = kd / kp / cfg.pid.derivative_N
     fr, pl = cfg.friction, cfg.plant
+    comp = cfg.compensation  # [compensation] knobs; only the controller 'pid+observer' compensates
     return LoopInputs(
         config=cfg, scenario=sc, controller=controller, plant=plant, stiffness=stiffness, estimator=estimator,
         settle_tol=settle_tol, dt=dt, n_sub=substeps, mode=PLANTS.code(plant),
@@ -205,6 +210,7 @@ def prepare(
         b1=obs.b1, g0=obs.g0, g1=obs.g1, L1=obs.design.L1, L2=obs.design.L2, schedule=schedule,
         estimator_code=estimator_code, v_hat0=v_hat0, f_hat0=f_hat0, controller_code=controller_code,
         kp=kp, ki=ki, kd=kd, tau_d=tau_d, u_max=pl.u_max, lp_phi=lp_phi, lp_g0=lp_g0, lp_g1=lp_g1,
+        comp_gain=comp.gain, comp_viscous=comp.viscous, comp_deadzone=comp.deadzone,
         x_ref=sc.x_ref, u_open=sc.u_open, noise=noise, quantization=sensor.quantization,
     )
 

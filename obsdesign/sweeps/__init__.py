@@ -5,9 +5,16 @@
 :mod:`~obsdesign.sweeps.summary` (the keys of ``summary.json``).
 """
 
-from .run import SweepResult as SweepResult
-from .run import sweep as sweep
-from .summary import SUMMARY_KEYS as SUMMARY_KEYS
-from .summary import make_summary as make_summary
+from .._lazy import lazy_names
+
 
 __all__ = ["SweepResult", "sweep", "SUMMARY_KEYS", "make_summary"]
+
+#: Public name -> module it comes from; loaded on first use (obsdesign._lazy).
+_LAZY = {
+    'SweepResult': '.run',
+    'sweep': '.run',
+    'SUMMARY_KEYS': '.summary',
+    'make_summary': '.summary',
+}
+__getattr__, __dir__ = lazy_names(__name__, _LAZY)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import concurrent.futures
 import json
 import os
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -61,7 +62,8 @@ def metric_columns(scenario: str) -> list[str]:
     """
     cols = ["stable", *_METRIC_KEYS]
     if scenario == "positioning":
-        cols += ["settling_time_1", "settling_time_2", "steady_state_error_1", "steady_state_error_2"]
+        cols += ["settling_time_1", "settling_time_2", "steady_state_error_1", "steady_state_error_2",
+                 "overshoot_1", "overshoot_2", "rise_time_1", "rise_time_2"]
     if scenario == "tracking":
         cols += [band_column(label) for label, _, _ in CHIRP_BAND_LABELS]
     return cols
@@ -93,6 +95,9 @@ def run_one(cfg: Config, scenario: str, spec: RunSpec, options: dict) -> dict:
             row[f"settling_time_{i}"] = value
         for i, value in enumerate(m["steady_state_error"], 1):
             row[f"steady_state_error_{i}"] = value
+        for key in ("overshoot", "rise_time"):
+            for i, value in enumerate(m.get(key, ()), 1):
+                row[f"{key}_{i}"] = value
         for band, value in m.get("rms_error_per_band", {}).items():
             row[band_column(band)] = value
         row["status"] = "diverged" if m["diverged"] else "ok"
@@ -143,7 +148,7 @@ class SweepResult:
 def sweep(cfg: Config, scenario: str, *, vary: dict | None = None, uncertain: dict | None = None,
           samples: int = 1, seed: int = 0, executor=None, workers: int | None = None,
           out_dir: str | os.PathLike | None = None, resume: bool = False, force: bool = False,
-          progress: bool = False, duration: float | None = None, variant: str | None = None,
+          progress: bool | int = False, duration: float | None = None, variant: str | None = None,
           controller: str | None = None, chunk: int = 8) -> SweepResult:
     """Run a design sweep with Monte-Carlo draws.
 
@@ -181,8 +186,9 @@ def sweep(cfg: Config, scenario: str, *, vary: dict | None = None, uncertain: di
         Continue an interrupted sweep in ``out_dir`` (same settings required; every row is checked).
     force : bool
         Replace the results in ``out_dir`` of another sweep.
-    progress : bool
-        Progress bar with ETA (tqdm).
+    progress : bool or int
+        ``True``: progress bar with ETA (tqdm); an integer N >= 1: one line on stderr every N
+        runs (for logs, where a bar would not render); ``False``: quiet.
     duration : float, optional
         The run length [s] (the scenario's default).
     variant : str, optional
@@ -251,7 +257,9 @@ def _execute(run_cfg, scenario, run_options, plan, columns, out, done, executor,
     todo = [spec for spec in plan if spec.run not in done]
     rows: dict[int, dict] = dict(done)
     pool = _Executor(executor, workers)
-    bar = tqdm(total=len(plan), initial=len(done), desc="sweep", unit="run", disable=not progress, smoothing=0.05)
+    every = 0 if isinstance(progress, bool) else check_integer("progress", progress, minimum=1)
+    bar = tqdm(total=len(plan), initial=len(done), desc="sweep", unit="run", disable=progress is not True,
+               smoothing=0.05)
     walls = []
     sink = open(out / "results.csv", "a", encoding="utf-8") if out is not None else None
     sums = open(out / ".checksums", "a", encoding="utf-8") if out is not None else None
@@ -265,6 +273,8 @@ def _execute(run_cfg, scenario, run_options, plan, columns, out, done, executor,
             sums.write(checksum_line(columns, row))
             sums.flush()
         bar.update()
+        if every and ((len(rows) - len(done)) % every == 0 or len(rows) == len(plan)):
+            print(f"sweep: {len(rows)}/{len(plan)} runs, {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
 
     try:
         batches = [todo[i:i + chunk] for i in range(0, len(todo), chunk)] if pool.pool is not None else \

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["SUMMARY_KEYS", "STATUS_VALUES", "best_value", "make_summary", "check_summary"]
+__all__ = ["SUMMARY_KEYS", "STATUS_VALUES", "best_value", "best_with_spread", "make_summary", "check_summary"]
 
 #: Keys of ``summary.json``, in order.
 SUMMARY_KEYS = ("runs", "ok", "diverged", "failed", "resumed_runs", "wall_s", "metric", "best")
@@ -53,6 +53,64 @@ def best_value(rows: list[dict], parameter: str, metric: str = "rms_error") -> t
     return best, means[best]
 
 
+def best_with_spread(rows: list[dict], parameter: str, metric: str = "rms_error") -> dict[str, Any]:
+    """The best value of ``parameter``, the spread of the metric over the samples, and whether the best
+    differs from the runner-up by more than that spread.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Typed rows of a sweep.
+    parameter : str
+        A varied parameter.
+    metric : str
+        A metric column.
+
+    Returns
+    -------
+    dict
+        ``value``, ``mean_metric`` (as :func:`best_value`), ``spread`` (largest standard deviation of
+        the metric over the samples of one value; ``None`` with one sample per value),
+        ``runner_up`` (the second-best value), ``difference`` (its mean minus the best mean) and
+        ``distinguishable``: the difference exceeds twice its standard error
+        ``sqrt(s1^2/n1 + s2^2/n2)`` (``False`` when there is one sample per value, so no spread to
+        compare with, or when a mean is not finite).
+
+    Examples
+    --------
+    >>> rows = [{"rho": r, "rms_error": e, "status": "ok"} for r, e in
+    ...         [(1, 1.0), (1, 1.2), (2, 1.05), (2, 1.15), (3, 2.0), (3, 2.2)]]
+    >>> b = best_with_spread(rows, "rho")
+    >>> b["value"], b["runner_up"], b["distinguishable"]
+    (1, 2, False)
+    """
+    groups: dict[float, list[float]] = {}
+    for row in rows:
+        value = row.get(metric)
+        ok = row["status"] == "ok" and value not in (None, "")
+        groups.setdefault(row[parameter], []).append(float(value) if ok else math.inf)
+    means = {p: float(np.mean(v)) for p, v in groups.items()}
+    order = sorted(means, key=means.get)
+    best = order[0]
+    out: dict[str, Any] = {"value": best, "mean_metric": means[best] if math.isfinite(means[best]) else None,
+                           "spread": None, "runner_up": None, "difference": None, "distinguishable": False}
+    finite = [np.asarray(v) for v in groups.values() if len(v) > 1 and np.all(np.isfinite(v))]
+    if finite:
+        out["spread"] = float(max(np.std(v, ddof=1) for v in finite))
+    if len(order) > 1:
+        second = order[1]
+        out["runner_up"] = second
+        a, b = np.asarray(groups[best]), np.asarray(groups[second])
+        if np.all(np.isfinite(a)) and np.all(np.isfinite(b)):
+            out["difference"] = float(b.mean() - a.mean())
+            if len(a) > 1 and len(b) > 1:
+                stderr = math.sqrt(np.var(a, ddof=1) / len(a) + np.var(b, ddof=1) / len(b))
+                out["distinguishable"] = bool(out["difference"] > 2.0 * stderr)
+        elif np.all(np.isfinite(a)):
+            out["distinguishable"] = True  # the runner-up fails or diverges in some runs
+    return out
+
+
 def make_summary(rows: list[dict], varied, *, metric: str, resumed_runs: int, wall_s: float) -> dict[str, Any]:
     """The ``summary.json`` of a sweep's rows (keys :data:`SUMMARY_KEYS`).
 
@@ -73,8 +131,7 @@ def make_summary(rows: list[dict], varied, *, metric: str, resumed_runs: int, wa
     summary: dict[str, Any] = {"runs": len(rows), **counts, "resumed_runs": resumed_runs, "wall_s": wall_s,
                                "metric": metric, "best": {}}
     for name in varied:
-        value, score = best_value(rows, name, metric)
-        summary["best"][name] = {"value": value, "mean_metric": score if math.isfinite(score) else None}
+        summary["best"][name] = best_with_spread(rows, name, metric)
     return summary
 
 

@@ -15,6 +15,7 @@ Examples
 from __future__ import annotations
 
 import html
+import re
 from typing import TYPE_CHECKING, Any
 
 import sympy as sp
@@ -96,6 +97,67 @@ def derivation_json(d: "Derivation") -> dict[str, Any]:
     }
 
 
+_FENCE = re.compile(r"<mo>([\[\]()])</mo>")
+#: Variables of polynomials printed in descending powers (Laplace ``p``, eigenvalue ``lambda``).
+_POLY_VARIABLES = ("p", "lambda")
+
+
+def _ml(expr) -> str:
+    return sp.mathml(expr, printer="presentation")
+
+
+def _polynomial_ml(expr) -> str:
+    """MathML of ``expr``; a sum that is a polynomial in ``p`` or ``lambda`` in descending powers."""
+    names = {s.name: s for s in getattr(expr, "free_symbols", ())}
+    var = next((names[n] for n in _POLY_VARIABLES if n in names), None)
+    if var is None or not isinstance(expr, sp.Add):
+        return _ml(expr)
+    try:
+        poly = sp.Poly(expr, var)
+    except sp.PolynomialError:
+        return _ml(expr)
+    if poly.degree() < 1:
+        return _ml(expr)
+    parts = []
+    for (deg,), coeff in sorted(poly.terms(), key=lambda term: -term[0][0]):
+        negative = coeff.could_extract_minus_sign()
+        if negative:
+            coeff = -coeff
+        if parts or negative:
+            parts.append("<mo>-</mo>" if negative else "<mo>+</mo>")
+        power = _ml(var**deg) if deg else ""
+        if coeff == 1 and deg:
+            parts.append(power)
+            continue
+        c = _ml(coeff)
+        if isinstance(coeff, sp.Add) and deg:
+            c = f"<mrow><mo>(</mo>{c}<mo>)</mo></mrow>"
+        parts.append(c + (f"<mo>&InvisibleTimes;</mo>{power}" if deg else ""))
+    return "<mrow>" + "".join(parts) + "</mrow>"
+
+
+def _mathml(expr) -> str:
+    """Presentation MathML of a derivation step: equations side by side, rational functions with
+    numerator and denominator in descending powers, brackets that stretch over matrices."""
+    if isinstance(expr, sp.Equality):
+        text = f"<mrow>{_mathml(expr.lhs)}<mo>=</mo>{_mathml(expr.rhs)}</mrow>"
+    elif isinstance(expr, sp.Tuple):
+        text = "<mrow>" + "<mo>,</mo><mspace width='1em'/>".join(_mathml(e) for e in expr) + "</mrow>"
+    elif isinstance(expr, sp.Expr) and not isinstance(expr, sp.MatrixBase):
+        num, den = sp.fraction(expr)
+        if den != 1 and (isinstance(num, sp.Add) or isinstance(den, sp.Add)):
+            text = f"<mfrac><mrow>{_polynomial_ml(num)}</mrow><mrow>{_polynomial_ml(den)}</mrow></mfrac>"
+        else:
+            text = _polynomial_ml(expr)
+    else:
+        text = _ml(expr)
+    text = text.replace("<mo> </mo>", "")  # no gap inside subscripts such as G_(eta f)
+    # Matrix brackets as a styled table (class "bmatrix"): they span every row in any browser,
+    # with or without a MathML font that can stretch "[" and "]".
+    text = text.replace("<mo>[</mo><mtable>", '<mtable class="bmatrix">').replace("</mtable><mo>]</mo>", "</mtable>")
+    return _FENCE.sub(r'<mo fence="true" stretchy="true" symmetric="true">\1</mo>', text)
+
+
 def derivation_html(d: "Derivation") -> str:
     """HTML table of the steps with MathML (SymPy's presentation printer).
 
@@ -106,7 +168,7 @@ def derivation_html(d: "Derivation") -> str:
     """
     rows = []
     for label, title, expr in d.steps:
-        math = sp.mathml(expr, printer="presentation")
+        math = _mathml(expr)
         rows.append(
             f"<tr><td>{html.escape(label or '')}</td><td>{html.escape(title)}</td>"
             f'<td><math xmlns="http://www.w3.org/1998/Math/MathML">{math}</math></td></tr>'
