@@ -408,6 +408,9 @@ def check_stability(cfg: Config, *, rho: float | None = None, kappa: float | Non
     d = design_observer(cfg, rho=rho, kappa=kappa, variant=variant)
     ends = (0.0, d.kappa)
     verdicts, a0_ends, a1 = _interval_verdicts(d)
+    if not all(math.isfinite(x) for x in (*a0_ends, a1, 2.0 * a1 * min(a0_ends), a1 * a1)):
+        raise FloatingPointError(f"the characteristic coefficients overflow (a1 = {a1:.6g}, a0 = {a0_ends[0]:.6g} "
+                                 f"at k = 0, {a0_ends[1]:.6g} at k = kappa)")
     conditions = list(verdicts)
     stable, real_ok = verdicts.stable, verdicts.eigenvalues_real.holds
     eig = {k: d.eigenvalues(k) for k in ends}
