@@ -4,7 +4,7 @@ Every subcommand validates its input where it enters; bad input ends with one
 line on stderr and exit status 2, never a traceback. One module per group of
 commands: :mod:`~obsdesign.cli._design` (derive, check, pid, noise),
 :mod:`~obsdesign.cli._sim` (simulate, sweep), :mod:`~obsdesign.cli._output`
-(export, report); shared argument types in :mod:`~obsdesign.cli._common`.
+(export, report), :mod:`~obsdesign.cli._compare` (compare); shared argument types in :mod:`~obsdesign.cli._common`.
 
 Examples
 --------
@@ -21,7 +21,7 @@ import argparse
 import sys
 from typing import Sequence
 
-from . import _design, _output, _sim
+from . import _compare, _design, _output, _sim
 from ._common import Parser, UsageError
 
 __all__ = ["main", "build_parser", "UsageError"]
@@ -34,6 +34,7 @@ def build_parser() -> argparse.ArgumentParser:
     _design.add_commands(sub)
     _sim.add_commands(sub)
     _output.add_commands(sub)
+    _compare.add_commands(sub)
     return parser
 
 
