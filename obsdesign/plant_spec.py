@@ -31,12 +31,58 @@ from typing import Any, Mapping
 
 from ._validate import FrozenMap, check_choice
 
-__all__ = ["PlantFrictionSpec", "PLANT_FRICTION_MODELS", "PAPER_EXTRA"]
+__all__ = ["PlantFrictionSpec", "PLANT_FRICTION_MODELS", "PAPER_EXTRA", "PLANT_PARAMETER_NAMES", "split_plant",
+           "with_plant_parameters"]
 
 #: Model names, in the order of their kernel codes.
 PLANT_FRICTION_MODELS = ("paper", "lugre", "dahl", "gms")
 #: Parameters the ``paper`` plant takes beyond those of :data:`obsdesign.friction.FRICTION_MODELS`.
 PAPER_EXTRA = ("Cf_neg", "sigma_neg", "offset")
+
+
+#: Parameter names of ``[plant_friction]`` tables of any model (the sweeps' ``plant.NAME``).
+PLANT_PARAMETER_NAMES = frozenset({"Cf_neg", "sigma_neg", "offset", "Fs", "vs", "sigma0", "sigma1", "alpha", "C",
+                                   "N", "K"})
+
+
+def split_plant(params: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Split sweep parameters into design ones and ``plant.``-prefixed ones (prefix removed).
+
+    Parameters
+    ----------
+    params : mapping
+        Parameter name -> value.
+
+    >>> split_plant({"rho": 2.0, "plant.m": 1.0})
+    ({'rho': 2.0}, {'m': 1.0})
+    """
+    design = {k: v for k, v in params.items() if not k.startswith("plant.")}
+    plant = {k[6:]: v for k, v in params.items() if k.startswith("plant.")}
+    return design, plant
+
+
+def with_plant_parameters(cfg, values: Mapping[str, Any], config_fields: Mapping[str, str]):
+    """``cfg`` with config fields overridden and ``[plant_friction]`` parameters set (the plant of a sweep run).
+
+    Parameters
+    ----------
+    cfg : Config
+        The run's design config.
+    values : mapping
+        Plant parameter name (no prefix) -> value.
+    config_fields : mapping
+        :data:`obsdesign.params.PARAMETERS` (names that are config fields; ``K`` is the actuator's).
+    """
+    import dataclasses
+
+    fields = {k: v for k, v in values.items() if k in config_fields}
+    friction = {k: v for k, v in values.items() if k not in config_fields}
+    out = cfg.override(**fields)
+    if friction:
+        own = cfg.plant_friction or PlantFrictionSpec()
+        out = dataclasses.replace(out, plant_friction=PlantFrictionSpec(
+            model=own.model, parameters={**dict(own.parameters), **friction}))
+    return out
 
 
 @dataclass(frozen=True, kw_only=True)

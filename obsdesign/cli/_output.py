@@ -29,7 +29,8 @@ def _cmd_report(args: argparse.Namespace) -> int:
         raise UsageError(f"obsdesign report: argument -o/--output: directory {str(out.parent)!r} does not exist")
     cfg = load(args)
     label = f"config file {args.config}" if args.config else f"preset {cfg.name}"
-    write_report(cfg, out, source_label=label, progress=not args.quiet, sweep_dir=args.sweep)
+    write_report(cfg, out, source_label=label, progress=not args.quiet, sweep_dir=args.sweep,
+                 compare_dir=args.compare)
     print(args.output)
     return 0
 
@@ -49,5 +50,6 @@ def add_commands(sub) -> None:
     add_config_flags(p, default_preset="vcm")
     p.add_argument("-o", "--output", default="report.html", metavar="FILE", help="output file (default report.html)")
     p.add_argument("--sweep", metavar="DIR", help="add the summary of an 'obsdesign sweep' folder")
+    p.add_argument("--compare", metavar="DIR", help="add the results of an 'obsdesign compare' folder")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(run=_cmd_report)

@@ -121,7 +121,7 @@ def _sweep_section(sweep_dir) -> dict | None:
 
 
 def render_report(cfg: Config, *, source_label: str | None = None, progress: bool = False,
-                  sweep_dir=None) -> str:
+                  sweep_dir=None, compare_dir=None) -> str:
     """Render the report of a config as one HTML string.
 
     Parameters
@@ -133,11 +133,16 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
         Show a progress bar (tqdm) on the terminal.
     sweep_dir : path, optional
         A folder written by ``obsdesign sweep``; its summary is added as a section.
+    compare_dir : path, optional
+        A folder written by ``obsdesign compare``; shown in "Comparison with standard estimators".
     """
     from tqdm import tqdm
 
+    from .comparison_section import comparison_section
+
     source_label = source_label or f"preset {cfg.name}"
     sweep_section = _sweep_section(sweep_dir)
+    compare_section = comparison_section(compare_dir)
     variant = cfg.observer.variant
     steps = ["derivation", "stability", "PID", "noise", "convergence (Table 1)", "experiments", "friction loops",
              "noise study", "render"]
@@ -204,6 +209,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     ctx["explorer_params"] = _explorer_params(cfg, variant)
     ctx["explorer_fixed"] = {"sigma": cfg.friction.sigma, "beta": cfg.friction.beta}
     ctx["sweep"] = sweep_section
+    ctx["comparison"] = compare_section
     ctx["elapsed"] = time.perf_counter() - t0
     env = Environment(loader=PackageLoader("obsdesign.report", "templates"), undefined=StrictUndefined,
                       autoescape=select_autoescape(default=True, default_for_string=True))
@@ -216,7 +222,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
 
 
 def write_report(cfg: Config, path: str | os.PathLike, *, source_label: str | None = None,
-                 progress: bool = False, sweep_dir=None) -> None:
+                 progress: bool = False, sweep_dir=None, compare_dir=None) -> None:
     """Render and write the report atomically (temporary file, then rename).
 
     Parameters
@@ -225,7 +231,8 @@ def write_report(cfg: Config, path: str | os.PathLike, *, source_label: str | No
         The design.
     path : str or os.PathLike
         Output HTML file.
-    source_label, progress, sweep_dir : optional
+    source_label, progress, sweep_dir, compare_dir : optional
         As for :func:`render_report`.
     """
-    atomic_write(path, render_report(cfg, source_label=source_label, progress=progress, sweep_dir=sweep_dir))
+    atomic_write(path, render_report(cfg, source_label=source_label, progress=progress, sweep_dir=sweep_dir,
+                                     compare_dir=compare_dir))
