@@ -15,6 +15,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
+import bench_compare  # noqa: E402
 import bench_derive  # noqa: E402
 import bench_sim  # noqa: E402
 import bench_sweep  # noqa: E402
@@ -23,6 +24,7 @@ SUITES = {
     "Symbolic derivation (issue 2)": bench_derive.run,
     "Closed-loop simulator (issue 4)": bench_sim.run,
     "Sweeps (issue 6)": bench_sweep.run,
+    "Estimator comparison (issue 11)": bench_compare.run,
 }
 
 

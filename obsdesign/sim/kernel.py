@@ -174,25 +174,62 @@ def _paper_sigma(v, pp):
 
 
 @njit(cache=True, error_model="numpy")
-def _plant_rhs(x, v, w, u, direction, x_r, f_r, mode, lag_model, m, pp):
+def _plant_rhs(x, v, w, u, direction, x_r, f_r, mode, lag_model, m, Cf, s, sigma, beta, kappa):
     """Derivatives (v', w') of the paper plant; ``w`` is Fv (physical, lag) or w3 (model)."""
     if mode == PLANT_MODEL:
-        sigma, beta = pp[PP_SIGMA], pp[PP_BETA]
-        k = stiffness(x, direction, x_r, f_r, pp[PP_CF], pp[PP_S], pp[PP_KAPPA])
+        k = stiffness(x, direction, x_r, f_r, Cf, s, kappa)
         if lag_model:
             return (u - w) / m, (k + sigma / beta) * v
         return (u - sigma * v - w) / m, k * v
-    fc = _paper_coulomb(x, direction, x_r, f_r, pp)
-    beta = pp[PP_BETA]
+    fc = Cf * coulomb_normalized(x, direction, x_r, f_r, s)
     if beta > 0.0:
-        return (u - fc - pp[PP_OFFSET] - w) / m, (_paper_sigma(v, pp) * v - w) / beta
-    return (u - fc - pp[PP_OFFSET] - _paper_sigma(v, pp) * v) / m, 0.0
+        return (u - fc - w) / m, (sigma * v - w) / beta
+    return (u - fc - sigma * v) / m, 0.0
 
 
 @njit(cache=True, error_model="numpy")
-def _true_friction(x, v, w, direction, x_r, f_r, mode, lag_model, pp, fcode, fst):
-    """The plant's value of the estimated state w3: for ``lag`` the whole friction, for
-    ``static`` the friction less its viscous part (Fc + offset for the paper plant)."""
+def _plant_rhs_asym(x, v, w, u, direction, x_r, f_r, m, Cf, Cf_neg, s, sigma, sigma_neg, beta, offset):
+    """:func:`_plant_rhs` of the physical paper plant with ``Cf_neg``/``sigma_neg`` for the
+    negative side and a constant ``offset`` [N] (a separate loop keeps the symmetric one fast)."""
+    cn = coulomb_normalized(x, direction, x_r, f_r, s)
+    fc = (Cf if cn >= 0.0 else Cf_neg) * cn + offset
+    sg = sigma if v >= 0.0 else sigma_neg
+    if beta > 0.0:
+        return (u - fc - w) / m, (sg * v - w) / beta
+    return (u - fc - sg * v) / m, 0.0
+
+
+@njit(cache=True, error_model="numpy", inline="never")
+def _friction_plant_step(fcode, pp, fst, x, v, u, m, h, n_sub):
+    """``n_sub`` Heun substeps of ``m x'' = u - F`` with a model of :mod:`obsdesign.friction`
+    (``F`` with the state held in both stages, then :func:`friction_advance`)."""
+    for _ in range(n_sub):
+        k1v = (u - friction_force(fcode, pp, fst, x, v)) / m
+        xp = x + h * v
+        vp = v + h * k1v
+        k2v = (u - friction_force(fcode, pp, fst, xp, vp)) / m
+        x += 0.5 * h * (v + vp)
+        v += 0.5 * h * (k1v + k2v)
+        friction_advance(fcode, pp, fst, x, v, h)
+    return x, v
+
+
+@njit(cache=True, error_model="numpy")
+def _true_friction(x, v, w, direction, x_r, f_r, mode, lag_model, Cf, s, sigma, beta):
+    """The plant's value of the estimated state w3 (Fc + Fv for ``lag``, Fc for ``static``)."""
+    if mode == PLANT_MODEL:
+        return w
+    fc = Cf * coulomb_normalized(x, direction, x_r, f_r, s)
+    if not lag_model:
+        return fc
+    return fc + (w if beta > 0.0 else sigma * v)
+
+
+@njit(cache=True, error_model="numpy")
+def _true_friction_other(x, v, w, direction, x_r, f_r, mode, lag_model, pp, fcode, fst):
+    """:func:`_true_friction` of an asymmetric/offset paper plant or of a model of
+    :mod:`obsdesign.friction`: for ``lag`` the whole friction, for ``static`` the friction less
+    its viscous part (Fc + offset for the paper plant)."""
     if fcode != FRICTION_PAPER:
         F = friction_force(fcode, pp, fst, x, v)
         return F if lag_model else F - friction_viscous(fcode, pp, v)
@@ -231,6 +268,12 @@ def run_loop(
     ost = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     fst = np.zeros(max(friction_n_state(fcode, pp), 1))  # the friction state of lugre/dahl/gms
     ez = np.zeros(e_Phi.shape[0])  # state of a linear estimator
+    # the paper plant's parameters as scalars (the hot loop below reads no arrays)
+    Cf_p, Cfn_p, sig_p, sgn_p, off_p, s_p, beta_p, kap_p = pp[0], pp[0], pp[0], pp[0], 0.0, pp[0], pp[0], pp[0]
+    if fcode == FRICTION_PAPER:
+        Cf_p, Cfn_p, sig_p, sgn_p = pp[PP_CF], pp[PP_CF_NEG], pp[PP_SIGMA], pp[PP_SIGMA_NEG]
+        off_p, s_p, beta_p, kap_p = pp[PP_OFFSET], pp[PP_S], pp[PP_BETA], pp[PP_KAPPA]
+    asym = mode == PLANT_PHYSICAL and (Cfn_p != Cf_p or sgn_p != sig_p or off_p != 0.0)
     xm_prev = 0.0
     u_prev = 0.0
     integ = 0.0
@@ -257,7 +300,7 @@ def run_loop(
             k_true = 0.0
             if schedule == SCHEDULE_TRUE:
                 if fcode == FRICTION_PAPER:
-                    k_true = stiffness(x, p_dir, p_xr, p_fr, pp[PP_CF], pp[PP_S], kappa)
+                    k_true = stiffness(x, p_dir, p_xr, p_fr, Cf_p, s_p, kappa)
                 else:
                     k_true = min(friction_stiffness(fcode, pp, fst, x, v), kappa)
             ost, vh, fh, ff, k_now = observer_sample(ost, n, xm, u_prev, k_true, dt, Cf, s, kappa,
@@ -289,7 +332,10 @@ def run_loop(
         out_x[n] = x
         out_xm[n] = xm
         out_v[n] = v
-        out_f[n] = _true_friction(x, v, w, p_dir, p_xr, p_fr, mode, lag_model, pp, fcode, fst)
+        if asym or fcode != FRICTION_PAPER:
+            out_f[n] = _true_friction_other(x, v, w, p_dir, p_xr, p_fr, mode, lag_model, pp, fcode, fst)
+        else:
+            out_f[n] = _true_friction(x, v, w, p_dir, p_xr, p_fr, mode, lag_model, Cf_p, s_p, sig_p, beta_p)
         out_vh[n] = vh
         out_fh[n] = fh
         out_ff[n] = ff
@@ -300,26 +346,33 @@ def run_loop(
             return n + 1
         # 4. plant, Heun (explicit trapezoidal, order 2) substeps with the input held
         if fcode != FRICTION_PAPER:
+            x, v = _friction_plant_step(fcode, pp, fst, x, v, u, m, h, n_sub)
+            u_prev = u
+            continue
+        if asym:
             for _ in range(n_sub):
-                k1v = (u - friction_force(fcode, pp, fst, x, v)) / m
+                k1v, k1w = _plant_rhs_asym(x, v, w, u, p_dir, p_xr, p_fr, m, Cf_p, Cfn_p, s_p, sig_p, sgn_p, beta_p, off_p)
                 xp = x + h * v
                 vp = v + h * k1v
-                k2v = (u - friction_force(fcode, pp, fst, xp, vp)) / m
+                wp = w + h * k1w
+                k2v, k2w = _plant_rhs_asym(xp, vp, wp, u, p_dir, p_xr, p_fr, m, Cf_p, Cfn_p, s_p, sig_p, sgn_p, beta_p,
+                                           off_p)
                 x += 0.5 * h * (v + vp)
                 v += 0.5 * h * (k1v + k2v)
-                friction_advance(fcode, pp, fst, x, v, h)
+                w += 0.5 * h * (k1w + k2w)
+                p_dir, p_xr, p_fr = track_reversal(v, x, p_dir, p_xr, p_fr, s_p)
             u_prev = u
             continue
         for _ in range(n_sub):
-            k1v, k1w = _plant_rhs(x, v, w, u, p_dir, p_xr, p_fr, mode, lag_model, m, pp)
+            k1v, k1w = _plant_rhs(x, v, w, u, p_dir, p_xr, p_fr, mode, lag_model, m, Cf_p, s_p, sig_p, beta_p, kap_p)
             xp = x + h * v
             vp = v + h * k1v
             wp = w + h * k1w
-            k2v, k2w = _plant_rhs(xp, vp, wp, u, p_dir, p_xr, p_fr, mode, lag_model, m, pp)
+            k2v, k2w = _plant_rhs(xp, vp, wp, u, p_dir, p_xr, p_fr, mode, lag_model, m, Cf_p, s_p, sig_p, beta_p, kap_p)
             x += 0.5 * h * (v + vp)
             v += 0.5 * h * (k1v + k2v)
             w += 0.5 * h * (k1w + k2w)
-            p_dir, p_xr, p_fr = track_reversal(v, x, p_dir, p_xr, p_fr, pp[PP_S])
+            p_dir, p_xr, p_fr = track_reversal(v, x, p_dir, p_xr, p_fr, s_p)
         u_prev = u
     return n_samples
 
