@@ -69,7 +69,7 @@ TRANSIENT = 0.5
 #: The metrics each scenario is judged by in the summary (lower is better): the friction
 #: estimate everywhere, and the control result where there is a controller.
 JUDGED = {"excitation": ("friction_rms_error",), "positioning": ("friction_rms_error", "settling_time"),
-          "tracking": ("friction_rms_error", "tracking_rms_error")}
+          "tracking": ("friction_rms_error", "tracking_rms_error"), "data": ("friction_rms_error",)}
 
 
 def plant_config(cfg: Config, model: str) -> Config:
@@ -217,7 +217,8 @@ def summarize(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     out = []
     plants = list(dict.fromkeys(r["plant"] for r in rows))
     scenarios = list(dict.fromkeys(r["scenario"] for r in rows))
-    cases = [(p, s, m) for p in plants for s in scenarios for m in JUDGED[s]]
+    present = {(r["plant"], r["scenario"]) for r in rows}
+    cases = [(p, s, m) for p in plants for s in scenarios if (p, s) in present for m in JUDGED[s]]
     for plant, scenario, metric in cases:
         stats = []
         for est in dict.fromkeys(r["estimator"] for r in rows):

@@ -118,3 +118,35 @@ def test_cli_bad_input_is_one_line(tmp_path, capsys, argv, message):
 def test_report_section_rejects_a_foreign_folder(tmp_path):
     with pytest.raises(ValueError, match="compare: expected a folder written by 'obsdesign compare'"):
         comparison_section(tmp_path)
+
+
+def _synthetic_trace(tmp_path):
+    """A noise-free axis with known Coulomb-viscous friction and an offset (as docs/measured-data.md)."""
+    dt = 1e-3
+    t = np.arange(20_000) * dt
+    x = 0.05 * np.sin(2 * np.pi * 0.5 * t) + 0.01 * np.sin(2 * np.pi * 2.3 * t)
+    v = np.gradient(x, dt)
+    u_volt = (2.0 * np.gradient(v, dt) + 30.0 * v + 1.5 * np.sign(v) - 0.4) / 4.0
+    path = tmp_path / "axis.csv"
+    np.savetxt(path, np.column_stack([t, x, u_volt]), delimiter=",", header="t,x,u_volt", comments="")
+    return path
+
+
+def test_data_rows_follow_the_identified_friction(tmp_path):
+    from obsdesign.comparison_data import compare_data
+    from obsdesign.data import load_trace
+
+    trace = load_trace(_synthetic_trace(tmp_path), position="x", input="u_volt", time="t", input_gain=4.0)
+    rows = {r["estimator"]: r for r in compare_data(trace, estimators=("paper", "kalman"))}
+    for name in ("paper", "kalman"):
+        assert rows[name]["status"] == "ok" and rows[name]["scenario"] == "data"
+        # Coulomb level 1.5 N, offset -0.4 N. The estimates lag the sign jumps at the reversals (about
+        # 0.37 N RMS); leaving the offset in the force adds 0.4 N (sqrt(0.37^2 + 0.4^2) = 0.54 N)
+        assert rows[name]["friction_rms_error"] < 0.45
+        assert rows[name]["velocity_rms_error"] < 0.02 * np.sqrt(np.mean(np.gradient(trace.position, 1e-3) ** 2))
+
+
+def test_cli_data_needs_column_names(tmp_path, capsys):
+    assert main(["compare", "--data", str(_synthetic_trace(tmp_path)), "--out", str(tmp_path / "cmp")]) == 2
+    assert "needs --position NAME and --input NAME" in capsys.readouterr().err
+    assert not (tmp_path / "cmp").exists()

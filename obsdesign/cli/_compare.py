@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from ._common import UsageError, add_config_flags, integer, load
+from ._common import FINITE_ARG, POSITIVE_ARG, UsageError, add_config_flags, integer, load
 
 __all__ = ["add_commands", "parse_list", "summary_text"]
 
@@ -80,12 +80,18 @@ def _cmd_compare(args: argparse.Namespace) -> int:
         raise UsageError(f"obsdesign compare: argument --out: expected a directory, found the file {args.out!r}")
     if not out.parent.is_dir():
         raise UsageError(f"obsdesign compare: argument --out: directory {str(out.parent)!r} does not exist")
-    if args.data is not None:
-        raise UsageError("obsdesign compare: argument --data: offline rows on measured data are not implemented yet")
     plants = parse_list("--plants", args.plants, _PLANTS)
     estimators = parse_list("--estimators", args.estimators, _ESTIMATORS)
     scenarios = parse_list("--scenarios", args.scenarios, _SCENARIOS)
     cfg = load(args)
+    trace = None
+    if args.data is not None:
+        if args.position is None or args.input is None:
+            raise UsageError("obsdesign compare: argument --data: needs --position NAME and --input NAME")
+        from ..data import load_trace
+
+        trace = load_trace(args.data, position=args.position, input=args.input, time=args.time,
+                           sample_time=args.sample_time, input_gain=args.input_gain)
 
     from .._format import jsonable
     from .._io import atomic_write
@@ -96,13 +102,19 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
     res = compare(cfg, plants=plants, estimators=estimators, scenarios=scenarios, seeds=args.seeds,
                   workers=args.workers)
-    summary = res.summary()
+    rows = list(res.rows)
+    if trace is not None:
+        from ..comparison import summarize
+        from ..comparison_data import compare_data
+
+        rows += compare_data(trace, estimators=estimators)
+    summary = summarize(rows)
     out.mkdir(exist_ok=True)
-    atomic_write(out / "compare.csv", csv_text(list(COLUMNS), res.rows))
-    payload = {"config": cfg.name, "seeds": res.seeds, "runs": len(res.rows), "wall_s": res.wall_s,
+    atomic_write(out / "compare.csv", csv_text(list(COLUMNS), rows))
+    payload = {"config": cfg.name, "seeds": res.seeds, "runs": len(rows), "wall_s": res.wall_s,
                "summary": summary}
     atomic_write(out / "summary.json", json.dumps(jsonable(payload), indent=1, allow_nan=False))
-    save_figure(comparison_figure(res.rows), out / "compare.svg")
+    save_figure(comparison_figure(rows), out / "compare.svg")
     if args.json:
         print(json.dumps(jsonable(payload), allow_nan=False))
     else:
@@ -120,7 +132,13 @@ def add_commands(sub) -> None:
     p.add_argument("--scenarios", default=",".join(_SCENARIOS), help=f"scenarios (default {','.join(_SCENARIOS)})")
     p.add_argument("--seeds", type=integer(1), default=2, help="seeds per case (default 2)")
     p.add_argument("--workers", type=integer(1), help="local processes (default: all cores)")
-    p.add_argument("--data", metavar="FILE", help="measured trace for offline rows (not implemented yet)")
+    p.add_argument("--data", metavar="FILE", help="measured trace (.csv/.mat): adds offline rows, friction error "
+                   "against the model identified from it (docs/comparison.md)")
+    p.add_argument("--position", metavar="NAME", help="--data: displacement column [m]")
+    p.add_argument("--input", metavar="NAME", help="--data: actuator input column")
+    p.add_argument("--time", metavar="NAME", help="--data: time column [s]")
+    p.add_argument("--sample-time", type=POSITIVE_ARG, help="--data: sample time [s] (without --time)")
+    p.add_argument("--input-gain", type=FINITE_ARG, default=1.0, help="--data: force per input unit [N/unit]")
     p.add_argument("--out", required=True, metavar="DIR", help="folder for compare.csv, summary.json, compare.svg")
     p.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     p.set_defaults(run=_cmd_compare)
