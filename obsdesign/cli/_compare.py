@@ -95,7 +95,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
     from .._format import jsonable
     from .._io import atomic_write
-    from ..comparison import COLUMNS, compare
+    from ..comparison import COLUMNS, compare, summarize
     from ..report.comparison_section import comparison_figure
     from ..report.figures import save_figure
     from ..sweeps.store import csv_text
@@ -104,7 +104,6 @@ def _cmd_compare(args: argparse.Namespace) -> int:
                   workers=args.workers)
     rows = list(res.rows)
     if trace is not None:
-        from ..comparison import summarize
         from ..comparison_data import compare_data
 
         rows += compare_data(trace, estimators=estimators)
