@@ -24,7 +24,7 @@ Examples
 --------
 >>> import obsdesign as od
 >>> res = compare(od.load_preset("vcm"), plants=("paper",), estimators=("paper", "eso"),
-...               scenarios=("excitation",), workers=1)
+...               scenarios=("excitation",), seeds=1, workers=1)
 >>> [(r["estimator"], r["status"]) for r in res.rows]
 [('paper', 'ok'), ('eso', 'ok')]
 """
