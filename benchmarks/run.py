@@ -17,6 +17,7 @@ sys.path.insert(0, str(HERE))
 
 import bench_data  # noqa: E402
 import bench_cli  # noqa: E402
+import bench_compare  # noqa: E402
 import bench_derive  # noqa: E402
 import bench_sim  # noqa: E402
 import bench_sweep  # noqa: E402
@@ -27,6 +28,7 @@ SUITES = {
     "Sweeps (issue 6)": bench_sweep.run,
     "Measured data (issue 10)": bench_data.run,
     "Command-line start-up (issue 13)": bench_cli.run,
+    "Estimator comparison (issue 11)": bench_compare.run,
 }
 
 

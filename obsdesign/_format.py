@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-__all__ = ["short", "with_unit", "report", "csv_field", "code_literal", "jsonable"]
+__all__ = ["short", "with_unit", "report", "csv_field", "code_literal", "jsonable", "toml_value"]
 
 
 def short(value: object) -> str:
@@ -86,3 +86,40 @@ def jsonable(value):
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
+
+
+def toml_value(value) -> str:
+    """A TOML literal: booleans, integers, lists, floats (``repr``) and strings as basic strings
+    with every control character escaped, so that ``tomllib`` reads back the same value.
+
+    Parameters
+    ----------
+    value : bool, int, float, str or list
+        The value.
+
+    Examples
+    --------
+    >>> import tomllib
+    >>> toml_value(True), toml_value([1, 2.5])
+    ('true', '[1, 2.5]')
+    >>> text = 'a"b' + chr(10) + chr(0)
+    >>> tomllib.loads("x = " + toml_value(text))["x"] == text
+    True
+    """
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, list):
+        return "[" + ", ".join(toml_value(v) for v in value) + "]"
+    if isinstance(value, int) and not isinstance(value, bool):
+        return str(value)
+    if isinstance(value, str):
+        out = []
+        for ch in value:
+            if ch == "\\" or ch == '"':
+                out.append("\\" + ch)
+            elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+                out.append(f"\\u{ord(ch):04x}")
+            else:
+                out.append(ch)
+        return '"' + "".join(out) + '"'
+    return repr(float(value))

@@ -35,7 +35,9 @@ from typing import Any, Mapping, NamedTuple
 
 from ._io import atomic_write
 from .compensation import CompensationSpec
+from ._format import toml_value
 from ._validate import FINITE, NONNEGATIVE, POSITIVE, Choice, FrozenMap, Range, Text
+from .plant_spec import PlantFrictionSpec
 
 __all__ = [
     "PlantParams",
@@ -236,9 +238,12 @@ class Config:
     sensor: SensorSpec = field(default_factory=SensorSpec)
     compensation: CompensationSpec = field(default_factory=CompensationSpec)
     sources: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
+    plant_friction: PlantFrictionSpec | None = None  # [plant_friction]: the simulated plant's model
 
     def __post_init__(self) -> None:
         _validate_fields(self)
+        if not isinstance(self.plant_friction, (PlantFrictionSpec, type(None))):
+            raise TypeError(f"config.plant_friction: expected PlantFrictionSpec or None, found {self.plant_friction!r}")
         object.__setattr__(self, "sources", FrozenMap(_check_sources(self.sources)))
         for key, cls in _SECTIONS.items():
             value = getattr(self, key)
@@ -298,7 +303,7 @@ class Config:
         """
         if not isinstance(data, dict):
             raise TypeError(f"{source}: expected a table, found {type(data).__name__}")
-        allowed = set(_SECTIONS) | {"name", "sources"}
+        allowed = set(_SECTIONS) | {"name", "sources", "plant_friction"}
         unknown = sorted(set(data) - allowed)
         if unknown:
             raise ValueError(
@@ -309,6 +314,8 @@ class Config:
             kwargs["name"] = data["name"]
         if "sources" in data:
             kwargs["sources"] = data["sources"]
+        if "plant_friction" in data:
+            kwargs["plant_friction"] = PlantFrictionSpec.from_dict(data["plant_friction"])
         for key, section in _SECTIONS.items():
             table = data.get(key)
             if table is None:
@@ -351,22 +358,27 @@ class Config:
                 for f in dataclasses.fields(section)
                 if getattr(section, f.name) is not None
             }
+        if self.plant_friction is not None:
+            out["plant_friction"] = self.plant_friction.to_dict()
         return out
 
     def to_toml(self) -> str:
         """Serialise to TOML; ``Config.from_toml(c.to_toml()) == c``."""
-        lines = [f"name = {_toml_value(self.name)}"]
+        lines = [f"name = {toml_value(self.name)}"]
         for key, table in self.to_dict().items():
-            if key in ("name", "sources"):
+            if key in ("name", "sources", "plant_friction"):
                 continue
             section = getattr(self, key)
             meta = {f.name: f.metadata for f in dataclasses.fields(section)}
             lines += ["", f"[{key}]"]
             for name, value in table.items():
-                lines.append(f"{name} = {_toml_value(value)}  # [{meta[name]['unit']}] {meta[name]['doc']}")
+                lines.append(f"{name} = {toml_value(value)}  # [{meta[name]['unit']}] {meta[name]['doc']}")
+        if self.plant_friction is not None:
+            lines += ["", "[plant_friction]  # the simulated plant's friction model (docs/comparison.md)"]
+            lines += [f"{k} = {toml_value(v)}" for k, v in self.plant_friction.to_dict().items()]
         if self.sources:
             lines += ["", "[sources]  # where each value comes from"]
-            lines += [f"{_toml_value(k)} = {_toml_value(v)}" for k, v in self.sources.items()]
+            lines += [f"{toml_value(k)} = {toml_value(v)}" for k, v in self.sources.items()]
         return "\n".join(lines) + "\n"
 
     def save(self, path: str | os.PathLike) -> None:
@@ -419,23 +431,6 @@ def _check_sources(sources: Any) -> dict[str, str]:
         if not isinstance(value, str):
             raise TypeError(f"sources.{key}: expected a string, found {type(value).__name__} {value!r}")
     return dict(sources)
-
-
-def _toml_value(value: Any) -> str:
-    """A TOML literal: strings as basic strings with every control character escaped."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        out = []
-        for ch in value:
-            if ch == "\\" or ch == '"':
-                out.append("\\" + ch)
-            elif ord(ch) < 0x20 or ord(ch) == 0x7F:
-                out.append(f"\\u{ord(ch):04x}")
-            else:
-                out.append(ch)
-        return '"' + "".join(out) + '"'
-    return repr(float(value))
 
 
 def preset_names() -> tuple[str, ...]:

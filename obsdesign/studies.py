@@ -130,7 +130,8 @@ def convergence_study(cfg: Config | None = None, *, seeds: int = 5, duration: fl
     excitation = {}
     for rho in (0.98, 1.02):
         for seed in range(seeds):
-            res = simulate(cfg.override(rho=rho), "excitation", plant="model", seed=seed, duration=duration)
+            res = simulate(cfg.override(rho=rho), "excitation", plant="model", seed=seed, duration=duration,
+                           stiffness="estimated-raw")
             err = res.f_hat_filtered - res.f
             excitation[(rho, seed)] = (float(np.sqrt(np.nanmean(err[res.t > 1.0] ** 2))),
                                        _first_exceed(err, threshold, dt))
@@ -140,7 +141,7 @@ def convergence_study(cfg: Config | None = None, *, seeds: int = 5, duration: fl
     for rho in (0.98, 1.02):
         for seed in range(seeds):
             res = simulate(cfg.override(variant="static", rho=rho), Excitation(bandwidth=0.2), seed=seed,
-                           duration=duration)
+                           duration=duration, stiffness="estimated-raw")
             slow[(rho, seed)] = _first_exceed(res.f_hat_filtered - res.f, threshold, dt)
     long_runs = {}
     for noise in noise_levels:
@@ -210,9 +211,9 @@ def experiments_study(cfg: Config | None = None) -> ExperimentsStudy:
     cfg = cfg or load_preset("vcm")
     pos, trk, runs = {}, {}, {}
     for ctrl in ("pid", "pid+observer"):
-        runs[("positioning", ctrl)] = r = simulate(cfg, "positioning", controller=ctrl)
+        runs[("positioning", ctrl)] = r = simulate(cfg, "positioning", controller=ctrl, stiffness="estimated-raw")
         pos[ctrl] = r.metrics
-        runs[("tracking", ctrl)] = r = simulate(cfg, "tracking", controller=ctrl)
+        runs[("tracking", ctrl)] = r = simulate(cfg, "tracking", controller=ctrl, stiffness="estimated-raw")
         trk[ctrl] = r.metrics
     faster = all(a is not None and (b is None or a < b)
                  for a, b in zip(pos["pid+observer"]["settling_time"], pos["pid"]["settling_time"]))
@@ -272,7 +273,7 @@ def friction_loops_study(cfg: Config | None = None) -> FrictionLoopsStudy:
     import scipy.signal
 
     cfg = cfg or load_preset("vcm")
-    res = simulate(cfg, "positioning", controller="pid+observer")
+    res = simulate(cfg, "positioning", controller="pid+observer", stiffness="estimated-raw")
     w, dt = cfg.observer.omega_co, cfg.observer.dt
     b, a = scipy.signal.cont2discrete(([w * w], [1, 2 * w, w * w]), dt, method="bilinear")[:2]
     v_f = scipy.signal.lfilter(np.ravel(b), a, res.v_hat)

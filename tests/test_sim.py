@@ -236,7 +236,7 @@ def test_band_limited_noise_has_no_power_above_its_band():
         (dict(scenario="walk"), ValueError, r"scenario: expected one of excitation, constant, positioning, tracking, found 'walk'"),
         (dict(scenario="constant", controller="pid"), ValueError, r"controller: scenario 'constant' needs 'open-loop', found 'pid'"),
         (dict(scenario="tracking", controller="lqr"), ValueError, r"controller: expected one of open-loop, pid, pid\+observer, found 'lqr'"),
-        (dict(scenario="constant", stiffness="guess"), ValueError, r"stiffness: expected one of estimated, true, constant, found 'guess'"),
+        (dict(scenario="constant", stiffness="guess"), ValueError, r"stiffness: expected one of estimated, true, constant, estimated-raw, found 'guess'"),
         (dict(scenario="constant", plant="real"), ValueError, r"plant: expected one of physical, model, found 'real'"),
         (dict(scenario="constant", duration=-1.0), ValueError, r"duration: expected a finite number > 0, found -1\.0"),
         (dict(scenario=od.sim.Positioning(step_up=4.0)), ValueError, r"step_down: expected step_up < step_down < duration"),

@@ -15,7 +15,8 @@ from __future__ import annotations
 import argparse
 import dataclasses
 
-from ..params import _SECTIONS, _toml_value
+from .._format import toml_value as _toml_value
+from ..params import _SECTIONS
 from ._common import add_config_flags, load
 
 __all__ = ["add_commands", "config_toml"]
@@ -62,6 +63,9 @@ def config_toml(cfg, *, label: str | None = None) -> str:
                 source = cfg.source_of(f"{key}.{f.name}")
                 note = f"; source: {_comment(source)}" if source else ""
                 lines.append(f"{f.name} = {_toml_value(value)}  # [{unit}] {doc}{note}")
+    if cfg.plant_friction is not None:
+        lines += ["", "[plant_friction]  # the simulated plant's friction model (docs/friction-models.md)"]
+        lines += [f"{k} = {_toml_value(v)}" for k, v in cfg.plant_friction.to_dict().items()]
     if cfg.sources:
         lines += ["", "[sources]  # where each value comes from (dropped for a value that is overridden)"]
         lines += [f"{_toml_value(k)} = {_toml_value(v)}" for k, v in cfg.sources.items()]

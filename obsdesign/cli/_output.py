@@ -44,7 +44,8 @@ def _cmd_report(args: argparse.Namespace) -> int:
     cfg = load(args)
     trace = load_trace_args(args, args.data) if args.data else None
     label = f"config file {args.config}" if args.config else f"preset {cfg.name}"
-    write_report(cfg, out, source_label=label, progress=not args.quiet, sweep_dir=args.sweep, data=trace)
+    write_report(cfg, out, source_label=label, progress=not args.quiet, sweep_dir=args.sweep, data=trace,
+                 compare_dir=args.compare)
     print(args.output)
     return 0
 
@@ -69,6 +70,7 @@ def add_commands(sub) -> None:
     add_config_flags(p, default_preset="vcm")
     p.add_argument("-o", "--output", default="report.html", metavar="FILE", help="output file (default report.html)")
     p.add_argument("--sweep", metavar="DIR", help="add the summary of an 'obsdesign sweep' folder")
+    p.add_argument("--compare", metavar="DIR", help="add the results of an 'obsdesign compare' folder")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--data", metavar="FILE", help="add 'Validation on measured data' for a record (.csv or .mat)")
     add_trace_flags(p, required=False)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from .._validate import parse_number
 from ..params import VARIANTS
-from ..sim.registry import CONTROLLERS, PLANTS, SCHEDULES
+from ..sim.registry import CONTROLLERS, ESTIMATORS, PLANTS, SCHEDULES
 from ..sim.scenarios import DEFAULT_DURATION, SCENARIOS
 from ._common import (FINITE_ARG, NONNEGATIVE_ARG, POSITIVE_ARG, UsageError, add_config_flags, add_design_flags,
                       check_output_file, check_runs, check_samples, emit, integer, load, print_warnings)
@@ -47,8 +47,15 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     options = {field: getattr(args, flag) for flag, field in _SPEC_FLAGS[args.scenario].items()
                if getattr(args, flag) is not None}
     spec = type(scenario_spec(args.scenario))(**options)
+    if args.plant_config is not None:
+        if plant != "physical":
+            raise UsageError("obsdesign simulate: argument --plant-config: needs --plant physical, "
+                             f"found --plant {plant}")
+        from ..params import load_config
+
+        plant = load_config(args.plant_config)
     loop = prepare(cfg, spec, controller=args.controller, stiffness=args.stiffness, plant=plant,
-                   duration=args.duration, seed=args.seed, settle_tol=args.settle_tol)
+                   estimator=args.estimator, duration=args.duration, seed=args.seed, settle_tol=args.settle_tol)
     clipped = saturation_warning(loop)
     print_warnings((*design_warnings(cfg), *([clipped] if clipped else [])))  # after prepare's refusals, before the run
     res = run(loop, keep_trace=bool(args.out or args.plot))
@@ -223,6 +230,11 @@ def add_commands(sub) -> None:
     p.add_argument("--plant", choices=PLANTS.names(),
                    help="physical (Coulomb with pre-sliding memory + viscous friction) or model (the LTV model "
                         "eq:3:1 of the variant); default: model for variant lag, physical for static")
+    p.add_argument("--plant-config", metavar="FILE",
+                   help="simulate the plant of this TOML config (mass, gain, load, friction, [plant_friction]); "
+                        "observer and controller stay designed from --preset/--config")
+    p.add_argument("--estimator", choices=ESTIMATORS.names(), default="paper",
+                   help="estimator in the loop (default paper; baselines tuned by the fair noise rule)")
     p.add_argument("--noise-rms", type=NONNEGATIVE_ARG, help="measurement noise RMS [m]")
     p.add_argument("--noise-bandwidth", type=POSITIVE_ARG, help="measurement noise bandwidth [Hz]")
     p.add_argument("--quantization", type=NONNEGATIVE_ARG, help="encoder resolution [m] (0: none)")

@@ -164,7 +164,7 @@ def _with_csp(html: str) -> str:
 
 
 def render_report(cfg: Config, *, source_label: str | None = None, progress: bool = False,
-                  sweep_dir=None, data=None) -> str:
+                  sweep_dir=None, data=None, compare_dir=None) -> str:
     """Render the report of a config as one HTML string.
 
     Parameters
@@ -179,11 +179,16 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     data : Trace, optional
         A measured trace; adds "Validation on measured data"
         (:func:`obsdesign.report.data_section.data_section`).
+    compare_dir : path, optional
+        A folder written by ``obsdesign compare``; shown in "Comparison with standard estimators".
     """
     from tqdm import tqdm
 
+    from .comparison_section import comparison_section
+
     source_label = source_label or f"preset {cfg.name}"
     sweep_section = _sweep_section(sweep_dir)
+    compare_section = comparison_section(compare_dir)
     variant = cfg.observer.variant
     steps = ["derivation", "stability", "PID and loop", "noise", "convergence (Table 1)", "experiments", "friction loops",
              "noise study", "render"]
@@ -255,6 +260,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     ctx["explorer_fixed"] = {"sigma": cfg.friction.sigma, "beta": cfg.friction.beta}
     ctx["sweep"] = sweep_section
     ctx["data"] = data_section(data) if data is not None else None
+    ctx["comparison"] = compare_section
     ctx["elapsed"] = time.perf_counter() - t0
     env = Environment(loader=PackageLoader("obsdesign.report", "templates"), undefined=StrictUndefined,
                       autoescape=select_autoescape(default=True, default_for_string=True))
@@ -268,7 +274,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
 
 
 def write_report(cfg: Config, path: str | os.PathLike, *, source_label: str | None = None,
-                 progress: bool = False, sweep_dir=None, data=None) -> None:
+                 progress: bool = False, sweep_dir=None, data=None, compare_dir=None) -> None:
     """Render and write the report atomically (temporary file, then rename).
 
     Parameters
@@ -277,8 +283,8 @@ def write_report(cfg: Config, path: str | os.PathLike, *, source_label: str | No
         The design.
     path : str or os.PathLike
         Output HTML file.
-    source_label, progress, sweep_dir, data : optional
+    source_label, progress, sweep_dir, data, compare_dir : optional
         As for :func:`render_report`.
     """
     atomic_write(path, render_report(cfg, source_label=source_label, progress=progress, sweep_dir=sweep_dir,
-                                     data=data))
+                                     data=data, compare_dir=compare_dir))

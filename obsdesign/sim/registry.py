@@ -9,13 +9,13 @@ command line, the kernel and the report.
 Examples
 --------
 >>> ESTIMATORS.names()
-('paper', 'paper-k0')
+('paper', 'paper-k0', 'eso', 'kalman', 'dob')
 >>> SCHEDULES.code("true")
 1
 >>> SCHEDULES.code("guess")
 Traceback (most recent call last):
 ...
-ValueError: stiffness: expected one of estimated, true, constant, found 'guess'
+ValueError: stiffness: expected one of estimated, true, constant, estimated-raw, found 'guess'
 """
 
 from __future__ import annotations
@@ -87,12 +87,21 @@ class Registry(Mapping):
         return {name: entry.doc for name, entry in self._entries.items()}
 
 
-#: Friction models of the simulated plant (``[plant_friction]`` in a config, later).
+#: Friction models of the simulated plant (``[plant_friction]`` in a config; codes of
+#: :mod:`obsdesign.friction`). Each also takes ``Cf_neg``, ``sigma_neg`` and ``offset``.
 PLANT_FRICTION = Registry("plant_friction", [
     Entry("paper", 0, "Coulomb friction with pre-sliding memory (eq:2:3:1-2:3:5) plus viscous friction "
           "sigma v, with the first-order lag beta of eq:2:2:2 when friction.beta is set",
           (("Cf", "N", "Coulomb friction level"), ("sigma", "N s/m", "viscous friction coefficient"),
            ("s", "1/m", "pre-sliding distance scaling factor"), ("beta", "s", "viscous friction lag"))),
+    Entry("lugre", 1, "LuGre bristle model with a Stribeck curve (Canudas de Wit et al. 1995)",
+          (("Fs", "N", "stiction level (default 1.5 Cf)"), ("vs", "m/s", "Stribeck velocity"),
+           ("sigma0", "N/m", "bristle stiffness"), ("sigma1", "N s/m", "bristle damping"))),
+    Entry("dahl", 2, "Dahl rate-independent pre-sliding model (Dahl 1968)",
+          (("sigma0", "N/m", "rest stiffness"), ("alpha", "-", "shape exponent"))),
+    Entry("gms", 3, "generalized Maxwell-slip model with N elements (Al-Bender et al. 2005)",
+          (("N", "-", "number of elements"), ("K", "N/m", "total element stiffness"),
+           ("C", "N/s", "attraction parameter"), ("Fs", "N", "stiction level (default 1.5 Cf)"))),
 ])
 
 #: Estimators of velocity and friction run in the closed loop.
@@ -100,13 +109,19 @@ ESTIMATORS = Registry("estimator", [
     Entry("paper", 0, "the paper's reduced-order observer with its stiffness schedule (eq:3:1:2, Prop. 2)"),
     Entry("paper-k0", 1, "the same gains with the schedule off (k = 0 always: a linear reduced-order "
           "observer), the ablation of the pre-sliding schedule"),
+    Entry("eso", 2, "linear extended state observer, poles at -omega_o, tuned by the fair noise rule"),
+    Entry("kalman", 3, "steady-state Kalman filter with a random-walk friction, tuned by the fair noise rule"),
+    Entry("dob", 4, "disturbance observer with Q = omega_q^2/(s + omega_q)^2, tuned by the fair noise rule"),
 ])
 
 #: Stiffness schedules of the paper's observer.
 SCHEDULES = Registry("stiffness", [
-    Entry("estimated", 0, "pre-sliding branch driven by the measured displacement and reversals of v_hat"),
+    Entry("estimated", 0, "pre-sliding branch driven by the measured displacement; a reversal is accepted once "
+          "the displacement has come back from its extreme by more than 4 noise RMS (sensor.noise_rms)"),
     Entry("true", 1, "the simulated plant's stiffness (for analysis)"),
     Entry("constant", 2, "kappa always"),
+    Entry("estimated-raw", 3, "pre-sliding branch with reversals at every sign change of v_hat (no hysteresis; "
+          "the paper's reproductions)"),
 ])
 
 #: Controllers of the loop.

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from .._validate import FINITE, POSITIVE, check_integer
+from ..estimators import DiscreteEstimator, tune
 from ..design.observer import design_observer
 from ..design.pid import pid_gains
 from ..params import Config
@@ -37,17 +38,24 @@ from . import kernel
 from ..design.discretize import lowpass_arrays
 from .metrics import loop_metrics
 from .numerics import step_is_stable, substeps_for
+from ..friction.registry import FRICTION_MODELS
 from .registry import CONTROLLERS, ESTIMATORS, PLANTS, SCHEDULES
 from .result import SimResult
 from .scenarios import Scenario, band_limited_noise, build_scenario, scenario_spec
 
-__all__ = ["LoopInputs", "KERNEL_ARGS", "prepare", "run", "simulate"]
+__all__ = ["LoopInputs", "KERNEL_ARGS", "REVERSAL_NOISE_FACTOR", "prepare", "run", "simulate",
+           "plant_friction_arrays"]
 
 #: The arguments of :func:`obsdesign.sim.kernel.run_loop` before its output arrays, in order.
 KERNEL_ARGS = ("dt", "n_sub", "mode", "lag_model", "m", "K", "G", "Cf", "s", "sigma", "beta", "kappa",
                "A0", "A1", "b0", "b1", "g0", "g1", "L1", "L2", "schedule", "estimator_code", "v_hat0", "f_hat0",
                "controller_code", "kp", "ki", "kd", "tau_d", "u_max", "lp_phi", "lp_g0", "lp_g1",
-               "comp_gain", "comp_viscous", "comp_deadzone", "x_ref", "u_open", "noise", "quantization")
+               "comp_gain", "comp_viscous", "comp_deadzone", "x_ref", "u_open", "noise", "quantization",
+               "friction_code", "plant_params", "K_plant", "G_plant", "reversal_threshold",
+               "e_Phi", "e_gu", "e_g0", "e_g1", "e_Cz", "e_d", "e_init")
+
+#: Hysteresis of the ``estimated`` schedule in units of the sensor's noise RMS (docs/comparison.md).
+REVERSAL_NOISE_FACTOR = 4.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -102,6 +110,19 @@ class LoopInputs:
     u_open: np.ndarray = field(repr=False)
     noise: np.ndarray = field(repr=False)
     quantization: float
+    friction_code: int = 0
+    plant_params: np.ndarray = field(repr=False, default=None)
+    K_plant: float = 0.0
+    G_plant: float = 0.0
+    reversal_threshold: float = 0.0
+    e_Phi: np.ndarray = field(repr=False, default=None)
+    e_gu: np.ndarray = field(repr=False, default=None)
+    e_g0: np.ndarray = field(repr=False, default=None)
+    e_g1: np.ndarray = field(repr=False, default=None)
+    e_Cz: np.ndarray = field(repr=False, default=None)
+    e_d: np.ndarray = field(repr=False, default=None)
+    e_init: np.ndarray = field(repr=False, default=None)
+    plant_config: Config | None = field(repr=False, default=None)
 
     @property
     def n_samples(self) -> int:
@@ -119,8 +140,8 @@ def prepare(
     *,
     controller: str | None = None,
     stiffness: str = "estimated",
-    plant: str = "physical",
-    estimator: str = "paper",
+    plant: "str | Config" = "physical",
+    estimator: "str | DiscreteEstimator" = "paper",
     duration: float | None = None,
     seed: int = 0,
     settle_tol: float = 2e-6,
@@ -139,13 +160,19 @@ def prepare(
         ``Positioning(step_size=2e-3)`` (see :mod:`obsdesign.sim.scenarios`).
     controller : {'open-loop', 'pid', 'pid+observer'}, optional
         Default ``open-loop`` for ``excitation``/``constant``, ``pid+observer`` otherwise.
-    stiffness : {'estimated', 'true', 'constant'}
-        Stiffness schedule of the observer.
-    plant : {'physical', 'model'}
-        ``physical``: Coulomb with pre-sliding memory and viscous friction (with lag when
-        ``friction.beta`` is set). ``model``: the 3-state LTV model eq:3:1 of the variant.
-    estimator : {'paper', 'paper-k0'}
-        The estimator of :data:`obsdesign.sim.registry.ESTIMATORS`.
+    stiffness : {'estimated', 'true', 'constant', 'estimated-raw'}
+        Stiffness schedule of the observer (``estimated``: with a reversal hysteresis of
+        :data:`REVERSAL_NOISE_FACTOR` times ``sensor.noise_rms``; ``estimated-raw``: none).
+    plant : {'physical', 'model'} or Config
+        ``physical``: the friction model of ``cfg``'s ``[plant_friction]`` (default: Coulomb with
+        pre-sliding memory and viscous friction, with lag when ``friction.beta`` is set).
+        ``model``: the 3-state LTV model eq:3:1 of the variant. A Config: a ``physical`` plant
+        with that config's mass, actuator gain, load and friction (model mismatch); the observer
+        and the controller are still designed from ``cfg``.
+    estimator : {'paper', 'paper-k0', 'eso', 'kalman', 'dob'} or DiscreteEstimator
+        The estimator of :data:`obsdesign.sim.registry.ESTIMATORS`; the baselines are tuned by
+        the fair noise rule (:func:`obsdesign.estimators.tune`). A
+        :class:`~obsdesign.estimators.DiscreteEstimator` (other tuning) runs as given.
     duration : float, optional
         Length [s] (the scenario's default).
     seed : int
@@ -168,7 +195,13 @@ def prepare(
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
     spec = scenario_spec(scenario)
     schedule = SCHEDULES.code(stiffness)
+    plant_cfg = cfg
+    if isinstance(plant, Config):
+        plant_cfg, plant = plant, "physical"
     PLANTS.check(plant)
+    est = None
+    if isinstance(estimator, DiscreteEstimator):
+        est, estimator = estimator, estimator.name
     estimator_code = ESTIMATORS.code(estimator)
     if controller is None:
         controller = "open-loop" if spec.open_loop else "pid+observer"
@@ -202,17 +235,86 @@ def prepare(
         tau_d = kd / kp / cfg.pid.derivative_N
     fr, pl = cfg.friction, cfg.plant
     comp = cfg.compensation  # [compensation] knobs; only the controller 'pid+observer' compensates
+    friction_code, plant_params = plant_friction_arrays(plant_cfg)
+    if plant == "model" and friction_code != 0:
+        raise ValueError(f"plant: the 'model' plant has the paper's friction, found [plant_friction] model "
+                         f"{plant_cfg.plant_friction.model!r}")
+    if est is None and estimator_code > 1:
+        est = tune(estimator, cfg)
+    if est is not None and (est.dt != dt or est.name != estimator):
+        raise ValueError(f"estimator: expected a DiscreteEstimator named {estimator!r} at dt = {dt!r} s, "
+                         f"found dt = {est.dt!r} s")
+    e_arrays = _estimator_arrays(est)
     return LoopInputs(
         config=cfg, scenario=sc, controller=controller, plant=plant, stiffness=stiffness, estimator=estimator,
         settle_tol=settle_tol, dt=dt, n_sub=substeps, mode=PLANTS.code(plant),
-        lag_model=cfg.observer.variant == "lag", m=pl.m, K=pl.K, G=pl.G, Cf=fr.Cf, s=fr.s, sigma=fr.sigma,
+        lag_model=cfg.observer.variant == "lag", m=plant_cfg.plant.m, K=pl.K, G=pl.G, Cf=fr.Cf, s=fr.s, sigma=fr.sigma,
         beta=fr.beta if fr.beta is not None else 0.0, kappa=fr.kappa, A0=obs.A0, A1=obs.A1, b0=obs.b0,
         b1=obs.b1, g0=obs.g0, g1=obs.g1, L1=obs.design.L1, L2=obs.design.L2, schedule=schedule,
         estimator_code=estimator_code, v_hat0=v_hat0, f_hat0=f_hat0, controller_code=controller_code,
         kp=kp, ki=ki, kd=kd, tau_d=tau_d, u_max=pl.u_max, lp_phi=lp_phi, lp_g0=lp_g0, lp_g1=lp_g1,
         comp_gain=comp.gain, comp_viscous=comp.viscous, comp_deadzone=comp.deadzone,
         x_ref=sc.x_ref, u_open=sc.u_open, noise=noise, quantization=sensor.quantization,
+        friction_code=friction_code, plant_params=plant_params, K_plant=plant_cfg.plant.K, G_plant=plant_cfg.plant.G,
+        reversal_threshold=REVERSAL_NOISE_FACTOR * sensor.noise_rms, **e_arrays,
+        plant_config=plant_cfg if plant_cfg is not cfg else None,
     )
+
+
+def plant_friction_arrays(cfg: Config) -> tuple[int, np.ndarray]:
+    """The kernel's plant friction code and parameter array for a config's ``[plant_friction]``.
+
+    Parameters
+    ----------
+    cfg : Config
+        The plant's config; without ``[plant_friction]`` its plant is the paper's model.
+
+    Returns
+    -------
+    code : int
+        ``0`` paper, ``1`` lugre, ``2`` dahl, ``3`` gms (:mod:`obsdesign.friction`).
+    params : ndarray
+        ``paper``: ``(Cf, Cf_neg, sigma, sigma_neg, offset, s, beta, kappa)``; the others: the
+        array of :meth:`obsdesign.friction.FrictionModelInfo.pack`.
+
+    Notes
+    -----
+    ``Cf`` and ``sigma`` (for ``paper`` also ``s`` and ``beta``) default to ``[friction]``; the
+    stiction level ``Fs`` of ``lugre``/``gms`` defaults to ``1.5 Cf`` (the ratio of the
+    published LuGre set), so the models keep their shape at any friction level.
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> code, pp = plant_friction_arrays(od.load_preset("table1"))
+    >>> code, pp.tolist()
+    (0, [0.35, 0.35, 21.1, 21.1, 0.0, 3000.0, 0.001, 8000.0])
+    """
+    fr = cfg.friction
+    spec = cfg.plant_friction
+    model = spec.model if spec is not None else "paper"
+    given = dict(spec.parameters) if spec is not None else {}
+    if model == "paper":
+        q = {"Cf": fr.Cf, "sigma": fr.sigma, "s": fr.s, "beta": fr.beta or 0.0, "offset": 0.0, **given}
+        FRICTION_MODELS["paper"].resolve({k: q[k] for k in ("Cf", "sigma", "s", "beta")})
+        return 0, np.array([q["Cf"], q.get("Cf_neg", q["Cf"]), q["sigma"], q.get("sigma_neg", q["sigma"]),
+                            q["offset"], q["s"], q["beta"], fr.kappa], dtype=np.float64)
+    info = FRICTION_MODELS[model]
+    q = {"Cf": fr.Cf, "sigma": fr.sigma, **given}
+    if "Fs" in {spec.name for spec in info.parameters} and "Fs" not in given:
+        q["Fs"] = 1.5 * q["Cf"]
+    return info.code, info.pack(q)
+
+
+_NO_ESTIMATOR = {"e_Phi": np.zeros((1, 1)), "e_gu": np.zeros(1), "e_g0": np.zeros(1), "e_g1": np.zeros(1),
+                 "e_Cz": np.zeros((2, 1)), "e_d": np.zeros(2), "e_init": np.zeros((1, 3))}
+
+
+def _estimator_arrays(est: DiscreteEstimator | None) -> dict[str, np.ndarray]:
+    if est is None:
+        return dict(_NO_ESTIMATOR)
+    return {"e_Phi": est.Phi, "e_gu": est.gu, "e_g0": est.g0, "e_g1": est.g1, "e_Cz": est.Cz, "e_d": est.d,
+            "e_init": est.init}
 
 
 def run(loop: LoopInputs, keep_trace: bool = True) -> SimResult:

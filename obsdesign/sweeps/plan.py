@@ -51,9 +51,16 @@ def check_names(kind: str, spec: dict) -> dict[str, tuple]:
     if not isinstance(spec, dict):
         raise TypeError(f"{kind}: expected a dict of parameter name -> bounds, found {type(spec).__name__}")
     for name in spec:
+        if name.startswith("plant."):  # the simulated plant only (model mismatch), see docs/comparison.md
+            from ..plant_spec import PLANT_PARAMETER_NAMES
+
+            if name[6:] in PLANT_PARAMETER_NAMES or (name[6:] in PARAMETERS and name[6:] != "variant"):
+                continue
+            raise ValueError(f"{kind}: unknown plant parameter {name!r}; expected plant.<config field> such as "
+                             "plant.m, plant.Cf, or plant.<[plant_friction] parameter> such as plant.offset")
         if name not in PARAMETERS or name == "variant":
             raise ValueError(f"{kind}: unknown parameter {name!r}; expected a numeric config field such as "
-                             "rho, omega_co, kappa, Cf, sigma, m")
+                             "rho, omega_co, kappa, Cf, sigma, m (or plant.NAME for the simulated plant only)")
     return spec
 
 

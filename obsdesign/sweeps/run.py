@@ -24,7 +24,8 @@ from typing import Any
 from .._io import atomic_write
 from .._validate import check_integer
 from ..design.observer import is_stable
-from ..params import Config
+from ..params import PARAMETERS, Config
+from ..plant_spec import split_plant, with_plant_parameters
 from ..sim.registry import CONTROLLERS
 from ..sim.scenarios import CHIRP_BAND_LABELS, build_scenario, scenario_spec
 from ..sim.simulate import simulate
@@ -86,8 +87,11 @@ def run_one(cfg: Config, scenario: str, spec: RunSpec, options: dict) -> dict:
     row: dict[str, Any] = {"run": spec.run, "grid_point": spec.grid_point, "sample": spec.sample, "seed": spec.seed,
                            **spec.params}
     try:
-        cfg_r = cfg.override(**spec.params)
+        design, plant = split_plant(spec.params)  # "plant.NAME": the simulated plant only (model mismatch)
+        cfg_r = cfg.override(**design)
         row["stable"] = is_stable(cfg_r)
+        if plant:
+            options = dict(options, plant=with_plant_parameters(cfg_r, plant, PARAMETERS))
         res = simulate(cfg_r, scenario, seed=spec.seed, keep_trace=False, **options)
         m = res.metrics
         row.update({key: m[key] for key in _METRIC_KEYS})

@@ -1,0 +1,143 @@
+"""The ``compare`` command: every estimator on every plant friction model and scenario."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from ._common import FINITE_ARG, POSITIVE_ARG, UsageError, add_config_flags, integer, load
+
+__all__ = ["add_commands", "parse_list", "summary_text"]
+
+_PLANTS = ("paper", "lugre", "dahl", "gms")
+_ESTIMATORS = ("paper", "paper-k0", "eso", "kalman", "dob")
+_SCENARIOS = ("excitation", "positioning", "tracking")
+
+
+def parse_list(flag: str, text: str, choices: tuple[str, ...]) -> tuple[str, ...]:
+    """A comma-separated list of names, each one of ``choices``.
+
+    Parameters
+    ----------
+    flag : str
+        The flag, for messages.
+    text : str
+        The list, e.g. ``'paper,lugre'``.
+    choices : tuple of str
+        The allowed names.
+
+    >>> parse_list("--plants", "paper,gms", _PLANTS)
+    ('paper', 'gms')
+    >>> parse_list("--plants", "paper,coulomb", _PLANTS)
+    Traceback (most recent call last):
+    ...
+    obsdesign.cli._common.UsageError: obsdesign compare: argument --plants: expected names from paper, lugre, dahl, gms, found 'coulomb'
+    """
+    names = tuple(n.strip() for n in text.split(",") if n.strip())
+    if not names:
+        raise UsageError(f"obsdesign compare: argument {flag}: expected a comma-separated list, found {text!r}")
+    for n in names:
+        if n not in choices:
+            raise UsageError(f"obsdesign compare: argument {flag}: expected names from {', '.join(choices)}, "
+                             f"found {n!r}")
+    if len(set(names)) != len(names):
+        raise UsageError(f"obsdesign compare: argument {flag}: expected distinct names, found {text!r}")
+    return names
+
+
+def summary_text(summary: list[dict], seeds: int) -> str:
+    """Plain sentences: which estimator is best where, with the spread over seeds.
+
+    Parameters
+    ----------
+    summary : list of dict
+        :func:`obsdesign.comparison.summarize`.
+    seeds : int
+        Seeds per case.
+    """
+    from .._format import short as fmt
+
+    lines = [f"Comparison with standard estimators ({seeds} seed{'s' if seeds != 1 else ''} per case; "
+             "'win' only where the spreads over seeds do not overlap and the means differ by more than 1 %)"]
+    for s in summary:
+        head = f"{s['plant']:6} {s['scenario']:12} {s['metric']:20}"
+        if s.get("best") is None:
+            lines.append(f"{head} {s['verdict']}")
+            continue
+        lo, hi = s["best_range"]
+        text = f"{head} best {s['best']} {fmt(s['best_mean'])} [{fmt(lo)}, {fmt(hi)}]"
+        if s.get("runner_up") is not None:
+            lo2, hi2 = s["runner_up_range"]
+            text += f", next {s['runner_up']} {fmt(s['runner_up_mean'])} [{fmt(lo2)}, {fmt(hi2)}]"
+        lines.append(f"{text}: {s['verdict']}")
+    return "\n".join(lines)
+
+
+def _cmd_compare(args: argparse.Namespace) -> int:
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"obsdesign compare: argument --out: expected a directory, found the file {args.out!r}")
+    if not out.parent.is_dir():
+        raise UsageError(f"obsdesign compare: argument --out: directory {str(out.parent)!r} does not exist")
+    plants = parse_list("--plants", args.plants, _PLANTS)
+    estimators = parse_list("--estimators", args.estimators, _ESTIMATORS)
+    scenarios = parse_list("--scenarios", args.scenarios, _SCENARIOS)
+    cfg = load(args)
+    trace = None
+    if args.data is not None:
+        if args.position is None or args.input is None:
+            raise UsageError("obsdesign compare: argument --data: needs --position NAME and --input NAME")
+        from ..data import load_trace
+
+        trace = load_trace(args.data, position=args.position, input=args.input, time=args.time,
+                           sample_time=args.sample_time, input_gain=args.input_gain)
+
+    from .._format import jsonable
+    from .._io import atomic_write
+    from ..comparison import COLUMNS, compare, summarize
+    from ..report.comparison_section import comparison_figure
+    from ..report.figures import save_figure
+    from ..sweeps.store import csv_text
+
+    res = compare(cfg, plants=plants, estimators=estimators, scenarios=scenarios, seeds=args.seeds,
+                  workers=args.workers)
+    rows = list(res.rows)
+    if trace is not None:
+        from ..comparison_data import compare_data
+
+        rows += compare_data(trace, estimators=estimators)
+    summary = summarize(rows)
+    out.mkdir(exist_ok=True)
+    atomic_write(out / "compare.csv", csv_text(list(COLUMNS), rows))
+    payload = {"config": cfg.name, "seeds": res.seeds, "runs": len(rows), "wall_s": res.wall_s,
+               "summary": summary}
+    atomic_write(out / "summary.json", json.dumps(jsonable(payload), indent=1, allow_nan=False))
+    save_figure(comparison_figure(rows), out / "compare.svg")
+    if args.json:
+        print(json.dumps(jsonable(payload), allow_nan=False))
+    else:
+        print(summary_text(summary, res.seeds))
+    return 0
+
+
+def add_commands(sub) -> None:
+    """Add ``compare`` to the subparsers ``sub``."""
+    p = sub.add_parser("compare", help="estimators x plant friction models x scenarios (the shoot-out)")
+    add_config_flags(p, default_preset="vcm")
+    p.add_argument("--plants", default=",".join(_PLANTS), help=f"plant friction models (default {','.join(_PLANTS)})")
+    p.add_argument("--estimators", default=",".join(_ESTIMATORS),
+                   help=f"estimators (default {','.join(_ESTIMATORS)}); baselines tuned by the fair noise rule")
+    p.add_argument("--scenarios", default=",".join(_SCENARIOS), help=f"scenarios (default {','.join(_SCENARIOS)})")
+    p.add_argument("--seeds", type=integer(1), default=2, help="seeds per case (default 2)")
+    p.add_argument("--workers", type=integer(1), help="local processes (default: all cores)")
+    p.add_argument("--data", metavar="FILE", help="measured trace (.csv/.mat): adds offline rows, friction error "
+                   "against the model identified from it (docs/comparison.md)")
+    p.add_argument("--position", metavar="NAME", help="--data: displacement column [m]")
+    p.add_argument("--input", metavar="NAME", help="--data: actuator input column")
+    p.add_argument("--time", metavar="NAME", help="--data: time column [s]")
+    p.add_argument("--sample-time", type=POSITIVE_ARG, help="--data: sample time [s] (without --time)")
+    p.add_argument("--input-gain", type=FINITE_ARG, default=1.0, help="--data: force per input unit [N/unit]")
+    p.add_argument("--out", required=True, metavar="DIR", help="folder for compare.csv, summary.json, compare.svg")
+    p.add_argument("--json", action="store_true", help="print the summary as one JSON object")
+    p.set_defaults(run=_cmd_compare)

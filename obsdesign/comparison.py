@@ -1,0 +1,322 @@
+"""Observer shoot-out: every estimator on every plant friction model and scenario (compute only).
+
+Each estimator of :data:`obsdesign.sim.registry.ESTIMATORS` is designed from one config
+(the baselines tuned by the fair noise rule, :func:`obsdesign.estimators.tune`) and runs in
+the closed loop (or open loop for ``excitation``) against plants whose friction model is
+one of :data:`obsdesign.plant_spec.PLANT_FRICTION_MODELS` (``[plant_friction]``), at the
+design's friction levels. The observer never knows the plant's model: ``paper`` is the
+matched case, the others are model mismatch.
+
+Scenarios and their lengths (chosen so the default 5 x 4 x 3 comparison runs in well under
+a minute on two cores; see :data:`SCENARIOS`):
+
+* ``excitation``: open loop, 1 N RMS band-limited to 5 Hz, 5 s;
+* ``positioning``: 1 mm step up at 0.5 s and back at 3 s, 4 s;
+* ``tracking``: a chirp from 0.5 to 3 Hz with 0.1 m/s peak velocity, 8 s.
+
+Metrics per run (columns of :data:`COLUMNS`): RMS friction error of the compensation signal
+(the paper's low-pass filtered estimate, the baselines' own estimate) and RMS velocity error
+after :data:`TRANSIENT` s; the mean settling time and the largest overshoot of the two steps
+(positioning); the RMS tracking error (tracking); the estimator's friction-noise RMS from the
+sensor noise (analytic, :func:`obsdesign.estimators.friction_noise_rms`).
+
+Examples
+--------
+>>> import obsdesign as od
+>>> res = compare(od.load_preset("vcm"), plants=("paper",), estimators=("paper", "eso"),
+...               scenarios=("excitation",), seeds=1, workers=1)
+>>> [(r["estimator"], r["status"]) for r in res.rows]
+[('paper', 'ok'), ('eso', 'ok')]
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ._display import ResultDisplay
+from ._validate import check_choice, check_integer
+from .estimators import DiscreteEstimator, friction_noise_rms, noise_level, reference_noise_rms, tune
+from .params import Config
+from .plant_spec import PLANT_FRICTION_MODELS, PlantFrictionSpec
+from .sim.registry import ESTIMATORS
+from .sim.scenarios import Chirp, Excitation, Positioning
+from .sim.simulate import simulate
+from .sim.step_metrics import step_metrics
+from .sweeps.run import _Executor
+
+__all__ = ["COLUMNS", "SCENARIOS", "TRANSIENT", "JUDGED", "TIE", "ComparisonResult", "compare", "compare_one", "summarize",
+           "plant_config"]
+
+#: Columns of ``compare.csv``, in order.
+COLUMNS = ("plant", "estimator", "scenario", "seed", "friction_rms_error", "velocity_rms_error", "settling_time",
+           "overshoot", "tracking_rms_error", "friction_noise_rms", "status")
+#: Scenario name -> (spec, duration [s]) of the comparison.
+SCENARIOS = {
+    "excitation": (Excitation(force_rms=1.0, bandwidth=5.0), 5.0),
+    "positioning": (Positioning(step_size=1e-3, step_up=0.5, step_down=3.0), 4.0),
+    "tracking": (Chirp(f0=0.5, f1=3.0), 8.0),
+}
+#: Relative difference below which two estimators tie, whatever the spread (deterministic runs).
+TIE = 0.01
+#: Start-up interval [s] left out of the RMS errors.
+TRANSIENT = 0.5
+#: The metrics each scenario is judged by in the summary (lower is better): the friction
+#: estimate everywhere, and the control result where there is a controller.
+JUDGED = {"excitation": ("friction_rms_error",), "positioning": ("friction_rms_error", "settling_time"),
+          "tracking": ("friction_rms_error", "tracking_rms_error"), "data": ("friction_rms_error",)}
+
+
+def plant_config(cfg: Config, model: str) -> Config:
+    """``cfg`` with the plant friction model ``model`` (at ``cfg``'s friction levels).
+
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+    model : str
+        One of :data:`obsdesign.plant_spec.PLANT_FRICTION_MODELS`; ``cfg``'s own
+        ``[plant_friction]`` parameters are kept when it names the same model.
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> plant_config(od.load_preset("vcm"), "dahl").plant_friction.model
+    'dahl'
+    """
+    check_choice("plant", model, PLANT_FRICTION_MODELS)
+    own = cfg.plant_friction
+    params = dict(own.parameters) if own is not None and own.model == model else {}
+    return dataclasses.replace(cfg, plant_friction=PlantFrictionSpec(model=model, parameters=params))
+
+
+def _rms(a: np.ndarray) -> float | None:
+    a = a[np.isfinite(a)]
+    return float(np.sqrt(np.mean(a * a))) if a.size else None
+
+
+def compare_one(cfg: Config, plant: Config, estimator: str | DiscreteEstimator, scenario: str, seed: int,
+                noise_rms: float) -> dict[str, Any]:
+    """One row of the comparison (never raises for a failed run: ``status`` says ``failed``).
+
+    Parameters
+    ----------
+    cfg : Config
+        The design of the observer and the controller.
+    plant : Config
+        The simulated plant (its ``[plant_friction]``).
+    estimator : str or DiscreteEstimator
+        ``paper``/``paper-k0`` or a tuned baseline.
+    scenario : str
+        A key of :data:`SCENARIOS`.
+    seed : int
+        Seed of the noise and the excitation.
+    noise_rms : float
+        The estimator's friction-noise RMS [N] for the row.
+    """
+    name = estimator if isinstance(estimator, str) else estimator.name
+    model = plant.plant_friction.model if plant.plant_friction is not None else "paper"
+    row: dict[str, Any] = {"plant": model, "estimator": name, "scenario": scenario, "seed": seed,
+                           "friction_rms_error": None, "velocity_rms_error": None, "settling_time": None,
+                           "overshoot": None, "tracking_rms_error": None, "friction_noise_rms": noise_rms}
+    spec, duration = SCENARIOS[scenario]
+    try:
+        res = simulate(cfg, spec, plant=plant, estimator=estimator, duration=duration, seed=seed)
+    except (ValueError, TypeError, ArithmeticError) as e:
+        row["status"] = "failed: " + f"{type(e).__name__}: {e}".splitlines()[0]
+        return row
+    keep = res.t >= TRANSIENT
+    row["friction_rms_error"] = _rms((res.f_hat_filtered - res.f)[keep])
+    row["velocity_rms_error"] = _rms((res.v_hat - res.v)[keep])
+    if scenario == "positioning":
+        times, over = [], []
+        for t_step, y0, y1 in ((spec.step_up, 0.0, spec.step_size), (spec.step_down, spec.step_size, 0.0)):
+            end = spec.step_down if t_step == spec.step_up else duration
+            window = (res.t >= t_step) & (res.t < end)
+            m = step_metrics(res.t[window], res.x[window], t_step=t_step, y0=y0, y1=y1, settle_band=res_tol(cfg))
+            times.append(m["settling_time"])
+            over.append(m["overshoot"])
+        row["settling_time"] = None if any(t is None for t in times) else float(np.mean(times))
+        row["overshoot"] = float(max(over))
+    if scenario == "tracking":
+        row["tracking_rms_error"] = _rms(res.e[keep])
+    row["status"] = "diverged" if res.metrics["diverged"] else "ok"
+    return row
+
+
+def res_tol(cfg: Config) -> float:
+    """Settling band [m]: 2 um (the simulator's default)."""
+    return 2e-6
+
+
+@dataclass(frozen=True, eq=False)
+class ComparisonResult(ResultDisplay):
+    """Rows of a comparison (one per plant, estimator, scenario and seed) and its summary.
+
+    Attributes
+    ----------
+    rows : list of dict
+        Keys :data:`COLUMNS`; None where a metric does not apply (or the run did not settle).
+    config : Config
+        The design.
+    seeds : int
+        Seeds per case.
+    wall_s : float
+        Wall time [s].
+    """
+
+    rows: list
+    config: Config
+    seeds: int
+    wall_s: float
+
+    _title = "Comparison with standard estimators"
+
+    def _rows(self) -> list[tuple[str, object]]:
+        out: list[tuple[str, object]] = [("runs", len(self.rows)), ("seeds", self.seeds), ("wall [s]", self.wall_s)]
+        for s in self.summary():
+            out.append((f"{s['plant']} / {s['scenario']} / {s['metric']}", f"{s['best']}: {s['verdict']}"))
+        return out
+
+    def summary(self) -> list[dict[str, Any]]:
+        """See :func:`summarize`."""
+        return summarize(self.rows)
+
+
+def summarize(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Per plant, scenario and judged metric: the best estimator and whether it wins.
+
+    Each scenario is judged by the metrics of :data:`JUDGED`. A *win* needs the best estimator's worst seed to beat the runner-up's best seed (the
+    spreads over seeds do not overlap) and a mean lower by more than :data:`TIE` (1 %);
+    otherwise the verdict is ``"within spread"`` or ``"tie"``. With one seed there is no
+    spread and the verdict is ``"single seed"``.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of :func:`compare`.
+
+    Returns
+    -------
+    list of dict
+        ``plant, scenario, metric, best, best_mean, best_range, runner_up, runner_up_mean,
+        runner_up_range, verdict``.
+
+    Examples
+    --------
+    >>> rows = [dict(plant="paper", scenario="excitation", estimator=e, seed=s, friction_rms_error=v, status="ok")
+    ...         for e, vals in (("a", (1.0, 1.1)), ("b", (2.0, 2.2))) for s, v in enumerate(vals)]
+    >>> summarize(rows)[0]["verdict"], summarize(rows)[0]["best"]
+    ('win', 'a')
+    """
+    out = []
+    plants = list(dict.fromkeys(r["plant"] for r in rows))
+    scenarios = list(dict.fromkeys(r["scenario"] for r in rows))
+    present = {(r["plant"], r["scenario"]) for r in rows}
+    cases = [(p, s, m) for p in plants for s in scenarios if (p, s) in present for m in JUDGED[s]]
+    for plant, scenario, metric in cases:
+        stats = []
+        for est in dict.fromkeys(r["estimator"] for r in rows):
+            vals = [r[metric] for r in rows if (r["plant"], r["scenario"], r["estimator"]) == (plant, scenario, est)]
+            ok = all(r["status"] == "ok" for r in rows
+                     if (r["plant"], r["scenario"], r["estimator"]) == (plant, scenario, est))
+            vals = [v for v in vals if v is not None and math.isfinite(v)]
+            if vals and ok and len(vals) == len([r for r in rows if (r["plant"], r["scenario"], r["estimator"])
+                                                 == (plant, scenario, est)]):
+                stats.append((float(np.mean(vals)), min(vals), max(vals), est, len(vals)))
+        stats.sort()
+        entry: dict[str, Any] = {"plant": plant, "scenario": scenario, "metric": metric}
+        if not stats:
+            entry.update(best=None, verdict="no estimator has a finite value on every seed"
+                         + (" (none settled within the band)" if metric == "settling_time" else ""))
+            out.append(entry)
+            continue
+        best = stats[0]
+        entry.update(best=best[3], best_mean=best[0], best_range=(best[1], best[2]))
+        if len(stats) == 1:
+            entry.update(runner_up=None, verdict="only one estimator completed every seed")
+        else:
+            second = stats[1]
+            entry.update(runner_up=second[3], runner_up_mean=second[0], runner_up_range=(second[1], second[2]))
+            if best[4] < 2:
+                entry["verdict"] = "single seed"
+            else:
+                close = second[0] - best[0] <= TIE * abs(second[0])
+                entry["verdict"] = "tie" if close else ("win" if best[2] < second[1] else "within spread")
+        out.append(entry)
+    return out
+
+
+def compare(cfg: Config, *, plants=PLANT_FRICTION_MODELS, estimators=tuple(ESTIMATORS),
+            scenarios=tuple(SCENARIOS), seeds: int = 2, workers: int | None = None,
+            executor=None) -> ComparisonResult:
+    """Run every estimator on every plant friction model and scenario.
+
+    Parameters
+    ----------
+    cfg : Config
+        The design (observer, PID, sensor); the plant's friction levels and mass come from it too.
+    plants : sequence of str
+        Plant friction models (:data:`obsdesign.plant_spec.PLANT_FRICTION_MODELS`).
+    estimators : sequence of str
+        Names of :data:`obsdesign.sim.registry.ESTIMATORS`; baselines are tuned by the fair
+        noise rule (:func:`obsdesign.estimators.tune`).
+    scenarios : sequence of str
+        Keys of :data:`SCENARIOS`.
+    seeds : int
+        Seeds (noise and excitation) per case, 0 .. seeds-1.
+    workers : int, optional
+        Processes of the pool (default all cores; 1 runs here).
+    executor : optional
+        A ``concurrent.futures.Executor`` or ``dask.distributed.Client`` (as :func:`obsdesign.sweep`).
+
+    Returns
+    -------
+    ComparisonResult
+
+    Raises
+    ------
+    ValueError
+        An unknown plant, estimator or scenario name; ``seeds < 1``; a baseline the fair rule
+        cannot tune (e.g. no sensor noise and no quantization).
+    """
+    if not isinstance(cfg, Config):
+        raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
+    plants = tuple(check_choice("plants", p, PLANT_FRICTION_MODELS) for p in plants)
+    estimators = tuple(check_choice("estimators", e, tuple(ESTIMATORS)) for e in estimators)
+    scenarios = tuple(check_choice("scenarios", s, tuple(SCENARIOS)) for s in scenarios)
+    seeds = check_integer("seeds", seeds, minimum=1)
+    t0 = time.perf_counter()
+    tuned: dict[str, Any] = {}
+    eta, band = noise_level(cfg)
+    noise: dict[str, float] = {}
+    for name in estimators:
+        if name in ("paper", "paper-k0"):
+            tuned[name] = name
+            noise[name] = reference_noise_rms(cfg) if eta > 0 else 0.0
+        else:
+            tuned[name] = tune(name, cfg)
+            noise[name] = friction_noise_rms(tuned[name], eta, band)
+    tasks = [(cfg, plant_config(cfg, p), tuned[e], s, seed, noise[e])
+             for p in plants for e in estimators for s in scenarios for seed in range(seeds)]
+    pool = _Executor(executor, workers)
+    done: dict[int, dict] = {}
+    indexed = list(enumerate(tasks))
+    try:
+        for batch in pool.map_batches(_run_batch, [indexed[i:i + 4] for i in range(0, len(indexed), 4)]):
+            done.update(batch)
+    except BaseException:
+        pool.abort()
+        raise
+    pool.close()
+    rows = [done[i] for i in range(len(tasks))]
+    return ComparisonResult(rows=rows, config=cfg, seeds=seeds, wall_s=time.perf_counter() - t0)
+
+
+def _run_batch(batch: list[tuple]) -> list[tuple[int, dict]]:
+    return [(i, compare_one(*task)) for i, task in batch]

@@ -1,0 +1,111 @@
+"""Offline rows of the estimator comparison on a measured trace (compute only).
+
+The trace is identified (:func:`obsdesign.data.identify`, ``coulomb-viscous``), a design config
+is built from it (:meth:`~obsdesign.data.Identification.to_config`), and every estimator runs
+offline over the measured displacement and force: the paper observers through the simulator's
+own observer step (:func:`obsdesign.sim.kernel.observe_loop`, ``estimated`` schedule with its
+hysteresis), the baselines, tuned by the fair noise rule for the identified sensor, through
+:func:`obsdesign.estimators.run_offline`. There is no true friction on measured data: the
+reference is the identified model along the measured motion, the Coulomb part
+``Cf coulomb(x, v)`` (pre-sliding with the identified ``s``) with ``v`` the zero-phase filtered
+velocity, and ``v`` itself for the velocity error. The rows say how far each estimate is from the
+identified model, not from the truth.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from .data import Trace, identify
+from .data.trace import zero_phase_velocity
+from .design.discretize import lowpass_arrays
+from .design.observer import design_observer
+from .estimators import friction_noise_rms, noise_level, reference_noise_rms, run_offline, tune
+from .friction.presliding import coulomb_along
+from .sim import kernel
+from .sim.registry import ESTIMATORS, SCHEDULES
+from .sim.simulate import REVERSAL_NOISE_FACTOR
+
+__all__ = ["compare_data", "TRANSIENT_SAMPLES_S"]
+
+#: Start-up interval [s] left out of the errors.
+TRANSIENT_SAMPLES_S = 1.0
+
+
+def _rms(a: np.ndarray) -> float | None:
+    a = a[np.isfinite(a)]
+    return float(np.sqrt(np.mean(a * a))) if a.size else None
+
+
+def compare_data(trace: Trace, *, estimators=tuple(ESTIMATORS), cutoff_hz: float | None = None) -> list[dict[str, Any]]:
+    """One row per estimator on a measured trace (``plant = 'data:<source>'``, ``scenario = 'data'``).
+
+    Parameters
+    ----------
+    trace : obsdesign.data.Trace
+        The measurement (displacement and actuator force).
+    estimators : sequence of str
+        Names of :data:`obsdesign.sim.registry.ESTIMATORS`.
+    cutoff_hz : float, optional
+        Cut-off of the zero-phase velocity of the reference (default that of the identification).
+
+    Returns
+    -------
+    list of dict
+        Rows with the columns of :data:`obsdesign.comparison.COLUMNS`.
+    """
+    if not isinstance(trace, Trace):
+        raise TypeError(f"trace: expected an obsdesign.data.Trace, found {type(trace).__name__}")
+    ident = identify(trace)
+    cfg = ident.to_config(name=f"identified from {trace.source}")
+    dt = cfg.observer.dt
+    fr = cfg.friction
+    x = np.ascontiguousarray(trace.position, dtype=np.float64)
+    u = np.ascontiguousarray(trace.force - cfg.plant.G, dtype=np.float64)  # net force (offset as a load)
+    v_ref = zero_phase_velocity(x, dt, cutoff_hz if cutoff_hz is not None else ident.filter_hz)
+    f_ref = coulomb_along(x, v_ref, fr.Cf, fr.s)
+    keep = trace.t - trace.t[0] >= TRANSIENT_SAMPLES_S
+    eta, band = noise_level(cfg)
+    rows = []
+    for name in estimators:
+        ESTIMATORS.check(name)
+        row: dict[str, Any] = {"plant": f"data:{trace.source}", "estimator": name, "scenario": "data", "seed": 0,
+                               "settling_time": None, "overshoot": None, "tracking_rms_error": None}
+        try:
+            if name in ("paper", "paper-k0"):
+                v_hat, f_hat = _paper_offline(cfg, name, x, u)
+                noise = reference_noise_rms(cfg) if eta > 0 else 0.0
+            else:
+                est = tune(name, cfg)
+                v_hat, f_hat = run_offline(est, u, x)
+                noise = friction_noise_rms(est, eta, band)
+        except (ValueError, TypeError, ArithmeticError) as e:
+            row.update(friction_rms_error=None, velocity_rms_error=None, friction_noise_rms=None,
+                       status="failed: " + f"{type(e).__name__}: {e}".splitlines()[0])
+            rows.append(row)
+            continue
+        row["friction_rms_error"] = _rms((f_hat - f_ref)[keep])
+        row["velocity_rms_error"] = _rms((v_hat - v_ref)[keep])
+        row["friction_noise_rms"] = noise
+        ok = all(math.isfinite(v) for v in (row["friction_rms_error"] or math.nan, row["velocity_rms_error"] or math.nan))
+        row["status"] = "ok" if ok else "diverged"
+        rows.append(row)
+    return rows
+
+
+def _paper_offline(cfg, name: str, x: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The paper observer (``paper``/``paper-k0``) over measured data; returns ``v_hat`` and the
+    low-pass filtered ``f_hat`` (the compensation signal, as in the closed loop)."""
+    obs = design_observer(cfg).affine()
+    lp_phi, lp_g0, lp_g1 = lowpass_arrays(cfg.observer.omega_co, cfg.observer.dt)
+    n = x.shape[0]
+    out = [np.empty(n) for _ in range(4)]
+    fr = cfg.friction
+    kernel.observe_loop(cfg.observer.dt, fr.Cf, fr.s, fr.kappa, obs.A0, obs.A1, obs.b0, obs.b1, obs.g0, obs.g1,
+                        obs.design.L1, obs.design.L2, SCHEDULES.code("estimated"), ESTIMATORS.code(name), 0.0, 0.0,
+                        lp_phi, lp_g0, lp_g1, x, u, np.zeros(n), *out,
+                        REVERSAL_NOISE_FACTOR * cfg.sensor.noise_rms)
+    return out[0], out[2]

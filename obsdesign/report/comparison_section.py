@@ -1,0 +1,100 @@
+"""The report's section "Comparison with standard estimators": figure and folder reader (render only).
+
+The numbers come from :func:`obsdesign.comparison.compare` (``obsdesign compare --out DIR``);
+this module draws them and reads such a folder back for :func:`obsdesign.report.html.render_report`.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+
+from .figures import plt
+
+__all__ = ["comparison_figure", "comparison_section", "FILES"]
+
+#: Files ``obsdesign compare`` writes into its folder.
+FILES = ("compare.csv", "summary.json", "compare.svg")
+
+
+def _float(value) -> float:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def comparison_figure(rows: list[dict]):
+    """Friction RMS error per plant and estimator, one panel per scenario (mean over seeds, range as bars).
+
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of :func:`obsdesign.comparison.compare` (or of ``compare.csv``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    scenarios = list(dict.fromkeys(r["scenario"] for r in rows))
+    plants = list(dict.fromkeys(r["plant"] for r in rows))
+    estimators = list(dict.fromkeys(r["estimator"] for r in rows))
+    fig, axes = plt.subplots(1, max(1, len(scenarios)), figsize=(4.2 * max(1, len(scenarios)), 3.6),
+                             constrained_layout=True, squeeze=False)
+    width = 0.8 / max(1, len(estimators))
+    for ax, sc in zip(axes[0], scenarios):
+        for j, est in enumerate(estimators):
+            mean, lo, hi = [], [], []
+            for p in plants:
+                vals = [_float(r["friction_rms_error"]) for r in rows
+                        if (r["scenario"], r["plant"], r["estimator"]) == (sc, p, est) and r["status"] == "ok"]
+                vals = [v for v in vals if math.isfinite(v)]
+                m = float(np.mean(vals)) if vals else math.nan
+                mean.append(m)
+                lo.append(m - min(vals) if vals else 0.0)
+                hi.append(max(vals) - m if vals else 0.0)
+            x = np.arange(len(plants)) + (j - (len(estimators) - 1) / 2) * width
+            ax.bar(x, mean, width, yerr=[lo, hi], label=est, capsize=2)
+        ax.set_xticks(np.arange(len(plants)), plants)
+        ax.set_title(sc)
+        ax.set_xlabel("plant friction model")
+        ax.set_ylabel("friction RMS error [N]")
+    axes[0][0].legend(fontsize=7, title="estimator", title_fontsize=7)
+    return fig
+
+
+def comparison_section(folder) -> dict | None:
+    """The rows, summary and figure of an ``obsdesign compare`` folder, for the report.
+
+    Parameters
+    ----------
+    folder : path or None
+        A folder written by ``obsdesign compare --out``; None gives None.
+
+    Raises
+    ------
+    ValueError
+        If the folder lacks one of :data:`FILES` or the figure is not one obsdesign wrote.
+    """
+    if folder is None:
+        return None
+    folder = Path(folder)
+    if not all((folder / n).is_file() for n in FILES):
+        raise ValueError(f"compare: expected a folder written by 'obsdesign compare' (with {', '.join(FILES)}), "
+                         f"found {str(folder)!r}")
+    with open(folder / "compare.csv", newline="", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+    if not isinstance(summary, dict) or not isinstance(summary.get("summary"), list):
+        raise ValueError(f"compare: {str(folder / 'summary.json')!r} is not a summary written by obsdesign compare")
+    text = (folder / "compare.svg").read_text(encoding="utf-8")
+    text = re.sub(r"<metadata>.*?</metadata>", "", text[text.index("<svg"):], flags=re.S)
+    if re.search(r"<script|\bon\w+=|(?:href|src)=\"(?!#)", text):
+        raise ValueError(f"compare: {str(folder / 'compare.svg')!r} is not a figure written by obsdesign")
+    return {"rows": rows, "summary": summary["summary"], "seeds": summary.get("seeds"), "svg": text,
+            "folder": str(folder)}
