@@ -126,3 +126,18 @@ def test_report_includes_a_sweep_summary(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "sweep: expected a folder written by 'obsdesign sweep'" in err[0]
     assert not (tmp_path / "r.html").exists()
+
+
+def test_identical_figures_are_identical_files(tmp_path):
+    """Review L6: the summary SVGs of two identical sweeps differed (a date and random ids)."""
+    import matplotlib.pyplot as plt
+
+    from obsdesign.report.figures import save_figure
+
+    for name in ("a.svg", "b.svg"):
+        fig, ax = plt.subplots()
+        ax.plot([0, 1, 2], [1, 3, 2], label="x")
+        ax.legend()
+        save_figure(fig, tmp_path / name)
+    assert (tmp_path / "a.svg").read_bytes() == (tmp_path / "b.svg").read_bytes()
+    assert b"<dc:date>" not in (tmp_path / "a.svg").read_bytes()

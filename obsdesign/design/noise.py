@@ -93,7 +93,18 @@ def band_limited_rms(G: ct.TransferFunction, noise_rms: float, bandwidth_hz: flo
 
     W = 2.0 * math.pi * B
     corners = sorted({abs(p) for p in np.roots(den) if 0.0 < abs(p) < W} | {abs(z) for z in np.roots(num) if 0.0 < abs(z) < W})
-    edges = [0.0, *corners, W]
+    # Between the corners the integrand is smooth on a log scale: split each interval into decades,
+    # so that a band far beyond the corners (many decades) is integrated as accurately as a narrow one.
+    edges = [0.0]
+    for edge in (*corners, W):
+        lo = edges[-1] if edges[-1] > 0.0 else edge / 10.0
+        if edges[-1] == 0.0:
+            edges.append(lo)
+        while edge / lo > 10.0:
+            lo *= 10.0
+            edges.append(lo)
+        edges.append(edge)
+    edges = sorted(set(edges))
     total = 0.0
     for lo, hi in zip(edges[:-1], edges[1:]):
         total += scipy.integrate.quad(power, lo, hi, limit=400, epsrel=1e-10, epsabs=0.0)[0]

@@ -353,7 +353,7 @@ def _interval_verdicts(d: ObserverDesign) -> tuple[IntervalVerdicts, tuple[float
         value = d.L1 if gain == "L1" else d.L2
         holds = bool(value > bound) if rel.rel_op == ">" else bool(value < bound)
         prop1[gain] = Condition(f"Proposition 1: {sp.sstr(rel)}", holds,
-                                f"{rel.lhs} = {value:.6g} (needs {rel.rel_op} {float(bound):.6g})")
+                                f"{rel.lhs} = {value + 0.0:.6g} (needs {rel.rel_op} {float(bound) + 0.0:.6g})")
     disc = [a1 * a1 - 4.0 * a0 for a0 in a0_ends]
     real = Condition("eigenvalues real on [0, kappa]", all(x >= -DISCRIMINANT_RTOL * a1 * a1 for x in disc),
                      f"discriminant a1^2 - 4 a0 = {disc[0]:.6g} at k = 0, {disc[1]:.6g} at k = kappa")

@@ -20,7 +20,11 @@ from .._io import atomic_path
 import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
+matplotlib.rcParams["svg.hashsalt"] = "obsdesign"  # the same figure gives the same SVG, byte for byte
 import matplotlib.pyplot as plt  # noqa: E402
+
+#: No creation date in the files, so that identical figures are identical files.
+_METADATA = {"svg": {"Date": None}, "png": {}, "pdf": {"CreationDate": None}}
 
 __all__ = ["trace_figure", "save_figure", "save_trace_figure", "trace_figure_svg", "figure_svg"]
 
@@ -69,7 +73,8 @@ def save_figure(fig, path: str | os.PathLike) -> None:
     """
     try:
         with atomic_path(path) as tmp:
-            fig.savefig(tmp, format=Path(path).suffix.lstrip(".").lower())
+            fmt = Path(path).suffix.lstrip(".").lower()
+            fig.savefig(tmp, format=fmt, metadata=_METADATA.get(fmt))
     finally:
         plt.close(fig)
 
@@ -96,7 +101,7 @@ def figure_svg(fig) -> str:
         The figure (closed afterwards).
     """
     buf = io.StringIO()
-    fig.savefig(buf, format="svg")
+    fig.savefig(buf, format="svg", metadata=_METADATA["svg"])
     plt.close(fig)
     return buf.getvalue()
 

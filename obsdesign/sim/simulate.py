@@ -296,7 +296,8 @@ def plant_friction_arrays(cfg: Config) -> tuple[int, np.ndarray]:
     given = dict(spec.parameters) if spec is not None else {}
     if model == "paper":
         q = {"Cf": fr.Cf, "sigma": fr.sigma, "s": fr.s, "beta": fr.beta or 0.0, "offset": 0.0, **given}
-        FRICTION_MODELS["paper"].resolve({k: q[k] for k in ("Cf", "sigma", "s", "beta")})
+        if given:  # the values of [friction] are validated by the config; check only what the table sets
+            FRICTION_MODELS["paper"].resolve({k: q[k] for k in ("Cf", "sigma", "s", "beta")})
         return 0, np.array([q["Cf"], q.get("Cf_neg", q["Cf"]), q["sigma"], q.get("sigma_neg", q["sigma"]),
                             q["offset"], q["s"], q["beta"], fr.kappa], dtype=np.float64)
     info = FRICTION_MODELS[model]
