@@ -373,13 +373,18 @@ class Config:
             lines += ["", f"[{key}]"]
             for name, value in table.items():
                 lines.append(f"{name} = {toml_value(value)}  # [{meta[name]['unit']}] {meta[name]['doc']}")
+        return "\n".join(lines + self.extra_tables_toml()) + "\n"
+
+    def extra_tables_toml(self) -> list[str]:
+        """TOML lines of the ``[plant_friction]`` and ``[sources]`` tables (empty when unset)."""
+        lines = []
         if self.plant_friction is not None:
-            lines += ["", "[plant_friction]  # the simulated plant's friction model (docs/comparison.md)"]
+            lines += ["", "[plant_friction]  # the simulated plant's friction model (docs/friction-models.md)"]
             lines += [f"{k} = {toml_value(v)}" for k, v in self.plant_friction.to_dict().items()]
         if self.sources:
-            lines += ["", "[sources]  # where each value comes from"]
+            lines += ["", "[sources]  # where each value comes from (dropped for a value that is overridden)"]
             lines += [f"{toml_value(k)} = {toml_value(v)}" for k, v in self.sources.items()]
-        return "\n".join(lines) + "\n"
+        return lines
 
     def save(self, path: str | os.PathLike) -> None:
         """Write :meth:`to_toml` atomically (temporary file, then rename)."""

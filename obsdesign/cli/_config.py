@@ -63,13 +63,7 @@ def config_toml(cfg, *, label: str | None = None) -> str:
                 source = cfg.source_of(f"{key}.{f.name}")
                 note = f"; source: {_comment(source)}" if source else ""
                 lines.append(f"{f.name} = {_toml_value(value)}  # [{unit}] {doc}{note}")
-    if cfg.plant_friction is not None:
-        lines += ["", "[plant_friction]  # the simulated plant's friction model (docs/friction-models.md)"]
-        lines += [f"{k} = {_toml_value(v)}" for k, v in cfg.plant_friction.to_dict().items()]
-    if cfg.sources:
-        lines += ["", "[sources]  # where each value comes from (dropped for a value that is overridden)"]
-        lines += [f"{_toml_value(k)} = {_toml_value(v)}" for k, v in cfg.sources.items()]
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines + cfg.extra_tables_toml()) + "\n"
 
 
 def _cmd_config(args: argparse.Namespace) -> int:
