@@ -18,8 +18,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 __all__ = ["short", "with_unit", "report", "csv_field", "code_literal", "jsonable", "toml_value"]
 
 
@@ -63,11 +61,17 @@ def csv_field(value: object) -> str:
     """A CSV cell that reads back exactly: floats by ``repr``, booleans as true/false, None empty."""
     if value is None:
         return ""
-    if isinstance(value, (bool, np.bool_)):
+    if isinstance(value, bool) or _is_numpy_bool(value):
         return "true" if value else "false"
     if isinstance(value, float):
         return repr(value)
     return str(value)
+
+
+def _is_numpy_bool(value: object) -> bool:
+    """A NumPy boolean scalar, recognised without importing NumPy (the CLI starts without it)."""
+    kind = type(value)
+    return kind.__module__ == "numpy" and kind.__name__ in ("bool_", "bool")
 
 
 def code_literal(value: float) -> str:

@@ -444,3 +444,15 @@ def test_sweep_best_without_samples_has_no_spread():
     rows = [{"rho": r, "rms_error": e, "status": "ok"} for r, e in ((1.5, 7.93e-5), (3.0, 7.97e-5))]
     best = best_with_spread(rows, "rho")
     assert best["value"] == 1.5 and best["spread"] is None and best["distinguishable"] is False
+
+
+def test_the_parser_does_not_import_numpy_either():
+    """`--help` must answer within 1.5x of `python -c "import numpy"`: importing NumPy itself at
+    start-up (it once came in through obsdesign._format) would use that budget up."""
+    import subprocess
+    import sys
+
+    code = ("import sys, obsdesign.cli as c; c.build_parser(); "
+            "print(','.join(sorted(m for m in sys.modules if m.split('.')[0] == 'numpy')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert out == ""
