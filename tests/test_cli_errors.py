@@ -260,3 +260,12 @@ def test_the_report_study_of_a_diverging_design_says_so():  # m5, m6 (the report
     texts = {c.statement: c for c in study.claims}
     ss = texts["observer compensation reaches zero steady-state error, PID does not"]
     assert "none (diverged)" in ss.measured and ss.reproduced is False
+
+
+def test_export_says_when_its_schedule_differs_from_the_simulators(capsys, tmp_path):
+    """The exports reverse the schedule at sign changes of v_hat ('estimated-raw'); a config with sensor
+    noise, whose simulator default adds a hysteresis, gets one warning line; vcm (no random noise) none."""
+    code, _, err = run(capsys, "export", "--format", "python", "--preset", "table1", "-o", str(tmp_path / "a"))
+    assert code == 0 and len(err) == 1 and "estimated-raw" in err[0] and "1e-06 m" in err[0]
+    code, _, err = run(capsys, "export", "--format", "python", "--preset", "vcm", "-o", str(tmp_path / "b"))
+    assert code == 0 and err == []

@@ -9,7 +9,7 @@ from ..export import FORMATS as EXPORT_FORMATS
 from ..export import WHAT as EXPORT_WHAT
 from ..params import VARIANTS
 from ._common import (POSITIVE_ARG, UsageError, add_config_flags, check_output_dir, check_output_file, load,
-                      warn_unstable)
+                      warn_unstable, print_warnings)
 from ._data import add_trace_flags, load_trace_args
 
 __all__ = ["add_commands"]
@@ -26,6 +26,10 @@ def _cmd_export(args: argparse.Namespace) -> int:
     paths = export(cfg, args.format, args.output, variant=args.variant, rho=args.rho, dt=args.dt,
                    what=args.what, controller=args.controller)
     warn_unstable(cfg, "the exported observer diverges", rho=args.rho, variant=args.variant)
+    if cfg.sensor.noise_rms > 0 and args.format != "latex":
+        print_warnings([f"the exported stiffness schedule reverses at sign changes of v_hat (the simulator's "
+                        f"'estimated-raw'); with sensor.noise_rms = {cfg.sensor.noise_rms:g} m the simulator's "
+                        "default 'estimated' adds a reversal hysteresis the export does not have yet"])
     for path in paths:
         print(path)
     return 0
