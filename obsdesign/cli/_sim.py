@@ -138,7 +138,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if args.metric not in metrics:
         raise UsageError(f"obsdesign sweep: argument --metric: expected one of {', '.join(metrics)}, "
                          f"found {args.metric!r}")
-    check_runs(vary, args.samples)
+    runs = check_runs(vary, args.samples)
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UsageError(f"obsdesign sweep: argument --out: expected a directory, found the file {args.out!r}")
@@ -149,7 +149,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     try:
         res = sweep(cfg, args.scenario, vary=vary, uncertain=uncertain, samples=args.samples, seed=args.seed,
                     executor=client, workers=args.workers, out_dir=out, resume=args.resume, force=args.force,
-                    progress=_progress(vary, args.samples), duration=args.duration, variant=args.variant)
+                    progress=_progress(runs), duration=args.duration, variant=args.variant)
     except KeyboardInterrupt:
         print(f"obsdesign sweep: interrupted; finished runs are in {str(out / 'results.csv')!r}, "
               "continue with --resume", file=sys.stderr)
@@ -198,13 +198,11 @@ def _connect(address: str):
                          f"({type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''})") from None
 
 
-def _progress(vary: dict, samples: int) -> bool | int:
-    """A tqdm bar on a terminal; otherwise a line on stderr every tenth of the runs."""
+def _progress(runs: int) -> bool | int:
+    """A tqdm bar on a terminal; otherwise a line on stderr every tenth of the ``runs``
+    (counted by :func:`~obsdesign.cli._common.check_runs`)."""
     if sys.stderr.isatty():
         return True
-    runs = samples
-    for _, _, n in vary.values():
-        runs *= n
     return max(1, runs // 10)
 
 

@@ -30,6 +30,18 @@ SUMMARY_KEYS = ("runs", "ok", "diverged", "failed", "resumed_runs", "wall_s", "m
 STATUS_VALUES = ("ok", "diverged", "failed")
 
 
+def _metric_groups(rows: list[dict], parameter: str, metric: str) -> tuple[dict, dict]:
+    """The metric of every run grouped by the value of ``parameter`` (a run that failed or diverged
+    counts as ``inf``), and the mean of each group."""
+    groups: dict[float, list[float]] = {}
+    for row in rows:
+        value = row.get(metric)
+        ok = row["status"] == "ok" and value not in (None, "")
+        groups.setdefault(row[parameter], []).append(float(value) if ok else math.inf)
+    means = {p: float(np.mean(v)) for p, v in groups.items()}
+    return groups, means
+
+
 def best_value(rows: list[dict], parameter: str, metric: str = "rms_error") -> tuple[float, float]:
     """The value of a varied ``parameter`` with the lowest mean ``metric`` over its runs
     (runs that failed or diverged count as infinitely bad).
@@ -43,12 +55,7 @@ def best_value(rows: list[dict], parameter: str, metric: str = "rms_error") -> t
     metric : str
         A metric column.
     """
-    groups: dict[float, list[float]] = {}
-    for row in rows:
-        value = row.get(metric)
-        ok = row["status"] == "ok" and value not in (None, "")
-        groups.setdefault(row[parameter], []).append(float(value) if ok else math.inf)
-    means = {p: float(np.mean(v)) for p, v in groups.items()}
+    groups, means = _metric_groups(rows, parameter, metric)
     best = min(means, key=means.get)
     return best, means[best]
 
@@ -84,12 +91,7 @@ def best_with_spread(rows: list[dict], parameter: str, metric: str = "rms_error"
     >>> b["value"], b["runner_up"], b["distinguishable"]
     (1, 2, False)
     """
-    groups: dict[float, list[float]] = {}
-    for row in rows:
-        value = row.get(metric)
-        ok = row["status"] == "ok" and value not in (None, "")
-        groups.setdefault(row[parameter], []).append(float(value) if ok else math.inf)
-    means = {p: float(np.mean(v)) for p, v in groups.items()}
+    groups, means = _metric_groups(rows, parameter, metric)
     order = sorted(means, key=means.get)
     best = order[0]
     out: dict[str, Any] = {"value": best, "mean_metric": means[best] if math.isfinite(means[best]) else None,
