@@ -31,13 +31,14 @@ Examples
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import control as ct
 import numpy as np
 import scipy.linalg
 from numba import njit
+
+from .._validate import POSITIVE, as_float
 
 __all__ = [
     "MAX_STATES",
@@ -70,11 +71,10 @@ def check_positive(name: str, value, unit: str) -> float:
     ...
     ValueError: omega_o: expected a finite number > 0 [rad/s], found -1.0
     """
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
-        raise TypeError(f"{name}: expected a finite number > 0 [{unit}], found {type(value).__name__} {value!r}")
-    number = float(value)
-    if not (math.isfinite(number) and number > 0.0):
-        raise ValueError(f"{name}: expected a finite number > 0 [{unit}], found {number!r}")
+    expected = f"{POSITIVE.describe()} [{unit}]"
+    number = as_float(name, value, expected)
+    if not POSITIVE.contains(number):
+        raise ValueError(f"{name}: expected {expected}, found {number!r}")
     return number
 
 
