@@ -29,7 +29,8 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["presliding_shape", "coulomb_normalized", "coulomb", "stiffness", "track_reversal", "coulomb_along"]
+__all__ = ["presliding_shape", "coulomb_normalized", "coulomb", "stiffness", "track_reversal", "track_reversal_hysteresis",
+           "coulomb_along"]
 
 
 @njit(cache=True, error_model="numpy")
@@ -90,6 +91,28 @@ def track_reversal(v: float, x: float, direction: float, x_r: float, f_r: float,
         f_new = coulomb_normalized(x, direction, x_r, f_r, s)
         return (1.0 if v > 0.0 else -1.0), x, f_new
     return direction, x_r, f_r
+
+
+@njit(cache=True, error_model="numpy")
+def track_reversal_hysteresis(xm, direction, x_r, f_r, x_ext, s, threshold):
+    """Branch update of the ``estimated`` schedule with a position hysteresis of ``threshold`` [m].
+
+    A reversal is accepted once the measured displacement ``xm`` has come back from the
+    branch's extreme ``x_ext`` by more than ``threshold``; the new branch starts at the
+    extreme (where the motion reversed), not where the reversal was detected. The first
+    motion leaves the start ``x_ext`` likewise. Returns ``(direction, x_r, f_r, x_ext)``.
+    """
+    if direction == 0.0:
+        dx = xm - x_ext
+        if abs(dx) > threshold:
+            return (1.0 if dx > 0.0 else -1.0), x_ext, f_r, xm
+        return direction, x_r, f_r, x_ext
+    if direction * (xm - x_ext) > 0.0:
+        return direction, x_r, f_r, xm
+    if direction * (x_ext - xm) > threshold:
+        f_new = coulomb_normalized(x_ext, direction, x_r, f_r, s)
+        return -direction, x_ext, f_new, xm
+    return direction, x_r, f_r, x_ext
 
 
 @njit(cache=True, error_model="numpy")

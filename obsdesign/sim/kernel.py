@@ -38,10 +38,10 @@ from ..design.discretize import coefficients
 from ..estimators.base import estimator_output, estimator_step
 from ..friction.kernels import friction_advance, friction_force, friction_n_state, friction_stiffness
 from ..friction.kernels import friction_viscous
-from ..friction.presliding import coulomb_normalized, stiffness, track_reversal
+from ..friction.presliding import coulomb_normalized, stiffness, track_reversal, track_reversal_hysteresis
 
 __all__ = ["run_loop", "observer_sample", "observe_loop", "new_observer_state", "empty_outputs",
-           "OUTPUT_NAMES", "OBSERVER_STATE_SIZE", "PLANT_PHYSICAL", "PLANT_MODEL", "track_reversal_hysteresis"]
+           "OUTPUT_NAMES", "OBSERVER_STATE_SIZE", "PLANT_PHYSICAL", "PLANT_MODEL"]
 
 PLANT_PHYSICAL, PLANT_MODEL = 0, 1
 SCHEDULE_ESTIMATED, SCHEDULE_TRUE, SCHEDULE_CONSTANT, SCHEDULE_ESTIMATED_RAW = 0, 1, 2, 3
@@ -72,28 +72,6 @@ def new_observer_state() -> tuple:
 
 
 _FRESH_STATE = (0.0,) * 9 + (-1.0,) + (0.0,) * 11
-
-
-@njit(cache=True, error_model="numpy")
-def track_reversal_hysteresis(xm, direction, x_r, f_r, x_ext, s, threshold):
-    """Branch update of the ``estimated`` schedule with a position hysteresis of ``threshold`` [m].
-
-    A reversal is accepted once the measured displacement ``xm`` has come back from the
-    branch's extreme ``x_ext`` by more than ``threshold``; the new branch starts at the
-    extreme (where the motion reversed), not where the reversal was detected. The first
-    motion leaves the start ``x_ext`` likewise. Returns ``(direction, x_r, f_r, x_ext)``.
-    """
-    if direction == 0.0:
-        dx = xm - x_ext
-        if abs(dx) > threshold:
-            return (1.0 if dx > 0.0 else -1.0), x_ext, f_r, xm
-        return direction, x_r, f_r, x_ext
-    if direction * (xm - x_ext) > 0.0:
-        return direction, x_r, f_r, xm
-    if direction * (x_ext - xm) > threshold:
-        f_new = coulomb_normalized(x_ext, direction, x_r, f_r, s)
-        return -direction, x_ext, f_new, xm
-    return direction, x_r, f_r, x_ext
 
 
 @njit(cache=True, error_model="numpy", inline="always")
