@@ -25,7 +25,7 @@ from obsdesign.data import Trace, identify, load_trace, observe
 from obsdesign.design import design_observer
 from obsdesign.design.discretize import lowpass_arrays
 from obsdesign.sim import kernel
-from obsdesign.sim.registry import ESTIMATORS, SCHEDULES
+from obsdesign.sampled.choices import ESTIMATORS, SCHEDULES
 
 HERE = Path(__file__).resolve().parent
 EMPS = Path(os.environ.get("OBSDESIGN_EMPS") or HERE.parents[1] / "shared" / "data" / "emps" / "DATA_EMPS.mat")

@@ -1,6 +1,6 @@
 """Observer shoot-out: every estimator on every plant friction model and scenario (compute only).
 
-Each estimator of :data:`obsdesign.sim.registry.ESTIMATORS` is designed from one config
+Each estimator of :data:`obsdesign.sampled.choices.ESTIMATORS` is designed from one config
 (the baselines tuned by the fair noise rule, :func:`obsdesign.estimators.tune`) and runs in
 the closed loop (or open loop for ``excitation``) against plants whose friction model is
 one of :data:`obsdesign.plant_spec.PLANT_FRICTION_MODELS` (``[plant_friction]``), at the
@@ -44,7 +44,7 @@ from ._validate import check_choice, check_integer
 from .estimators import DiscreteEstimator, friction_noise_rms, noise_level, reference_noise_rms, tune
 from .params import Config
 from .plant_spec import PLANT_FRICTION_MODELS, PlantFrictionSpec
-from .sim.registry import ESTIMATORS
+from .sampled.choices import ESTIMATORS
 from .sim.scenarios import Chirp, Excitation, Positioning
 from .sim.simulate import simulate
 from .sim.step_metrics import step_metrics
@@ -264,7 +264,7 @@ def compare(cfg: Config, *, plants=PLANT_FRICTION_MODELS, estimators=tuple(ESTIM
     plants : sequence of str
         Plant friction models (:data:`obsdesign.plant_spec.PLANT_FRICTION_MODELS`).
     estimators : sequence of str
-        Names of :data:`obsdesign.sim.registry.ESTIMATORS`; baselines are tuned by the fair
+        Names of :data:`obsdesign.sampled.choices.ESTIMATORS`; baselines are tuned by the fair
         noise rule (:func:`obsdesign.estimators.tune`).
     scenarios : sequence of str
         Keys of :data:`SCENARIOS`.

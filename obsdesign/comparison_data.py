@@ -26,7 +26,7 @@ from .design.observer import design_observer
 from .estimators import friction_noise_rms, noise_level, reference_noise_rms, run_offline, tune
 from .friction.presliding import coulomb_along
 from .sim import kernel
-from .sim.registry import ESTIMATORS, SCHEDULES
+from .sampled.choices import ESTIMATORS, SCHEDULES
 from .sim.simulate import REVERSAL_NOISE_FACTOR
 
 __all__ = ["compare_data", "TRANSIENT_SAMPLES_S"]
@@ -48,7 +48,7 @@ def compare_data(trace: Trace, *, estimators=tuple(ESTIMATORS), cutoff_hz: float
     trace : obsdesign.data.Trace
         The measurement (displacement and actuator force).
     estimators : sequence of str
-        Names of :data:`obsdesign.sim.registry.ESTIMATORS`.
+        Names of :data:`obsdesign.sampled.choices.ESTIMATORS`.
     cutoff_hz : float, optional
         Cut-off of the zero-phase velocity of the reference (default that of the identification).
 

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from ..params import preset_names
-from ..sim.registry import SCHEDULES
+from ..sampled.choices import SCHEDULES
 from ._common import FINITE_ARG, POSITIVE_ARG, UsageError, check_output_file, emit
 
 __all__ = ["add_commands", "add_trace_flags", "load_trace_args"]

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from .._validate import parse_number
 from ..params import VARIANTS
-from ..sim.registry import CONTROLLERS, ESTIMATORS, PLANTS, SCHEDULES
+from ..sampled.choices import CONTROLLERS, ESTIMATORS, PLANTS, SCHEDULES
 from ..sim.scenarios import DEFAULT_DURATION, SCENARIOS
 from ._common import (FINITE_ARG, NONNEGATIVE_ARG, POSITIVE_ARG, UsageError, add_config_flags, add_design_flags,
                       check_output_file, check_runs, check_samples, emit, integer, load, print_warnings)

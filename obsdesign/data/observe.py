@@ -62,7 +62,7 @@ from ..friction.presliding import stiffness as _branch_stiffness
 from ..friction.presliding import track_reversal
 from ..params import Config
 from ..sim import kernel
-from ..sim.registry import ESTIMATORS, SCHEDULES
+from ..sampled.choices import ESTIMATORS, SCHEDULES
 from .trace import REVERSAL_THRESHOLD, Trace, zero_phase_velocity
 
 __all__ = ["Observation", "observe", "model_friction_state", "OBSERVATION_COLUMNS", "DT_TOLERANCE",

@@ -13,11 +13,11 @@ __all__ = ["CONTROLLERS", "ESTIMATORS", "PLANT_FRICTION", "PLANTS", "SCHEDULES",
 
 #: Public name -> module it comes from; loaded on first use (obsdesign._lazy).
 _LAZY = {
-    'CONTROLLERS': '.registry',
-    'ESTIMATORS': '.registry',
-    'PLANT_FRICTION': '.registry',
-    'PLANTS': '.registry',
-    'SCHEDULES': '.registry',
+    'CONTROLLERS': '..sampled.choices',
+    'ESTIMATORS': '..sampled.choices',
+    'PLANT_FRICTION': '..sampled.choices',
+    'PLANTS': '..sampled.choices',
+    'SCHEDULES': '..sampled.choices',
     'COLUMNS': '.result',
     'SimResult': '.result',
     'SCENARIOS': '.scenarios',

@@ -4,7 +4,7 @@ One call of :func:`run_loop` simulates the whole horizon; there is no Python
 work per sample. The observer enters only through affine-in-stiffness arrays
 (``A(k) = A0 + k A1``, likewise ``b``, ``g``: :meth:`obsdesign.design.ObserverDesign.affine`),
 so the kernel is the same for both model variants. Integer codes of the choices
-(controller, schedule, estimator, plant) are those of :mod:`obsdesign.sim.registry`.
+(controller, schedule, estimator, plant) are those of :mod:`obsdesign.sampled.choices`.
 
 Per sample ``n`` (time ``n dt``):
 

@@ -39,7 +39,7 @@ from ..design.discretize import lowpass_arrays
 from .metrics import loop_metrics
 from .numerics import step_is_stable, substeps_for
 from ..friction.registry import FRICTION_MODELS
-from .registry import CONTROLLERS, ESTIMATORS, PLANTS, SCHEDULES
+from ..sampled.choices import CONTROLLERS, ESTIMATORS, PLANTS, SCHEDULES
 from .result import SimResult
 from .scenarios import Scenario, band_limited_noise, build_scenario, scenario_spec
 
@@ -170,7 +170,7 @@ def prepare(
         with that config's mass, actuator gain, load and friction (model mismatch); the observer
         and the controller are still designed from ``cfg``.
     estimator : {'paper', 'paper-k0', 'eso', 'kalman', 'dob'} or DiscreteEstimator
-        The estimator of :data:`obsdesign.sim.registry.ESTIMATORS`; the baselines are tuned by
+        The estimator of :data:`obsdesign.sampled.choices.ESTIMATORS`; the baselines are tuned by
         the fair noise rule (:func:`obsdesign.estimators.tune`). A
         :class:`~obsdesign.estimators.DiscreteEstimator` (other tuning) runs as given.
     duration : float, optional

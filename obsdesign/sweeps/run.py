@@ -26,7 +26,7 @@ from .._validate import check_integer
 from ..design.observer import is_stable
 from ..params import PARAMETERS, Config
 from ..plant_spec import split_plant, with_plant_parameters
-from ..sim.registry import CONTROLLERS
+from ..sampled.choices import CONTROLLERS
 from ..sim.scenarios import CHIRP_BAND_LABELS, build_scenario, scenario_spec
 from ..sim.simulate import simulate
 from .folder import SweepLock, check_start, read_manifest

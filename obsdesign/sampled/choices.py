@@ -1,4 +1,4 @@
-"""Registries of the simulator's choices: name -> integer code of the kernel, parameters, docs.
+"""Registries of the sampled controller's choices: name -> integer code of the kernels, parameters, docs.
 
 The numba kernel branches on small integers; everything above it (the API, the
 CLI's choices, the docs and the report) names the choices. One registry per
