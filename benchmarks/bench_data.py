@@ -22,10 +22,9 @@ import numpy as np
 
 import obsdesign as od
 from obsdesign.data import Trace, identify, load_trace, observe
-from obsdesign.design import design_observer
-from obsdesign.design.discretize import lowpass_arrays
+from obsdesign.sampled import sampled_controller
+from obsdesign.sampled.kernel import observe_loop
 from obsdesign.sim import kernel
-from obsdesign.sampled.choices import ESTIMATORS, SCHEDULES
 
 HERE = Path(__file__).resolve().parent
 EMPS = Path(os.environ.get("OBSDESIGN_EMPS") or HERE.parents[1] / "shared" / "data" / "emps" / "DATA_EMPS.mat")
@@ -57,26 +56,23 @@ def run() -> list[dict]:
     observe(cfg, trace)  # warm-up (JIT from the cache, python-control imports)
     whole = _best(lambda: observe(cfg, trace))
 
-    aff = design_observer(cfg).affine()
-    fr = cfg.friction
-    lp = lowpass_arrays(cfg.observer.omega_co, cfg.observer.dt)
+    obs, est, _ = sampled_controller(cfg).kernel_args()
     x, u = np.ascontiguousarray(trace.position), np.ascontiguousarray(trace.force - cfg.plant.G)
     out = [np.empty(trace.samples) for _ in range(4)]
     k_true = np.zeros(trace.samples)
 
     def loop():
-        kernel.observe_loop(cfg.observer.dt, fr.Cf, fr.s, fr.kappa, aff.A0, aff.A1, aff.b0, aff.b1, aff.g0, aff.g1,
-                            aff.design.L1, aff.design.L2, SCHEDULES.code("estimated"), ESTIMATORS.code("paper"),
-                            0.0, 0.0, *lp, x, u, k_true, *out)
+        observe_loop(obs, est, x, u, k_true, *out)
 
     loop()
     offline = _best(loop)
 
     sim = od.sim.prepare(cfg, od.sim.Positioning(step_size=1e-3, step_up=1.0, step_down=12.0),
                          controller="pid+observer", duration=trace.samples * cfg.observer.dt)
-    sim_out = {name: np.empty(sim.n_samples) for name in kernel.OUTPUT_NAMES}
-    kernel.run_loop(*sim.args(), *sim_out.values())
-    closed = _best(lambda: kernel.run_loop(*sim.args(), *sim_out.values()))
+    sim_out = kernel.empty_outputs(sim.n_samples)
+    sim_args = sim.kernel_args()
+    kernel.run_loop(*sim_args, sim_out)
+    closed = _best(lambda: kernel.run_loop(*sim_args, sim_out))
     ns_off, ns_closed = offline / trace.samples * 1e9, closed / sim.n_samples * 1e9
     return [
         {"benchmark": f"observe() over the {label} ({trace.samples} samples, warm, whole call)",

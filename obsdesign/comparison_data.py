@@ -3,9 +3,9 @@
 The trace is identified (:func:`obsdesign.data.identify`, ``coulomb-viscous``), a design config
 is built from it (:meth:`~obsdesign.data.Identification.to_config`), and every estimator runs
 offline over the measured displacement and force: the paper observers through the simulator's
-own observer step (:func:`obsdesign.sim.kernel.observe_loop`, ``estimated`` schedule with its
-hysteresis), the baselines, tuned by the fair noise rule for the identified sensor, through
-:func:`obsdesign.estimators.run_offline`. There is no true friction on measured data: the
+estimator step (:func:`obsdesign.data.observe` of the one sampled controller,
+:func:`obsdesign.sampled.sampled_controller`, ``estimated`` schedule with its hysteresis), the
+baselines tuned by the fair noise rule for the identified sensor. There is no true friction on measured data: the
 reference is the identified model along the measured motion, the Coulomb part
 ``Cf coulomb(x, v)`` (pre-sliding with the identified ``s``) with ``v`` the zero-phase filtered
 velocity, and ``v`` itself for the velocity error. The rows say how far each estimate is from the
@@ -19,15 +19,12 @@ from typing import Any
 
 import numpy as np
 
-from .data import Trace, identify
+from .data import Trace, identify, observe
 from .data.trace import zero_phase_velocity
-from .design.discretize import lowpass_arrays
-from .design.observer import design_observer
-from .estimators import friction_noise_rms, noise_level, reference_noise_rms, run_offline, tune
+from .estimators import friction_noise_rms, noise_level, reference_noise_rms
 from .friction.presliding import coulomb_along
-from .sim import kernel
-from .sampled.choices import ESTIMATORS, SCHEDULES
-from .sim.simulate import REVERSAL_NOISE_FACTOR
+from .sampled.choices import ESTIMATORS
+from .sampled.controller import sampled_controller
 
 __all__ = ["compare_data", "TRANSIENT_SAMPLES_S"]
 
@@ -64,7 +61,6 @@ def compare_data(trace: Trace, *, estimators=tuple(ESTIMATORS), cutoff_hz: float
     dt = cfg.observer.dt
     fr = cfg.friction
     x = np.ascontiguousarray(trace.position, dtype=np.float64)
-    u = np.ascontiguousarray(trace.force - cfg.plant.G, dtype=np.float64)  # net force (offset as a load)
     v_ref = zero_phase_velocity(x, dt, cutoff_hz if cutoff_hz is not None else ident.filter_hz)
     f_ref = coulomb_along(x, v_ref, fr.Cf, fr.s)
     keep = trace.t - trace.t[0] >= TRANSIENT_SAMPLES_S
@@ -75,13 +71,15 @@ def compare_data(trace: Trace, *, estimators=tuple(ESTIMATORS), cutoff_hz: float
         row: dict[str, Any] = {"plant": f"data:{trace.source}", "estimator": name, "scenario": "data", "seed": 0,
                                "settling_time": None, "overshoot": None, "tracking_rms_error": None}
         try:
-            if name in ("paper", "paper-k0"):
-                v_hat, f_hat = _paper_offline(cfg, name, x, u)
+            ctrl = sampled_controller(cfg, estimator=name)
+            result = observe(ctrl, trace)
+            # the compensation signal, as in the closed loop: the paper entries' low-pass output,
+            # a baseline's own estimate
+            v_hat, f_hat = result.v_hat, result.f_hat_filtered
+            if ctrl.baseline is None:
                 noise = reference_noise_rms(cfg) if eta > 0 else 0.0
             else:
-                est = tune(name, cfg)
-                v_hat, f_hat = run_offline(est, u, x)
-                noise = friction_noise_rms(est, eta, band)
+                noise = friction_noise_rms(ctrl.baseline, eta, band)
         except (ValueError, TypeError, ArithmeticError) as e:
             row.update(friction_rms_error=None, velocity_rms_error=None, friction_noise_rms=None,
                        status="failed: " + f"{type(e).__name__}: {e}".splitlines()[0])
@@ -95,17 +93,3 @@ def compare_data(trace: Trace, *, estimators=tuple(ESTIMATORS), cutoff_hz: float
         rows.append(row)
     return rows
 
-
-def _paper_offline(cfg, name: str, x: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The paper observer (``paper``/``paper-k0``) over measured data; returns ``v_hat`` and the
-    low-pass filtered ``f_hat`` (the compensation signal, as in the closed loop)."""
-    obs = design_observer(cfg).affine()
-    lp_phi, lp_g0, lp_g1 = lowpass_arrays(cfg.observer.omega_co, cfg.observer.dt)
-    n = x.shape[0]
-    out = [np.empty(n) for _ in range(4)]
-    fr = cfg.friction
-    kernel.observe_loop(cfg.observer.dt, fr.Cf, fr.s, fr.kappa, obs.A0, obs.A1, obs.b0, obs.b1, obs.g0, obs.g1,
-                        obs.design.L1, obs.design.L2, SCHEDULES.code("estimated"), ESTIMATORS.code(name), 0.0, 0.0,
-                        lp_phi, lp_g0, lp_g1, x, u, np.zeros(n), *out,
-                        REVERSAL_NOISE_FACTOR * cfg.sensor.noise_rms)
-    return out[0], out[2]

@@ -322,7 +322,7 @@ def test_step_metrics_match_step_info_on_a_linear_loop():
     loop = od.sim.prepare(cfg, spec, controller="pid")
     res = od.simulate(cfg, spec, controller="pid", keep_trace=False)
     s = ct.tf("s")
-    C = loop.kp + loop.ki / s + loop.kd * s / (loop.tau_d * s + 1)
+    C = loop.sampled.kp + loop.sampled.ki / s + loop.sampled.kd * s / (loop.sampled.tau_d * s + 1)
     T = ct.feedback(C * K / (s * (m * s + sigma)), 1)
     info = ct.step_info(T, T=np.linspace(0, 2.5, 250001), SettlingTimeThreshold=2e-6 / 1e-3)
     mt = res.metrics

@@ -70,8 +70,8 @@ def _open_loop(u_open, *, substeps=10, cfg=VCM):
                           substeps=substeps, stiffness="true")
     loop = dataclasses.replace(loop, u_open=np.asarray(u_open, float))
     out = kernel.empty_outputs(n)
-    assert kernel.run_loop(*loop.args(), *out.values()) == n
-    return out
+    assert kernel.run_loop(*loop.kernel_args(), out) == n
+    return out._asdict()
 
 
 def test_free_motion_stops_in_finite_time():

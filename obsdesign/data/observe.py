@@ -2,12 +2,12 @@
 
 :func:`observe` runs the reduced-order observer of a config (and the low-pass filter
 eq:3:4:5 of its friction estimate) over a :class:`~obsdesign.data.Trace` at the trace's
-own sample time. There is no second implementation: the samples go through
-:func:`obsdesign.sim.kernel.observe_loop`, which calls
-:func:`~obsdesign.sim.kernel.observer_sample`, the very step the closed-loop simulator
-inlines, with the arrays of ``design_observer(cfg).affine()`` and
-:func:`obsdesign.design.lowpass_arrays`. Run on a simulator's own ``x_meas`` and force,
-it reproduces the simulator's ``v_hat``, ``f_hat`` and ``f_hat_filtered`` bit for bit.
+own sample time. There is no second implementation: the config becomes the one sampled
+controller (:func:`obsdesign.sampled.sampled_controller`) and the samples go through
+:func:`obsdesign.sampled.kernel.observe_loop`, the estimator step of the closed-loop
+simulator's controller. Run on a simulator's own ``x_meas`` and force, it reproduces the
+simulator's ``v_hat``, ``f_hat``, ``f_hat_filtered`` and ``stiffness`` bit for bit, for every
+schedule (``estimated`` with the same reversal hysteresis) and every estimator.
 
 Conventions
 -----------
@@ -24,7 +24,9 @@ Conventions
   :data:`DT_TOLERANCE` (relative) is refused, with the value to put in the config; within
   that tolerance the two are one clock and the config's value is used.
 * **Stiffness** ``estimated`` (default, as in the simulator: branch driven by the
-  measured position and the sign of ``v_hat``), ``constant`` (``kappa``), or ``true``:
+  measured position, a reversal accepted once the position has come back from its extreme by
+  4 ``sensor.noise_rms``), ``estimated-raw`` (a reversal at every sign change of ``v_hat``),
+  ``constant`` (``kappa``), or ``true``:
   measured data have no plant, so ``true`` means the paper's pre-sliding stiffness
   (eq:2:3:5, bounded by ``kappa``) driven by the measured position and the zero-phase
   velocity (:func:`~obsdesign.data.trace.zero_phase_velocity`, samples with ``|v|`` at most
@@ -55,14 +57,11 @@ from numba import njit
 
 from .._display import ResultDisplay
 from .._io import atomic_write
-from .._validate import check_choice
-from ..design.discretize import lowpass_arrays
-from ..design.observer import design_observer
 from ..friction.presliding import stiffness as _branch_stiffness
 from ..friction.presliding import track_reversal
 from ..params import Config
-from ..sim import kernel
-from ..sampled.choices import ESTIMATORS, SCHEDULES
+from ..sampled.controller import SampledController, sampled_controller
+from ..sampled.kernel import observe_loop
 from .trace import REVERSAL_THRESHOLD, Trace, zero_phase_velocity
 
 __all__ = ["Observation", "observe", "model_friction_state", "OBSERVATION_COLUMNS", "DT_TOLERANCE",
@@ -124,7 +123,7 @@ class Observation(ResultDisplay):
     config : Config
         The design that ran (its ``observer.dt`` is the trace's sample time).
     stiffness_schedule : str
-        ``estimated``, ``true`` or ``constant``.
+        ``estimated``, ``estimated-raw``, ``true`` or ``constant``.
     source : str
         Where the trace came from.
     reversals : int
@@ -223,19 +222,22 @@ def _matching_config(cfg: Config, trace: Trace) -> Config:
     return cfg
 
 
-def observe(cfg: Config, trace: Trace, *, stiffness: str = "estimated") -> Observation:
+def observe(cfg: "Config | SampledController", trace: Trace, *, stiffness: str | None = None) -> Observation:
     """Run the designed observer and its low-pass filter over a measured trace.
 
     Parameters
     ----------
-    cfg : Config
-        The design (e.g. ``identify(trace).to_config()``); its ``observer.dt`` must be the
-        trace's sample time (the trace's wins; see the module notes).
+    cfg : Config or SampledController
+        The design (e.g. ``identify(trace).to_config()``), or the sampled controller whose estimator
+        and schedule run (:func:`obsdesign.sampled.sampled_controller`); its ``observer.dt`` must be
+        the trace's sample time (the trace's wins; see the module notes).
     trace : Trace
         Measured displacement [m] and actuator force [N].
-    stiffness : {'estimated', 'true', 'constant'}
-        Stiffness schedule; ``true`` is the pre-sliding stiffness along the measured
-        position and the zero-phase velocity (module notes).
+    stiffness : {'estimated', 'true', 'constant', 'estimated-raw'}, optional
+        Stiffness schedule of a Config's observer (default ``estimated``, with the reversal
+        hysteresis of the simulator); ``true`` is the pre-sliding stiffness along the measured
+        position and the zero-phase velocity (module notes). Not with a SampledController, which
+        has its own.
 
     Returns
     -------
@@ -244,7 +246,7 @@ def observe(cfg: Config, trace: Trace, *, stiffness: str = "estimated") -> Obser
     Raises
     ------
     TypeError
-        If ``cfg`` is not a Config or ``trace`` not a Trace.
+        If ``cfg`` is not a Config or SampledController, or ``trace`` not a Trace.
     ValueError
         If the sample times differ or the schedule is unknown.
 
@@ -270,38 +272,42 @@ def observe(cfg: Config, trace: Trace, *, stiffness: str = "estimated") -> Obser
     >>> float(np.max(np.abs(obs.v_hat))), float(obs.stiffness[0])
     (0.0, 8000.0)
     """
-    if not isinstance(cfg, Config):
-        raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
+    if isinstance(cfg, SampledController):
+        if stiffness is not None:
+            raise ValueError(f"stiffness: a SampledController has its schedule ({cfg.schedule!r}); "
+                             f"expected None, found {stiffness!r}")
+        ctrl = cfg
+    elif isinstance(cfg, Config):
+        ctrl = None
+    else:
+        raise TypeError(f"cfg: expected a Config or a SampledController, found {type(cfg).__name__}")
     if not isinstance(trace, Trace):
         raise TypeError(f"trace: expected a Trace (from obsdesign.data.load_trace), found {type(trace).__name__}")
-    check_choice("stiffness", stiffness, SCHEDULES.names())
-    cfg = _matching_config(cfg, trace)
-    dt = cfg.observer.dt
+    _matching_config(ctrl.config if ctrl is not None else cfg, trace)
+    if ctrl is None:
+        ctrl = sampled_controller(cfg, schedule="estimated" if stiffness is None else stiffness)
+    cfg = ctrl.config
     fr = cfg.friction
-    obs = design_observer(cfg).affine()
-    lp_phi, lp_g0, lp_g1 = lowpass_arrays(cfg.observer.omega_co, dt)
     x_meas = np.ascontiguousarray(trace.position, dtype=float)
     u_net = np.ascontiguousarray(trace.force - cfg.plant.G, dtype=float)
     n = trace.samples
-    if stiffness == "true":
+    if ctrl.schedule == "true":
         v = zero_phase_velocity(trace.position, trace.sample_time)
         v = np.where(np.abs(v) > REVERSAL_THRESHOLD * float(np.max(np.abs(v))), v, 0.0)
         k_true = presliding_stiffness_along(x_meas, v, fr.Cf, fr.s, fr.kappa)
     else:
         k_true = np.zeros(n)
     out = {name: np.empty(n) for name in ("v_hat", "f_hat", "f_hat_filtered", "stiffness")}
-    kernel.observe_loop(dt, fr.Cf, fr.s, fr.kappa, obs.A0, obs.A1, obs.b0, obs.b1, obs.g0, obs.g1,
-                        obs.design.L1, obs.design.L2, SCHEDULES.code(stiffness), ESTIMATORS.code("paper"), 0.0, 0.0,
-                        lp_phi, lp_g0, lp_g1, x_meas, u_net, k_true, *out.values())
+    obs_args, est_args, _ = ctrl.kernel_args()
+    observe_loop(obs_args, est_args, x_meas, u_net, k_true, *out.values())
     bad = np.flatnonzero(~np.isfinite(out["f_hat"]) | ~np.isfinite(out["v_hat"]))
     if bad.size:
         raise ValueError(f"cfg: expected a finite observer run, found a non-finite estimate at sample {bad[0]} "
                          f"(check the design with 'obsdesign check')")
     for arr in out.values():
         arr.setflags(write=False)
-    return Observation(t=trace.t, x_meas=trace.position, u=trace.force, config=cfg, stiffness_schedule=stiffness,
+    return Observation(t=trace.t, x_meas=trace.position, u=trace.force, config=cfg, stiffness_schedule=ctrl.schedule,
                        source=trace.source, reversals=trace.reversals, **out)
-
 
 
 def model_friction_state(ident, trace: Trace, cfg: Config) -> np.ndarray:

@@ -217,10 +217,11 @@ def saturation_warning(loop) -> str | None:
         return None
     import numpy as np
 
-    low, high = -loop.K * loop.u_max - loop.G, loop.K * loop.u_max - loop.G
+    pl = loop.config.plant
+    low, high = -pl.K * pl.u_max - pl.G, pl.K * pl.u_max - pl.G
     peak_hi, peak_lo = float(np.max(loop.u_open)), float(np.min(loop.u_open))
     if peak_hi <= high * (1 + 1e-12) and peak_lo >= low * (1 + 1e-12):
         return None
     peak = peak_hi if peak_hi - high >= low - peak_lo else peak_lo
     return (f"the open-loop force reaches {peak:.4g} N, beyond the saturated actuator's range [{low:.4g}, {high:.4g}] N "
-            f"(K = {loop.K:g} N/V, u_max = {loop.u_max:g} V, G = {loop.G:g} N): it is clipped")
+            f"(K = {pl.K:g} N/V, u_max = {pl.u_max:g} V, G = {pl.G:g} N): it is clipped")

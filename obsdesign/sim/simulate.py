@@ -29,99 +29,72 @@ from typing import Any
 
 import numpy as np
 
-from .._validate import FINITE, POSITIVE, check_integer
-from ..estimators import DiscreteEstimator, tune
-from ..design.observer import design_observer
-from ..design.pid import pid_gains
+from .._validate import POSITIVE, check_integer
+from ..estimators import DiscreteEstimator
 from ..params import Config
+from ..sampled.choices import PLANTS
+from ..sampled.controller import REVERSAL_NOISE_FACTOR, SampledController, sampled_controller
 from . import kernel
-from ..design.discretize import lowpass_arrays
 from .metrics import loop_metrics
 from .numerics import step_is_stable, substeps_for
 from ..friction.registry import FRICTION_MODELS
-from ..sampled.choices import CONTROLLERS, ESTIMATORS, PLANTS, SCHEDULES
 from .result import SimResult
 from .scenarios import Scenario, band_limited_noise, build_scenario, scenario_spec
 
-__all__ = ["LoopInputs", "KERNEL_ARGS", "REVERSAL_NOISE_FACTOR", "prepare", "run", "simulate",
-           "plant_friction_arrays"]
-
-#: The arguments of :func:`obsdesign.sim.kernel.run_loop` before its output arrays, in order.
-KERNEL_ARGS = ("dt", "n_sub", "mode", "lag_model", "m", "K", "G", "Cf", "s", "sigma", "beta", "kappa",
-               "A0", "A1", "b0", "b1", "g0", "g1", "L1", "L2", "schedule", "estimator_code", "v_hat0", "f_hat0",
-               "controller_code", "kp", "ki", "kd", "tau_d", "u_max", "lp_phi", "lp_g0", "lp_g1",
-               "comp_gain", "comp_viscous", "comp_deadzone", "x_ref", "u_open", "noise", "quantization",
-               "friction_code", "plant_params", "K_plant", "G_plant", "reversal_threshold",
-               "e_Phi", "e_gu", "e_g0", "e_g1", "e_Cz", "e_d", "e_init")
-
-#: Hysteresis of the ``estimated`` schedule in units of the sensor's noise RMS (docs/comparison.md).
-REVERSAL_NOISE_FACTOR = 4.0
+__all__ = ["LoopInputs", "REVERSAL_NOISE_FACTOR", "prepare", "run", "simulate", "plant_friction_arrays"]
 
 
 @dataclass(frozen=True, eq=False)
 class LoopInputs:
-    """Everything one run needs: the kernel's arguments (see :data:`KERNEL_ARGS`) and what the
-    result reports about them. Built by :func:`prepare`; edit with ``dataclasses.replace``."""
+    """Everything one run needs: the sampled controller, the plant and the sampled signals, and
+    what the result reports about them. Built by :func:`prepare`; edit with ``dataclasses.replace``.
+
+    Attributes
+    ----------
+    config : Config
+        The design.
+    scenario : Scenario
+        The sampled scenario.
+    plant : str
+        ``physical`` or ``model``.
+    settle_tol : float
+        Settling band [m].
+    sampled : SampledController
+        The controller that runs (:func:`obsdesign.sampled.sampled_controller`).
+    n_sub : int
+        Heun substeps of the plant per sample.
+    mode : int
+        Plant structure code.
+    m, K_plant, G_plant : float
+        The plant's mass [kg], actuator gain [N/V] and load [N].
+    friction_code : int
+        The plant friction model's code.
+    plant_params : ndarray
+        Its parameters (:func:`plant_friction_arrays`).
+    x_ref, u_open, noise : ndarray
+        Reference [m], open-loop force [N] and sensor noise [m] per sample.
+    quantization : float
+        Encoder resolution [m] (0: none).
+    plant_config : Config or None
+        The plant's own config under model mismatch.
+    """
 
     config: Config
     scenario: Scenario = field(repr=False)
-    controller: str
     plant: str
-    stiffness: str
-    estimator: str
     settle_tol: float
-    dt: float
+    sampled: SampledController = field(repr=False)
     n_sub: int
     mode: int
-    lag_model: bool
     m: float
-    K: float
-    G: float
-    Cf: float
-    s: float
-    sigma: float
-    beta: float
-    kappa: float
-    A0: np.ndarray = field(repr=False)
-    A1: np.ndarray = field(repr=False)
-    b0: np.ndarray = field(repr=False)
-    b1: np.ndarray = field(repr=False)
-    g0: np.ndarray = field(repr=False)
-    g1: np.ndarray = field(repr=False)
-    L1: float
-    L2: float
-    schedule: int
-    estimator_code: int
-    v_hat0: float
-    f_hat0: float
-    controller_code: int
-    kp: float
-    ki: float
-    kd: float
-    tau_d: float
-    u_max: float
-    lp_phi: np.ndarray = field(repr=False)
-    lp_g0: np.ndarray = field(repr=False)
-    lp_g1: np.ndarray = field(repr=False)
-    comp_gain: float
-    comp_viscous: bool
-    comp_deadzone: float
+    K_plant: float
+    G_plant: float
+    friction_code: int
+    plant_params: np.ndarray = field(repr=False)
     x_ref: np.ndarray = field(repr=False)
     u_open: np.ndarray = field(repr=False)
     noise: np.ndarray = field(repr=False)
     quantization: float
-    friction_code: int = 0
-    plant_params: np.ndarray = field(repr=False, default=None)
-    K_plant: float = 0.0
-    G_plant: float = 0.0
-    reversal_threshold: float = 0.0
-    e_Phi: np.ndarray = field(repr=False, default=None)
-    e_gu: np.ndarray = field(repr=False, default=None)
-    e_g0: np.ndarray = field(repr=False, default=None)
-    e_g1: np.ndarray = field(repr=False, default=None)
-    e_Cz: np.ndarray = field(repr=False, default=None)
-    e_d: np.ndarray = field(repr=False, default=None)
-    e_init: np.ndarray = field(repr=False, default=None)
     plant_config: Config | None = field(repr=False, default=None)
 
     @property
@@ -129,9 +102,35 @@ class LoopInputs:
         """Number of samples of the run."""
         return len(self.x_ref)
 
-    def args(self) -> tuple:
-        """The positional arguments of ``run_loop`` before its output arrays."""
-        return tuple(getattr(self, name) for name in KERNEL_ARGS)
+    @property
+    def dt(self) -> float:
+        """Sample time [s]."""
+        return self.sampled.dt
+
+    @property
+    def controller(self) -> str:
+        """The controller's name."""
+        return self.sampled.controller
+
+    @property
+    def stiffness(self) -> str:
+        """The stiffness schedule's name."""
+        return self.sampled.schedule
+
+    @property
+    def estimator(self) -> str:
+        """The estimator's name."""
+        return self.sampled.estimator
+
+    def kernel_args(self) -> tuple:
+        """The groups of :func:`obsdesign.sim.kernel.run_loop` before its outputs: the controller's
+        ``(ObserverArgs, EstimatorArgs, ControllerArgs)``, then ``PlantArgs`` and ``Signals``."""
+        plant = kernel.PlantArgs(n_sub=self.n_sub, mode=self.mode, lag_model=self.config.observer.variant == "lag",
+                                 m=self.m, K=self.K_plant, G=self.G_plant, friction_code=self.friction_code,
+                                 plant_params=self.plant_params)
+        signals = kernel.Signals(x_ref=self.x_ref, u_open=self.u_open, noise=self.noise,
+                                 quantization=self.quantization)
+        return (*self.sampled.kernel_args(), plant, signals)
 
 
 def prepare(
@@ -194,70 +193,36 @@ def prepare(
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
     spec = scenario_spec(scenario)
-    schedule = SCHEDULES.code(stiffness)
     plant_cfg = cfg
     if isinstance(plant, Config):
         plant_cfg, plant = plant, "physical"
     PLANTS.check(plant)
-    est = None
-    if isinstance(estimator, DiscreteEstimator):
-        est, estimator = estimator, estimator.name
-    estimator_code = ESTIMATORS.code(estimator)
     if controller is None:
         controller = "open-loop" if spec.open_loop else "pid+observer"
-    controller_code = CONTROLLERS.code(controller)
-    if spec.open_loop != (controller == "open-loop"):
-        expected = "'open-loop'" if spec.open_loop else "'pid' or 'pid+observer'"
-        raise ValueError(f"controller: scenario {spec.name!r} needs {expected}, found {controller!r}")
     settle_tol = POSITIVE.check("settle_tol", settle_tol)
     seed = check_integer("seed", seed, minimum=0)
-    if isinstance(initial_estimate, (str, bytes)) or not hasattr(initial_estimate, "__len__") \
-            or len(initial_estimate) != 2:
-        raise ValueError(f"initial_estimate: expected a pair (v_hat, f_hat) of finite numbers, "
-                         f"found {initial_estimate!r}")
-    v_hat0, f_hat0 = (FINITE.check("initial_estimate", x) for x in initial_estimate)
+    ctrl = sampled_controller(cfg, controller=controller, schedule=stiffness, estimator=estimator,
+                              initial_estimate=initial_estimate)
+    if spec.open_loop != (ctrl.controller == "open-loop"):
+        expected = "'open-loop'" if spec.open_loop else "'pid' or 'pid+observer'"
+        raise ValueError(f"controller: scenario {spec.name!r} needs {expected}, found {controller!r}")
     if plant == "model" and cfg.observer.variant == "lag" and cfg.friction.beta is None:
         raise ValueError("plant: the 'model' plant of variant 'lag' needs friction.beta")
     dt = cfg.observer.dt
     substeps = substeps_for(cfg, dt, substeps, plant=plant)
     noise_seed, signal_seed = np.random.SeedSequence(seed).spawn(2)
     sc = build_scenario(spec, dt=dt, duration=duration, seed=signal_seed)
-
-    obs = design_observer(cfg).affine()
-    lp_phi, lp_g0, lp_g1 = lowpass_arrays(cfg.observer.omega_co, dt)
     sensor = cfg.sensor
     noise = band_limited_noise(len(sc.x_ref), dt, sensor.noise_rms, sensor.noise_bandwidth, noise_seed)
-    if controller == "open-loop":
-        kp = ki = kd = tau_d = 0.0
-    else:
-        _, _, kp, ki, kd = pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
-                                     phase_margin_deg=cfg.pid.phase_margin_deg)
-        tau_d = kd / kp / cfg.pid.derivative_N
-    fr, pl = cfg.friction, cfg.plant
-    comp = cfg.compensation  # [compensation] knobs; only the controller 'pid+observer' compensates
     friction_code, plant_params = plant_friction_arrays(plant_cfg)
     if plant == "model" and friction_code != 0:
         raise ValueError(f"plant: the 'model' plant has the paper's friction, found [plant_friction] model "
                          f"{plant_cfg.plant_friction.model!r}")
-    if est is None and estimator_code > 1:
-        est = tune(estimator, cfg)
-    if est is not None and (est.dt != dt or est.name != estimator):
-        raise ValueError(f"estimator: expected a DiscreteEstimator named {estimator!r} at dt = {dt!r} s, "
-                         f"found dt = {est.dt!r} s")
-    e_arrays = _estimator_arrays(est)
     return LoopInputs(
-        config=cfg, scenario=sc, controller=controller, plant=plant, stiffness=stiffness, estimator=estimator,
-        settle_tol=settle_tol, dt=dt, n_sub=substeps, mode=PLANTS.code(plant),
-        lag_model=cfg.observer.variant == "lag", m=plant_cfg.plant.m, K=pl.K, G=pl.G, Cf=fr.Cf, s=fr.s, sigma=fr.sigma,
-        beta=fr.beta if fr.beta is not None else 0.0, kappa=fr.kappa, A0=obs.A0, A1=obs.A1, b0=obs.b0,
-        b1=obs.b1, g0=obs.g0, g1=obs.g1, L1=obs.design.L1, L2=obs.design.L2, schedule=schedule,
-        estimator_code=estimator_code, v_hat0=v_hat0, f_hat0=f_hat0, controller_code=controller_code,
-        kp=kp, ki=ki, kd=kd, tau_d=tau_d, u_max=pl.u_max, lp_phi=lp_phi, lp_g0=lp_g0, lp_g1=lp_g1,
-        comp_gain=comp.gain, comp_viscous=comp.viscous, comp_deadzone=comp.deadzone,
-        x_ref=sc.x_ref, u_open=sc.u_open, noise=noise, quantization=sensor.quantization,
-        friction_code=friction_code, plant_params=plant_params, K_plant=plant_cfg.plant.K, G_plant=plant_cfg.plant.G,
-        reversal_threshold=REVERSAL_NOISE_FACTOR * sensor.noise_rms, **e_arrays,
-        plant_config=plant_cfg if plant_cfg is not cfg else None,
+        config=cfg, scenario=sc, plant=plant, settle_tol=settle_tol, sampled=ctrl, n_sub=substeps,
+        mode=PLANTS.code(plant), m=plant_cfg.plant.m, K_plant=plant_cfg.plant.K, G_plant=plant_cfg.plant.G,
+        friction_code=friction_code, plant_params=plant_params, x_ref=sc.x_ref, u_open=sc.u_open, noise=noise,
+        quantization=sensor.quantization, plant_config=plant_cfg if plant_cfg is not cfg else None,
     )
 
 
@@ -307,17 +272,6 @@ def plant_friction_arrays(cfg: Config) -> tuple[int, np.ndarray]:
     return info.code, info.pack(q)
 
 
-_NO_ESTIMATOR = {"e_Phi": np.zeros((1, 1)), "e_gu": np.zeros(1), "e_g0": np.zeros(1), "e_g1": np.zeros(1),
-                 "e_Cz": np.zeros((2, 1)), "e_d": np.zeros(2), "e_init": np.zeros((1, 3))}
-
-
-def _estimator_arrays(est: DiscreteEstimator | None) -> dict[str, np.ndarray]:
-    if est is None:
-        return dict(_NO_ESTIMATOR)
-    return {"e_Phi": est.Phi, "e_gu": est.gu, "e_g0": est.g0, "e_g1": est.g1, "e_Cz": est.Cz, "e_d": est.d,
-            "e_init": est.init}
-
-
 def run(loop: LoopInputs, keep_trace: bool = True) -> SimResult:
     """Run the closed loop of :func:`prepare`'s inputs and summarise it.
 
@@ -334,16 +288,20 @@ def run(loop: LoopInputs, keep_trace: bool = True) -> SimResult:
     if not isinstance(loop, LoopInputs):
         raise TypeError(f"loop: expected LoopInputs (from obsdesign.sim.prepare), found {type(loop).__name__}")
     n = loop.n_samples
-    out = {name: np.empty(n) for name in kernel.OUTPUT_NAMES}
+    outputs = kernel.Outputs(*(np.empty(n) for _ in kernel.OUTPUT_NAMES))
+    args = loop.kernel_args()
     t0 = time.perf_counter()
-    n_written = kernel.run_loop(*loop.args(), *out.values())
+    n_written = kernel.run_loop(*args, outputs)
     wall = time.perf_counter() - t0
+    out = outputs._asdict()
     if n_written < n:
         for arr in out.values():
             arr[n_written:] = np.nan
     e = loop.x_ref - out["x"]
-    stable_step = step_is_stable(dt=loop.dt, n_sub=loop.n_sub, m=loop.m, sigma=loop.sigma, kappa=loop.kappa,
-                                 beta=loop.beta, model_lag=loop.mode == kernel.PLANT_MODEL and loop.lag_model)
+    fr = loop.config.friction
+    stable_step = step_is_stable(dt=loop.dt, n_sub=loop.n_sub, m=loop.m, sigma=fr.sigma, kappa=fr.kappa,
+                                 beta=fr.beta if fr.beta is not None else 0.0,
+                                 model_lag=loop.mode == kernel.PLANT_MODEL and args[3].lag_model)
     metrics = loop_metrics(loop.scenario, out, e, n_written, loop.settle_tol, wall, step_stable=stable_step)
     traces = {}
     if keep_trace:
