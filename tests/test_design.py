@@ -31,7 +31,7 @@ def test_gains_follow_the_gain_rule(cfg):
 
 
 def test_table1_rho_102_is_stable_with_dominant_pole_minus_2_44():
-    rep = od.check_stability(TABLE1, rho=1.02)
+    rep = od.check_stability(TABLE1.override(rho=1.02))
     assert rep.stable and rep.eigenvalues_real and rep.observable and rep.all_hold
     root = math.sqrt(8000 / 0.538)
     assert rep.dominant_pole == pytest.approx(-root * 0.02, rel=1e-9)  # eq:3:3:2
@@ -41,7 +41,7 @@ def test_table1_rho_102_is_stable_with_dominant_pole_minus_2_44():
 
 
 def test_table1_rho_098_fails_with_the_condition_named():
-    rep = od.check_stability(TABLE1, rho=0.98)
+    rep = od.check_stability(TABLE1.override(rho=0.98))
     assert not rep.stable and not rep.all_hold
     assert "Proposition 1: L_2 < sigma/beta" in rep.failed()
     assert "eigenvalues negative on [0, kappa]" in rep.failed()
@@ -90,7 +90,7 @@ def test_discrete_pole_radii_are_exp_of_eigenvalues_times_dt():
 
 def test_stiff_kappa_warns_about_the_sampling_rate():
     with pytest.warns(UserWarning, match=r"times dt = 0.0001 s is 3.34 > 1"):
-        rep = od.check_stability(VCM, kappa=2.4e7)
+        rep = od.check_stability(VCM.override(kappa=2.4e7))
     assert rep.stable and rep.warnings
     assert max(max(r) for r in rep.discrete_pole_radii.values()) < 1
 
@@ -116,7 +116,7 @@ def test_property_rho_above_one_is_stable_with_real_eigenvalues(rho, kap, mass, 
     cfg = TABLE1.override(m=mass, variant=variant)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        rep = od.check_stability(cfg, rho=rho, kappa=kap)
+        rep = od.check_stability(cfg.override(rho=rho, kappa=kap))
     assert rep.stable and rep.eigenvalues_real
     d = rep.design
     k = frac * kap
@@ -131,7 +131,7 @@ def test_property_rho_above_one_is_stable_with_real_eigenvalues(rho, kap, mass, 
 def test_property_rho_below_one_is_not_stable(rho, kap, variant):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        rep = od.check_stability(TABLE1.override(variant=variant), rho=rho, kappa=kap)
+        rep = od.check_stability(TABLE1.override(variant=variant, rho=rho, kappa=kap))
     assert not rep.stable
     assert rep.dominant_pole > 0
     np.testing.assert_allclose(rep.dominant_pole, math.sqrt(kap / 0.538) * (1 - rho), rtol=1e-6)

@@ -111,7 +111,7 @@ def _closed_form_unstable(rho, m=0.538, kappa=8000.0):
 
 @pytest.mark.parametrize("rho", [0.5, 0.9, 1.5, 4.0])
 def test_design_warnings_flag_exactly_the_unstable_designs(rho):
-    notes = od.design.design_warnings(od.load_preset("vcm"), rho=rho)
+    notes = od.design.design_warnings(od.load_preset("vcm").override(rho=rho))
     assert any(n.startswith("the observer design fails check") for n in notes) == _closed_form_unstable(rho)
 
 

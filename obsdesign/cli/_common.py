@@ -93,15 +93,23 @@ def shown(path: str, limit: int = 120) -> str:
     return repr(text if len(text) <= limit else text[:limit // 2] + "..." + text[-limit // 2:])
 
 
+#: Design flags that override the config once, at the door (:func:`load`).
+DESIGN_FLAGS = ("rho", "kappa", "variant")
+
+
 def load(args: argparse.Namespace):
-    """The config of ``--config`` or ``--preset`` (or the command's default preset)."""
+    """The config of ``--config`` or ``--preset`` (or the command's default preset), with the command's
+    design flags (``--rho``, ``--kappa``, ``--variant`` where it has them) applied once by
+    :meth:`obsdesign.Config.override`."""
     config = getattr(args, "config", None)
     if config is not None:
         if not config.strip():
             raise UsageError(f"obsdesign {args.command}: argument --config: expected the path of a TOML file, "
                              f"found {config!r}")
-        return load_config(config)
-    return load_preset(args.preset or args.default_preset)
+        cfg = load_config(config)
+    else:
+        cfg = load_preset(args.preset or args.default_preset)
+    return cfg.override(**{flag: getattr(args, flag, None) for flag in DESIGN_FLAGS})
 
 
 @contextlib.contextmanager
@@ -126,7 +134,7 @@ def finite_design(args: argparse.Namespace, flags: tuple[str, ...]):
                          "use values of a physically meaningful size") from None
 
 
-def warn_unstable(cfg, what: str, **overrides) -> None:
+def warn_unstable(cfg, what: str) -> None:
     """One ``obsdesign: warning:`` line on stderr if the observer design fails ``check``.
 
     Parameters
@@ -135,12 +143,10 @@ def warn_unstable(cfg, what: str, **overrides) -> None:
         The design.
     what : str
         What the result means for an unstable design (ends the message).
-    **overrides
-        ``rho``, ``kappa``, ``variant`` as given to :func:`obsdesign.design.check_stability`.
     """
     from ..design import design_warnings
 
-    print_warnings(design_warnings(cfg, **overrides), what)
+    print_warnings(design_warnings(cfg), what)
 
 
 def print_warnings(notes, what: str = "") -> None:

@@ -36,7 +36,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # reported in the output instead
         with finite_design(args, ("rho", "kappa")):
-            report = check_stability(cfg, rho=args.rho, kappa=args.kappa, variant=args.variant)
+            report = check_stability(cfg)
     emit(args, report, report.to_dict())
     if not args.json:
         for note in report.warnings:
@@ -68,11 +68,9 @@ def _cmd_noise(args: argparse.Namespace) -> int:
 
     cfg = load(args)
     with finite_design(args, ("rho", "kappa", "noise_rms", "noise_bandwidth", "stiffness")):
-        na = noise_analysis(cfg, rho=args.rho, kappa=args.kappa, variant=args.variant,
-                            noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
+        na = noise_analysis(cfg, noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
                             stiffness=args.stiffness)
-        warn_unstable(cfg, "the noise variance of an unstable observer is unbounded, the values are not meaningful",
-                      rho=args.rho, kappa=args.kappa, variant=args.variant)
+        warn_unstable(cfg, "the noise variance of an unstable observer is unbounded, the values are not meaningful")
     emit(args, na, na.to_dict())
     return 0
 

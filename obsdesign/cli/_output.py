@@ -25,7 +25,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
     cfg = load(args)
     paths = export(cfg, args.format, args.output, variant=args.variant, rho=args.rho, dt=args.dt,
                    what=args.what, controller=args.controller)
-    warn_unstable(cfg, "the exported observer diverges", rho=args.rho, variant=args.variant)
+    warn_unstable(cfg, "the exported observer diverges")
     if cfg.sensor.noise_rms > 0 and args.format != "latex":
         print_warnings([f"the exported stiffness schedule reverses at sign changes of v_hat (the simulator's "
                         f"'estimated-raw'); with sensor.noise_rms = {cfg.sensor.noise_rms:g} m the simulator's "

@@ -36,8 +36,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if args.config is None and args.preset is None:
         args.preset = "table1" if args.scenario in ("excitation", "constant") else "vcm"
     cfg = load(args).override(noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
-                              quantization=args.quantization, dt=args.dt, rho=args.rho, kappa=args.kappa,
-                              variant=args.variant)
+                              quantization=args.quantization, dt=args.dt)
     plant = args.plant or ("model" if cfg.observer.variant == "lag" else "physical")
     if plant == "physical" and cfg.observer.variant == "lag" and cfg.friction.beta is not None:
         print("obsdesign simulate: warning: the 'lag' observer follows eq:3:1, which drops the -Fv/beta term of "
@@ -149,7 +148,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     try:
         res = sweep(cfg, args.scenario, vary=vary, uncertain=uncertain, samples=args.samples, seed=args.seed,
                     executor=client, workers=args.workers, out_dir=out, resume=args.resume, force=args.force,
-                    progress=_progress(runs), duration=args.duration, variant=args.variant)
+                    progress=_progress(runs), duration=args.duration)
     except KeyboardInterrupt:
         print(f"obsdesign sweep: interrupted; finished runs are in {str(out / 'results.csv')!r}, "
               "continue with --resume", file=sys.stderr)

@@ -14,7 +14,7 @@ Examples
 >>> import obsdesign as od
 >>> design_warnings(od.load_preset("vcm"))
 ()
->>> notes = design_warnings(od.load_preset("vcm"), rho=0.5)   # an unstable observer
+>>> notes = design_warnings(od.load_preset("vcm").override(rho=0.5))   # an unstable observer
 >>> len(notes), notes[0].startswith("the observer design fails check ("), "discrete poles inside unit circle" in notes[0]
 (1, True, True)
 >>> print(design_warnings(od.load_preset("vcm").override(dt=0.01))[0][:61])
@@ -31,16 +31,13 @@ from .observer import check_stability
 __all__ = ["design_warnings"]
 
 
-def design_warnings(cfg: Config, *, rho: float | None = None, kappa: float | None = None,
-                    variant: str | None = None) -> tuple[str, ...]:
+def design_warnings(cfg: Config) -> tuple[str, ...]:
     """The warnings of ``obsdesign check`` for a design, as sentences (empty when all is well).
 
     Parameters
     ----------
     cfg : Config
-        The design.
-    rho, kappa, variant : optional
-        Overrides of the config's values, as in :func:`~obsdesign.design.check_stability`.
+        The design (change values with :meth:`obsdesign.Config.override` before).
 
     Returns
     -------
@@ -50,7 +47,7 @@ def design_warnings(cfg: Config, *, rho: float | None = None, kappa: float | Non
     """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # returned instead
-        report = check_stability(cfg, rho=rho, kappa=kappa, variant=variant)
+        report = check_stability(cfg)
     notes = list(report.warnings)
     failed = report.failed()
     if failed:

@@ -20,7 +20,7 @@ Examples
 True
 >>> na.warnings
 ()
->>> od.noise_analysis(od.load_preset("vcm"), rho=0.5).warnings[0].startswith("the observer design fails check")
+>>> od.noise_analysis(od.load_preset("vcm").override(rho=0.5)).warnings[0].startswith("the observer design fails check")
 True
 """
 
@@ -168,16 +168,14 @@ class NoiseAnalysis(ResultDisplay):
                 ("velocity estimate RMS, raw [m/s]", self.rms_velocity_raw)]
 
 
-def noise_analysis(cfg: Config, *, rho: float | None = None, kappa: float | None = None,
-                   variant: str | None = None, noise_rms: float | None = None,
+def noise_analysis(cfg: Config, *, noise_rms: float | None = None,
                    noise_bandwidth: float | None = None, stiffness: float = 0.0) -> NoiseAnalysis:
     """Noise transfer, low-pass and RMS of the friction and velocity estimates.
 
     Parameters
     ----------
     cfg : Config
-    rho, kappa, variant : optional
-        Overrides of the config.
+        The design (change values with :meth:`obsdesign.Config.override` before).
     noise_rms : float, optional
         Noise RMS [m]; default ``sqrt(sensor.noise_rms^2 + sensor.quantization^2 / 12)``.
     noise_bandwidth : float, optional
@@ -189,7 +187,7 @@ def noise_analysis(cfg: Config, *, rho: float | None = None, kappa: float | None
     -------
     NoiseAnalysis
     """
-    design = design_observer(cfg, rho=rho, kappa=kappa, variant=variant)
+    design = design_observer(cfg)
     sensor = cfg.sensor
     eta = (math.hypot(sensor.noise_rms, sensor.quantization / math.sqrt(12.0)) if noise_rms is None
            else _NONNEG.check("noise_rms", noise_rms))
@@ -204,5 +202,5 @@ def noise_analysis(cfg: Config, *, rho: float | None = None, kappa: float | None
         direct_gain=design.L2, velocity_direct_gain=design.L1,
         rms_raw=band_limited_rms(G_f, eta, B), rms_filtered=band_limited_rms(F * G_f, eta, B),
         rms_velocity_raw=band_limited_rms(G_v, eta, B), G_friction=G_f, G_velocity=G_v, lowpass=F,
-        warnings=design_warnings(cfg, rho=rho, kappa=kappa, variant=variant),
+        warnings=design_warnings(cfg),
     )

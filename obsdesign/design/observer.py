@@ -6,7 +6,7 @@ Examples
 >>> rep = od.check_stability(od.load_preset("table1"))
 >>> rep.stable, rep.eigenvalues_real, round(rep.dominant_pole, 3)
 (True, True, -2.439)
->>> od.check_stability(od.load_preset("table1"), rho=0.98).failed()
+>>> od.check_stability(od.load_preset("table1").override(rho=0.98)).failed()
 ('Proposition 1: L_2 < sigma/beta', 'eigenvalues negative on [0, kappa]', 'Ignatyev (ii) at kdot = 0', 'discrete poles inside unit circle')
 """
 
@@ -196,16 +196,13 @@ class ObserverArrays:
     g1: np.ndarray
 
 
-def design_observer(cfg: Config, *, rho: float | None = None, kappa: float | None = None,
-                    variant: str | None = None) -> ObserverDesign:
+def design_observer(cfg: Config) -> ObserverDesign:
     """Observer gains from rho by the gain rule of Proposition 2 (eq:3:3:3-4).
 
     Parameters
     ----------
     cfg : Config
-        The design; ``rho``, ``kappa`` and ``variant`` override its values.
-    rho, kappa, variant : optional
-        Overrides of the config's values (None keeps them).
+        The design (change values with :meth:`obsdesign.Config.override` before).
 
     Returns
     -------
@@ -220,7 +217,6 @@ def design_observer(cfg: Config, *, rho: float | None = None, kappa: float | Non
     """
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
-    cfg = cfg.override(rho=rho, kappa=kappa, variant=variant)
     fr, ob = cfg.friction, cfg.observer
     _affine_in_stiffness(ob.variant)
     vals = model_values(m=cfg.plant.m, sigma=fr.sigma, beta=fr.beta if ob.variant == "lag" else math.nan,
@@ -378,8 +374,7 @@ def is_stable(cfg: Config) -> bool:
     return _interval_verdicts(design_observer(cfg))[0].stable
 
 
-def check_stability(cfg: Config, *, rho: float | None = None, kappa: float | None = None,
-                    variant: str | None = None) -> StabilityReport:
+def check_stability(cfg: Config) -> StabilityReport:
     """Check an observer design over the whole stiffness range [0, kappa].
 
     The characteristic polynomial ``lambda^2 + a1 lambda + a0(k)`` has ``a1``
@@ -390,8 +385,7 @@ def check_stability(cfg: Config, *, rho: float | None = None, kappa: float | Non
     Parameters
     ----------
     cfg : Config
-    rho, kappa, variant : optional
-        Overrides of the config's values.
+        The design (change values with :meth:`obsdesign.Config.override` before).
 
     Returns
     -------
@@ -405,7 +399,7 @@ def check_stability(cfg: Config, *, rho: float | None = None, kappa: float | Non
     >>> rep.all_hold, round(rep.fastest_pole, 1)
     (True, -609.7)
     """
-    d = design_observer(cfg, rho=rho, kappa=kappa, variant=variant)
+    d = design_observer(cfg)
     ends = (0.0, d.kappa)
     verdicts, a0_ends, a1 = _interval_verdicts(d)
     if not all(math.isfinite(x) for x in (*a0_ends, a1, 2.0 * a1 * min(a0_ends), a1 * a1)):

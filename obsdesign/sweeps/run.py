@@ -152,7 +152,7 @@ class SweepResult:
 def sweep(cfg: Config, scenario: str, *, vary: dict | None = None, uncertain: dict | None = None,
           samples: int = 1, seed: int = 0, executor=None, workers: int | None = None,
           out_dir: str | os.PathLike | None = None, resume: bool = False, force: bool = False,
-          progress: bool | int = False, duration: float | None = None, variant: str | None = None,
+          progress: bool | int = False, duration: float | None = None,
           controller: str | None = None, chunk: int = 8) -> SweepResult:
     """Run a design sweep with Monte-Carlo draws.
 
@@ -195,8 +195,6 @@ def sweep(cfg: Config, scenario: str, *, vary: dict | None = None, uncertain: di
         runs (for logs, where a bar would not render); ``False``: quiet.
     duration : float, optional
         The run length [s] (the scenario's default).
-    variant : str, optional
-        The model variant, applied to the config.
     controller : str, optional
         The controller; it must suit the scenario (``open-loop`` for excitation/constant).
     chunk : int
@@ -220,10 +218,9 @@ def sweep(cfg: Config, scenario: str, *, vary: dict | None = None, uncertain: di
         if spec.open_loop != (controller == "open-loop"):
             expected = "'open-loop'" if spec.open_loop else "'pid' or 'pid+observer'"
             raise ValueError(f"controller: scenario {spec.name!r} needs {expected}, found {controller!r}")
-    options = {k: v for k, v in (("duration", duration), ("variant", variant), ("controller", controller))
-               if v is not None}
-    run_cfg = cfg.override(variant=variant)
-    run_options = {k: v for k, v in options.items() if k != "variant"}
+    options = {k: v for k, v in (("duration", duration), ("controller", controller)) if v is not None}
+    run_cfg = cfg
+    run_options = options
     build_scenario(scenario, dt=run_cfg.observer.dt, duration=duration)  # bad scenario or duration: fail now
     plan = make_plan(vary, uncertain, samples, seed)
     columns = [*FIXED_COLUMNS, *vary, *uncertain, *metric_columns(scenario), *TAIL_COLUMNS]
