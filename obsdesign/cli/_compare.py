@@ -6,13 +6,21 @@ import argparse
 import json
 from pathlib import Path
 
+from ..estimators.registry import ESTIMATORS
+from ..friction.registry import FRICTION_MODELS
 from ._common import FINITE_ARG, POSITIVE_ARG, UsageError, add_config_flags, integer, load
 
 __all__ = ["add_commands", "parse_list", "summary_text"]
 
-_PLANTS = ("paper", "lugre", "dahl", "gms")
-_ESTIMATORS = ("paper", "paper-k0", "eso", "kalman", "dob")
-_SCENARIOS = ("excitation", "positioning", "tracking")
+_PLANTS = FRICTION_MODELS.names()
+_ESTIMATORS = ESTIMATORS.names()
+
+
+def _scenarios() -> tuple[str, ...]:
+    """The comparison's scenarios (:data:`obsdesign.comparison.SCENARIOS`; heavy: read once the command runs)."""
+    from ..comparison import SCENARIOS
+
+    return tuple(SCENARIOS)
 
 
 def parse_list(flag: str, text: str, choices: tuple[str, ...]) -> tuple[str, ...]:
@@ -82,7 +90,9 @@ def _cmd_compare(args: argparse.Namespace) -> int:
         raise UsageError(f"obsdesign compare: argument --out: directory {str(out.parent)!r} does not exist")
     plants = parse_list("--plants", args.plants, _PLANTS)
     estimators = parse_list("--estimators", args.estimators, _ESTIMATORS)
-    scenarios = parse_list("--scenarios", args.scenarios, _SCENARIOS)
+    scenarios = _scenarios()
+    if args.scenarios is not None:
+        scenarios = parse_list("--scenarios", args.scenarios, scenarios)
     cfg = load(args)
     trace = None
     if args.data is not None:
@@ -128,7 +138,8 @@ def add_commands(sub) -> None:
     p.add_argument("--plants", default=",".join(_PLANTS), help=f"plant friction models (default {','.join(_PLANTS)})")
     p.add_argument("--estimators", default=",".join(_ESTIMATORS),
                    help=f"estimators (default {','.join(_ESTIMATORS)}); baselines tuned by the fair noise rule")
-    p.add_argument("--scenarios", default=",".join(_SCENARIOS), help=f"scenarios (default {','.join(_SCENARIOS)})")
+    p.add_argument("--scenarios", help="scenarios of obsdesign.comparison.SCENARIOS, comma-separated "
+                   "(default: all of them; docs/comparison.md)")
     p.add_argument("--seeds", type=integer(1), default=2, help="seeds per case (default 2)")
     p.add_argument("--workers", type=integer(1), help="local processes (default: all cores)")
     p.add_argument("--data", metavar="FILE", help="measured trace (.csv/.mat): adds offline rows, friction error "
