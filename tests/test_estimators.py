@@ -41,6 +41,28 @@ def test_registry_codes():
         "paper": 0, "paper-k0": 1, "eso": 2, "kalman": 3, "dob": 4}
 
 
+def test_one_catalogue_light_and_complete():
+    """The command line and the simulator read the same object; it loads no NumPy, SciPy or
+    python-control; every entry's builder resolves and every baseline has what the fair rule needs."""
+    import subprocess
+    import sys
+
+    from obsdesign.estimators import FIRST_BASELINE_CODE, RULES, EstimatorInfo
+    from obsdesign.sampled.choices import ESTIMATORS as CHOICES
+
+    assert CHOICES is ESTIMATORS
+    code = ("import sys, obsdesign.estimators.registry, obsdesign.sampled.choices, obsdesign.friction.registry; "
+            "print(','.join(m for m in ('numpy', 'scipy', 'control', 'numba') if m in sys.modules))")
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip() == ""
+    for name, info in ESTIMATORS.items():
+        assert isinstance(info, EstimatorInfo) and info.name == name and callable(info.build)
+        assert set(info.rules) <= set(RULES) and info.doc and "\n" not in info.doc
+        assert info.baseline == (info.code >= FIRST_BASELINE_CODE)
+        if info.baseline:
+            lo, hi = info.knob_range
+            assert info.knob and info.knob_unit and 0 < lo < hi and not info.lowpass
+
+
 # --- ESO ---------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("omega_o, sigma", [(30.0, 21.1), (400.0, 21.1), (50.0, 0.0)])

@@ -301,3 +301,17 @@ def test_the_choice_scan_finds_a_copy(tmp_path):
     found = [(line, what, strings) for line, what, strings in _name_lists(bad) if len(strings) >= 2]
     assert sorted(found) == [(1, "docstring set", ["pid", "pid+observer"]), (2, "literal", ["eso", "dob"]),
                              (3, "message", ["paper", "eso"]), (6, "literal", ["eso", "dob"])]
+
+
+def test_registry_codes_are_plain_ints():
+    """A numba module reads a code at import time (``SCHEDULES.code("true")``) and freezes it:
+    it must be a plain ``int``, unique within its registry."""
+    from obsdesign._registry import Registry
+
+    for kind, (where, _) in REGISTRIES.items():
+        module, _, name = where.partition(":")
+        registry = getattr(importlib.import_module(module), name)
+        if not isinstance(registry, Registry):  # export formats: names only, no kernel
+            continue
+        codes = [registry.code(n) for n in registry.names()]
+        assert all(type(c) is int for c in codes) and len(set(codes)) == len(codes), kind
