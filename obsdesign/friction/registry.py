@@ -253,7 +253,8 @@ def _gms_layout(q: dict[str, Any]) -> list[float]:
 FRICTION_MODELS = Registry("friction model", [
     FrictionModelInfo(
         name="paper", code=PAPER,
-        doc="Coulomb with log-shaped pre-sliding memory (eq:2:3:1-2:3:5) and viscous lag; kernel in friction/presliding.py",
+        doc="Coulomb with log-shaped pre-sliding memory (eq:2:3:1-2:3:5) and viscous lag; "
+            "kernel in friction/presliding.py",
         parameters=(
             ParameterSpec("Cf", "N", "Coulomb friction level", 0.35, 0.0, 1e3),
             ParameterSpec("sigma", "N s/m", "viscous coefficient", 21.1, 0.0, 1e4),
