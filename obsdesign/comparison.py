@@ -1,9 +1,9 @@
 """Observer shoot-out: every estimator on every plant friction model and scenario (compute only).
 
-Each estimator of :data:`obsdesign.sampled.choices.ESTIMATORS` is designed from one config
+Each estimator of :data:`obsdesign.estimators.ESTIMATORS` is designed from one config
 (the baselines tuned by the fair noise rule, :func:`obsdesign.estimators.tune`) and runs in
 the closed loop (or open loop for ``excitation``) against plants whose friction model is
-one of :data:`obsdesign.plant_spec.PLANT_FRICTION_MODELS` (``[plant_friction]``), at the
+one of :data:`obsdesign.friction.FRICTION_MODELS` (``[plant_friction]``), at the
 design's friction levels. The observer never knows the plant's model: ``paper`` is the
 matched case, the others are model mismatch.
 
@@ -43,8 +43,9 @@ from ._display import ResultDisplay
 from ._validate import check_choice, check_integer
 from .estimators import DiscreteEstimator, friction_noise_rms, noise_level, reference_noise_rms, tune
 from .params import Config
-from .plant_spec import PLANT_FRICTION_MODELS, PlantFrictionSpec
-from .sampled.choices import ESTIMATORS
+from .estimators.registry import ESTIMATORS
+from .friction.registry import FRICTION_MODELS
+from .plant_spec import PlantFrictionSpec
 from .sim.scenarios import Chirp, Excitation, Positioning
 from .sim.simulate import simulate
 from .sim.step_metrics import step_metrics
@@ -80,7 +81,7 @@ def plant_config(cfg: Config, model: str) -> Config:
     cfg : Config
         The design.
     model : str
-        One of :data:`obsdesign.plant_spec.PLANT_FRICTION_MODELS`; ``cfg``'s own
+        One of :data:`obsdesign.friction.FRICTION_MODELS`; ``cfg``'s own
         ``[plant_friction]`` parameters are kept when it names the same model.
 
     Examples
@@ -89,7 +90,7 @@ def plant_config(cfg: Config, model: str) -> Config:
     >>> plant_config(od.load_preset("vcm"), "dahl").plant_friction.model
     'dahl'
     """
-    check_choice("plant", model, PLANT_FRICTION_MODELS)
+    FRICTION_MODELS.check(model, kind="plant")
     own = cfg.plant_friction
     params = dict(own.parameters) if own is not None and own.model == model else {}
     return dataclasses.replace(cfg, plant_friction=PlantFrictionSpec(model=model, parameters=params))
@@ -252,7 +253,7 @@ def summarize(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return out
 
 
-def compare(cfg: Config, *, plants=PLANT_FRICTION_MODELS, estimators=tuple(ESTIMATORS),
+def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATORS.names(),
             scenarios=tuple(SCENARIOS), seeds: int = 2, workers: int | None = None,
             executor=None) -> ComparisonResult:
     """Run every estimator on every plant friction model and scenario.
@@ -262,9 +263,9 @@ def compare(cfg: Config, *, plants=PLANT_FRICTION_MODELS, estimators=tuple(ESTIM
     cfg : Config
         The design (observer, PID, sensor); the plant's friction levels and mass come from it too.
     plants : sequence of str
-        Plant friction models (:data:`obsdesign.plant_spec.PLANT_FRICTION_MODELS`).
+        Plant friction models (:data:`obsdesign.friction.FRICTION_MODELS`).
     estimators : sequence of str
-        Names of :data:`obsdesign.sampled.choices.ESTIMATORS`; baselines are tuned by the fair
+        Names of :data:`obsdesign.estimators.ESTIMATORS`; baselines are tuned by the fair
         noise rule (:func:`obsdesign.estimators.tune`).
     scenarios : sequence of str
         Keys of :data:`SCENARIOS`.
@@ -287,8 +288,8 @@ def compare(cfg: Config, *, plants=PLANT_FRICTION_MODELS, estimators=tuple(ESTIM
     """
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
-    plants = tuple(check_choice("plants", p, PLANT_FRICTION_MODELS) for p in plants)
-    estimators = tuple(check_choice("estimators", e, tuple(ESTIMATORS)) for e in estimators)
+    plants = tuple(FRICTION_MODELS.check(p, kind="plants") for p in plants)
+    estimators = tuple(ESTIMATORS.check(e, kind="estimators") for e in estimators)
     scenarios = tuple(check_choice("scenarios", s, tuple(SCENARIOS)) for s in scenarios)
     seeds = check_integer("seeds", seeds, minimum=1)
     t0 = time.perf_counter()
@@ -296,7 +297,7 @@ def compare(cfg: Config, *, plants=PLANT_FRICTION_MODELS, estimators=tuple(ESTIM
     eta, band = noise_level(cfg)
     noise: dict[str, float] = {}
     for name in estimators:
-        if name in ("paper", "paper-k0"):
+        if not ESTIMATORS[name].baseline:  # the paper's observer: run by name, the kernel schedules it
             tuned[name] = name
             noise[name] = reference_noise_rms(cfg) if eta > 0 else 0.0
         else:

@@ -2,9 +2,9 @@
 
 The observer is always designed from ``[friction]`` (the paper's model). The plant the
 simulator integrates may have another friction model: ``[plant_friction]`` names it
-(``model``, one of ``paper``, ``lugre``, ``dahl``, ``gms``) and sets its parameters by the
-names of :data:`obsdesign.friction.FRICTION_MODELS`. Every model also takes asymmetric
-levels ``Cf_neg``, ``sigma_neg`` and a constant ``offset`` [N]. ``Cf`` and ``sigma`` default
+(``model``, a name of :data:`obsdesign.friction.FRICTION_MODELS`) and sets its parameters by
+the names of that model's ``parameters``. Every model also takes asymmetric levels
+``Cf_neg``, ``sigma_neg`` and a constant ``offset`` [N]. ``Cf`` and ``sigma`` default
 to the config's ``[friction]`` values (and for ``paper`` also ``s`` and ``beta``), so a
 table holding only ``model = "lugre"`` gives a LuGre plant at the design's friction levels.
 Without the table the plant is the paper's model, exactly as designed. See docs/comparison.md.
@@ -29,20 +29,21 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
-from ._validate import FrozenMap, check_choice
+from ._validate import FrozenMap
+from .friction.registry import FRICTION_MODELS  # no NumPy, no numba: safe under ``import obsdesign``
 
 __all__ = ["PlantFrictionSpec", "PLANT_FRICTION_MODELS", "PAPER_EXTRA", "PLANT_PARAMETER_NAMES", "split_plant",
            "with_plant_parameters"]
 
-#: Model names, in the order of their kernel codes.
-PLANT_FRICTION_MODELS = ("paper", "lugre", "dahl", "gms")
+#: Model names, in the order of their kernel codes (those of :data:`obsdesign.friction.FRICTION_MODELS`).
+PLANT_FRICTION_MODELS = tuple(FRICTION_MODELS)
 #: Parameters the ``paper`` plant takes beyond those of :data:`obsdesign.friction.FRICTION_MODELS`.
 PAPER_EXTRA = ("Cf_neg", "sigma_neg", "offset")
 
 
-#: Parameter names of ``[plant_friction]`` tables of any model (the sweeps' ``plant.NAME``).
-PLANT_PARAMETER_NAMES = frozenset({"Cf_neg", "sigma_neg", "offset", "Fs", "vs", "sigma0", "sigma1", "alpha", "C",
-                                   "N", "K"})
+#: Parameter names of ``[plant_friction]`` tables of any model that a sweep can set (``plant.NAME``):
+#: the union of the models' scalar parameters (not the element lists ``k``/``alpha`` of ``gms``).
+PLANT_PARAMETER_NAMES = frozenset(name for info in FRICTION_MODELS.values() for name in info.scalar_parameters())
 
 
 def split_plant(params: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -102,10 +103,9 @@ class PlantFrictionSpec:
     parameters: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        check_choice("plant_friction.model", self.model, PLANT_FRICTION_MODELS)
+        FRICTION_MODELS.check(self.model, kind="plant_friction.model")
         if not isinstance(self.parameters, Mapping):
             raise TypeError(f"plant_friction: expected a table of parameters, found {type(self.parameters).__name__}")
-        from .friction.registry import FRICTION_MODELS  # lazy: numba only when the table is used
         params = dict(self.parameters)
         extra = {k: params.pop(k) for k in PAPER_EXTRA if self.model == "paper" and k in params}
         FRICTION_MODELS[self.model].resolve(params)  # names, types and ranges

@@ -210,6 +210,7 @@ def experiments_study(cfg: Config | None = None) -> ExperimentsStudy:
     """
     cfg = cfg or load_preset("vcm")
     pos, trk, runs = {}, {}, {}
+    # choice subset: the paper's experiment (section 4.2) compares these two controllers
     for ctrl in ("pid", "pid+observer"):
         runs[("positioning", ctrl)] = r = simulate(cfg, "positioning", controller=ctrl, stiffness="estimated-raw")
         pos[ctrl] = r.metrics

@@ -41,6 +41,71 @@ def test_registry_codes():
         "paper": 0, "paper-k0": 1, "eso": 2, "kalman": 3, "dob": 4}
 
 
+def test_one_catalogue_light_and_complete():
+    """The command line and the simulator read the same object; it loads no NumPy, SciPy or
+    python-control; every entry's builder resolves and every baseline has what the fair rule needs."""
+    import subprocess
+    import sys
+
+    from obsdesign.estimators import FIRST_BASELINE_CODE, RULES, EstimatorInfo
+    from obsdesign.sampled.choices import ESTIMATORS as CHOICES
+
+    assert CHOICES is ESTIMATORS
+    code = ("import sys, obsdesign.estimators.registry, obsdesign.sampled.choices, obsdesign.friction.registry; "
+            "print(','.join(m for m in ('numpy', 'scipy', 'control', 'numba') if m in sys.modules))")
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip() == ""
+    for name, info in ESTIMATORS.items():
+        assert isinstance(info, EstimatorInfo) and info.name == name and callable(info.build)
+        assert set(info.rules) <= set(RULES) and info.doc and "\n" not in info.doc
+        assert info.baseline == (info.code >= FIRST_BASELINE_CODE)
+        if info.baseline:
+            lo, hi = info.knob_range
+            assert info.knob and info.knob_unit and 0 < lo < hi and not info.lowpass
+
+
+def test_a_sixth_linear_estimator_is_its_module_plus_one_entry(request, monkeypatch, capsys, tmp_path):
+    """docs/estimators.md, "Adding an estimator": a module with its builder and one registry entry
+    reach tune, build, the simulator's kernel, compare and the command line, with no other edit.
+    The probe is the ESO under another name and knob, so its closed loop must be the ESO's."""
+    import dataclasses
+    import sys
+    import types
+
+    from obsdesign.cli import main
+    from obsdesign.comparison import compare
+    from obsdesign.estimators import EstimatorInfo
+
+    def build_probe(cfg, *, omega_p, sigma_model=None, tuning="manual"):
+        est = build_eso(cfg, omega_o=omega_p, sigma_model=sigma_model, tuning=tuning)
+        return dataclasses.replace(est, name="probe", params={**est.params, "omega_p": omega_p})
+
+    module = types.ModuleType("obsdesign.estimators.probe")   # "its module"
+    module.build_probe = build_probe
+    monkeypatch.setitem(sys.modules, module.__name__, module)
+    ESTIMATORS.register(EstimatorInfo(                         # "plus one entry"
+        name="probe", code=max(info.code for info in ESTIMATORS.values()) + 1, doc="the ESO, renamed",
+        knob="omega_p", knob_unit="rad/s", knob_range=(1e-3, 1e5), knob_is_rate=True, lowpass=False,
+        builder="probe:build_probe"))
+    request.addfinalizer(lambda: ESTIMATORS._entries.pop("probe"))
+
+    cfg = od.load_preset("vcm")
+    eso = tune("eso", cfg)
+    assert tune("probe", cfg).params["omega_p"] == eso.params["omega_o"]
+    assert tune("probe", cfg, rule="rate").params["omega_p"] == tune("eso", cfg, rule="rate").params["omega_o"]
+    assert build("probe", cfg, omega_p=100.0).name == "probe"
+    res = od.simulate(cfg, "tracking", estimator="probe", duration=0.05)
+    np.testing.assert_array_equal(res.u, od.simulate(cfg, "tracking", estimator="eso", duration=0.05).u)
+    rows = compare(cfg, plants=("paper",), estimators=("eso", "probe"), scenarios=("excitation",), seeds=1,
+                   workers=1).rows
+    assert [r["status"] for r in rows] == ["ok", "ok"]
+    assert rows[0]["friction_rms_error"] == rows[1]["friction_rms_error"]
+    assert main(["simulate", "tracking", "--estimator", "nope"]) == 2   # the command line's choices
+    assert "'dob', 'probe')" in capsys.readouterr().err
+    assert main(["compare", "--estimators", "nope", "--out", str(tmp_path / "cmp")]) == 2
+    assert "expected names from paper, paper-k0, eso, kalman, dob, probe, found 'nope'" in capsys.readouterr().err
+    assert main(["simulate", "tracking", "--estimator", "probe", "--duration", "0.05"]) == 0
+
+
 # --- ESO ---------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("omega_o, sigma", [(30.0, 21.1), (400.0, 21.1), (50.0, 0.0)])

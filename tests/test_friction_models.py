@@ -300,6 +300,18 @@ def test_registry_contract():
     assert q[:5].tolist() == [0.35, 0.35, 21.1, 21.1, 0.0]  # paper presets: Cf, sigma
 
 
+def test_plant_spec_lists_come_from_the_registry():
+    from obsdesign.friction import DAHL, GMS, LUGRE, PAPER
+    from obsdesign.plant_spec import PLANT_FRICTION_MODELS, PLANT_PARAMETER_NAMES
+
+    assert PLANT_FRICTION_MODELS == FRICTION_MODELS.names()
+    assert [FRICTION_MODELS.code(n) for n in PLANT_FRICTION_MODELS] == [PAPER, LUGRE, DAHL, GMS]
+    assert all(type(c) is int for c in (PAPER, LUGRE, DAHL, GMS))
+    # every scalar parameter of every model is sweepable as plant.NAME; the element lists are not
+    assert {"Cf_neg", "sigma_neg", "offset", "Fs", "vs", "sigma0", "sigma1", "alpha", "C", "N", "K"} \
+        <= PLANT_PARAMETER_NAMES and "k" not in PLANT_PARAMETER_NAMES
+
+
 def test_paper_code_is_not_dispatched():
     """Code 0 is reserved (its kernel is obsdesign.friction.presliding): NaN, never a silent zero."""
     p = FRICTION_MODELS["paper"].pack({})

@@ -4,7 +4,10 @@
 * every module under 500 lines;
 * every name in every ``__all__`` exists;
 * every parameter of a public function or method is documented in its numpydoc docstring;
-* ``obsdesign/export`` never imports the simulator.
+* ``obsdesign/export`` never imports the simulator;
+* every list of choice names (estimators, friction models, controllers, schedules, plants,
+  export formats) is written once, in its registry: no literal list, docstring set or
+  "expected one of" message elsewhere repeats >= 2 of them.
 """
 
 from __future__ import annotations
@@ -174,3 +177,141 @@ def test_public_parameters_are_documented(name, func):
     doc = inspect.getdoc(func) or ""
     missing = [p.name for p in params if p.name not in _documented("\n" + doc)]
     assert not missing, f"{name}: parameters not in the Parameters section: {missing}"
+
+
+# --- every list of choice names written once, in its registry -----------------------------------
+
+#: Kind of choice -> (where its names live, the module that types them).
+REGISTRIES = {
+    "estimators": ("obsdesign.estimators.registry:ESTIMATORS", "estimators/registry.py"),
+    "friction models": ("obsdesign.friction.registry:FRICTION_MODELS", "friction/registry.py"),
+    "controllers": ("obsdesign.sampled.choices:CONTROLLERS", "sampled/choices.py"),
+    "schedules": ("obsdesign.sampled.choices:SCHEDULES", "sampled/choices.py"),
+    "plants": ("obsdesign.sampled.choices:PLANTS", "sampled/choices.py"),
+    "export formats": ("obsdesign.export:FORMATS", "export/__init__.py"),
+}
+#: A literal may list a deliberate selection of choices (not the registry again) when the line
+#: it starts on, or the line above, says why with this marker.
+SUBSET_MARK = "# choice subset:"
+#: Known copies in files that other work owns (issue 16): (file, kind, names). Remove a line when
+#: its copy is gone; the test fails on a stale line so that this list only shrinks.
+PENDING = {
+    ("cli/_output.py", "controllers", ("pid", "pid+observer")),             # --controller choices=
+    ("comparison_data.py", "estimators", ("paper", "paper-k0")),           # the paper test of compare_data
+    ("export/controller.py", "controllers", ("pid", "pid+observer")),      # CONTROLLERS
+    ("export/controller.py", "export formats", ("c", "js", "octave", "python")),  # LANGUAGES, _TEMPLATES
+    ("export/files.py", "export formats", ("c", "js", "octave", "python")),       # CONTROLLER_FORMATS
+    ("export/files.py", "export formats", ("c", "js", "latex", "octave", "python")),  # export's docstring sets
+    ("export/files.py", "controllers", ("pid", "pid+observer")),
+    ("sim/simulate.py", "controllers", ("open-loop", "pid", "pid+observer")),    # prepare's docstring sets
+    ("sim/simulate.py", "schedules", ("constant", "estimated", "estimated-raw", "true")),
+    ("sim/simulate.py", "plants", ("model", "physical")),
+    ("sim/simulate.py", "estimators", ("dob", "eso", "kalman", "paper", "paper-k0")),
+    ("data/observe.py", "schedules", ("constant", "estimated", "true")),             # observe's docstring
+}
+
+
+def _registered() -> dict[str, frozenset]:
+    out = {}
+    for kind, (where, _) in REGISTRIES.items():
+        module, _, name = where.partition(":")
+        out[kind] = frozenset(getattr(importlib.import_module(module), name))
+    return out
+
+
+def _docstring_nodes(tree: ast.AST) -> set[int]:
+    found = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and node.body:
+            first = node.body[0]
+            if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant) \
+                    and isinstance(first.value.value, str):
+                found.add(id(first.value))
+    return found
+
+
+def _listed_name(node) -> str | None:
+    """The string a list element names: a constant, or the name of an entry built in place
+    (``Entry("paper", 0, ...)``, ``Info(name="paper", ...)``: a second registry)."""
+    if isinstance(node, ast.Call):
+        named = [k.value for k in node.keywords if k.arg == "name"]
+        node = named[0] if named else (node.args[0] if node.args else None)
+    if isinstance(node, ast.Constant) and isinstance(node.value, str):
+        return node.value
+    return None
+
+
+def _name_lists(path: Path):
+    """``(line, kind of text, strings)`` of every place in ``path`` that lists names: literal
+    lists, tuples, sets and dict keys; ``{'a', 'b'}`` sets in docstrings; and the names after
+    ``expected one of`` in other string constants (a hand-typed message)."""
+    source = path.read_text(encoding="utf-8")
+    lines = source.splitlines()
+    tree = ast.parse(source)
+    docstrings = _docstring_nodes(tree)
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.List, ast.Tuple, ast.Set, ast.Dict)):
+            elts = node.keys if isinstance(node, ast.Dict) else node.elts
+            marked = any(SUBSET_MARK in lines[i] for i in (node.lineno - 1, node.lineno - 2) if i >= 0)
+            if not marked:
+                yield node.lineno, "literal", [s for e in elts if (s := _listed_name(e)) is not None]
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+            if id(node) in docstrings:
+                for group in re.findall(r"\{([^{}\n]*)\}", node.value):
+                    yield node.lineno, "docstring set", re.findall(r"['\"]([^'\"]+)['\"]", group)
+            else:
+                for group in re.findall(r"expected one of ([^\n]*)", node.value):
+                    yield node.lineno, "message", [n.strip(" '\"") for n in group.split(",")]
+
+
+def _copies() -> dict[tuple, list[str]]:
+    registered = _registered()
+    own = {kind: module for kind, (_, module) in REGISTRIES.items()}
+    copies: dict[tuple, list[str]] = {}
+    for path in MODULES:
+        rel = str(path.relative_to(PACKAGE))
+        for line, what, strings in _name_lists(path):
+            for kind, names in registered.items():
+                hit = tuple(sorted(names.intersection(strings)))
+                if len(hit) >= 2 and rel != own[kind]:
+                    copies.setdefault((rel, kind, hit), []).append(f"{rel}:{line} {what}")
+    return copies
+
+
+def test_choice_names_are_written_only_in_their_registry():
+    """A list of >= 2 registered names (estimators, friction models, controllers, schedules,
+    plants, export formats) outside its registry is a second copy: read the registry instead
+    (``Registry.names()``, ``.check()``, an entry's attributes), refer to it in docstrings, or
+    mark a deliberate selection with ``# choice subset: <why>``."""
+    copies = _copies()
+    new = {key: where for key, where in copies.items() if key not in PENDING}
+    assert not new, "\n".join(f"{w}: {key[1]} {', '.join(key[2])}" for key, where in new.items() for w in where)
+
+
+def test_pending_copies_are_still_there():
+    stale = PENDING - set(_copies())
+    assert not stale, f"fixed? remove from tests/test_meta.py PENDING: {sorted(stale)}"
+
+
+def test_the_choice_scan_finds_a_copy(tmp_path):
+    bad = tmp_path / "bad.py"
+    bad.write_text('"""Doc: {\'pid\', \'pid+observer\'}."""\nX = ("eso", "dob")\n'
+                   'M = "estimator: expected one of paper, eso"\n# choice subset: a reason\nY = ("eso", "dob")\n'
+                   'R = Registry("estimator", [Entry("eso", 2, "."), Info(name="dob", code=4)])\n')
+    found = [(line, what, strings) for line, what, strings in _name_lists(bad) if len(strings) >= 2]
+    assert sorted(found) == [(1, "docstring set", ["pid", "pid+observer"]), (2, "literal", ["eso", "dob"]),
+                             (3, "message", ["paper", "eso"]), (6, "literal", ["eso", "dob"])]
+
+
+def test_registry_codes_are_plain_ints():
+    """A numba module reads a code at import time (``SCHEDULES.code("true")``) and freezes it:
+    it must be a plain ``int``, unique within its registry."""
+    from obsdesign._registry import Registry
+
+    for kind, (where, _) in REGISTRIES.items():
+        module, _, name = where.partition(":")
+        registry = getattr(importlib.import_module(module), name)
+        if not isinstance(registry, Registry):  # export formats: names only, no kernel
+            continue
+        codes = [registry.code(n) for n in registry.names()]
+        assert all(type(c) is int for c in codes) and len(set(codes)) == len(codes), kind

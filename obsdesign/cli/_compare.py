@@ -6,13 +6,18 @@ import argparse
 import json
 from pathlib import Path
 
+from ..estimators.registry import ESTIMATORS
+from ..friction.registry import FRICTION_MODELS
 from ._common import FINITE_ARG, POSITIVE_ARG, UsageError, add_config_flags, integer, load
 
 __all__ = ["add_commands", "parse_list", "summary_text"]
 
-_PLANTS = ("paper", "lugre", "dahl", "gms")
-_ESTIMATORS = ("paper", "paper-k0", "eso", "kalman", "dob")
-_SCENARIOS = ("excitation", "positioning", "tracking")
+
+def _scenarios() -> tuple[str, ...]:
+    """The comparison's scenarios (:data:`obsdesign.comparison.SCENARIOS`; heavy: read once the command runs)."""
+    from ..comparison import SCENARIOS
+
+    return tuple(SCENARIOS)
 
 
 def parse_list(flag: str, text: str, choices: tuple[str, ...]) -> tuple[str, ...]:
@@ -27,9 +32,9 @@ def parse_list(flag: str, text: str, choices: tuple[str, ...]) -> tuple[str, ...
     choices : tuple of str
         The allowed names.
 
-    >>> parse_list("--plants", "paper,gms", _PLANTS)
+    >>> parse_list("--plants", "paper,gms", FRICTION_MODELS.names())
     ('paper', 'gms')
-    >>> parse_list("--plants", "paper,coulomb", _PLANTS)
+    >>> parse_list("--plants", "paper,coulomb", FRICTION_MODELS.names())
     Traceback (most recent call last):
     ...
     obsdesign.cli._common.UsageError: obsdesign compare: argument --plants: expected names from paper, lugre, dahl, gms, found 'coulomb'
@@ -80,9 +85,11 @@ def _cmd_compare(args: argparse.Namespace) -> int:
         raise UsageError(f"obsdesign compare: argument --out: expected a directory, found the file {args.out!r}")
     if not out.parent.is_dir():
         raise UsageError(f"obsdesign compare: argument --out: directory {str(out.parent)!r} does not exist")
-    plants = parse_list("--plants", args.plants, _PLANTS)
-    estimators = parse_list("--estimators", args.estimators, _ESTIMATORS)
-    scenarios = parse_list("--scenarios", args.scenarios, _SCENARIOS)
+    plants = parse_list("--plants", args.plants, FRICTION_MODELS.names())
+    estimators = parse_list("--estimators", args.estimators, ESTIMATORS.names())
+    scenarios = _scenarios()
+    if args.scenarios is not None:
+        scenarios = parse_list("--scenarios", args.scenarios, scenarios)
     cfg = load(args)
     trace = None
     if args.data is not None:
@@ -125,10 +132,12 @@ def add_commands(sub) -> None:
     """Add ``compare`` to the subparsers ``sub``."""
     p = sub.add_parser("compare", help="estimators x plant friction models x scenarios (the shoot-out)")
     add_config_flags(p, default_preset="vcm")
-    p.add_argument("--plants", default=",".join(_PLANTS), help=f"plant friction models (default {','.join(_PLANTS)})")
-    p.add_argument("--estimators", default=",".join(_ESTIMATORS),
-                   help=f"estimators (default {','.join(_ESTIMATORS)}); baselines tuned by the fair noise rule")
-    p.add_argument("--scenarios", default=",".join(_SCENARIOS), help=f"scenarios (default {','.join(_SCENARIOS)})")
+    plants, estimators = ",".join(FRICTION_MODELS.names()), ",".join(ESTIMATORS.names())
+    p.add_argument("--plants", default=plants, help=f"plant friction models (default {plants})")
+    p.add_argument("--estimators", default=estimators,
+                   help=f"estimators (default {estimators}); baselines tuned by the fair noise rule")
+    p.add_argument("--scenarios", help="scenarios of obsdesign.comparison.SCENARIOS, comma-separated "
+                   "(default: all of them; docs/comparison.md)")
     p.add_argument("--seeds", type=integer(1), default=2, help="seeds per case (default 2)")
     p.add_argument("--workers", type=integer(1), help="local processes (default: all cores)")
     p.add_argument("--data", metavar="FILE", help="measured trace (.csv/.mat): adds offline rows, friction error "

@@ -1,7 +1,8 @@
 """Estimators of velocity and friction by registry, with a fair tuning rule.
 
 Every estimator is a :class:`DiscreteEstimator` in one discrete form, run per sample by
-:func:`estimator_step` (numba). ``ESTIMATORS`` maps names to codes, knobs and builders;
+:func:`estimator_step` (numba). ``ESTIMATORS`` (:mod:`~obsdesign.estimators.registry`, light)
+maps names to codes, knobs, tuning rules and builders;
 :func:`tune` sets a baseline's knob so that its friction-noise RMS equals that of the
 paper's filtered estimate (``rule="noise"``) or its slowest pole equals the paper's
 dominant pole (``rule="rate"``).
@@ -23,7 +24,7 @@ __all__ = [
     "MAX_STATES", "DiscreteEstimator", "discretize_observer", "estimator_output", "estimator_step",
     "foh_matrices", "run_offline", "build_dob", "dob_continuous", "q_filter", "build_eso", "eso_gains", "build_kalman",
     "noise_level", "build_paper", "build_paper_k0", "paper_dominant_pole", "with_lowpass", "ESTIMATORS",
-    "EstimatorInfo", "build", "estimator_names", "RULES", "friction_noise_rms", "reference_estimator",
+    "EstimatorInfo", "FIRST_BASELINE_CODE", "build", "estimator_names", "RULES", "friction_noise_rms", "reference_estimator",
     "reference_noise_rms", "tune", "velocity_noise_rms",
 ]
 
@@ -49,9 +50,10 @@ _LAZY = {
     'with_lowpass': '.paper',
     'ESTIMATORS': '.registry',
     'EstimatorInfo': '.registry',
+    'FIRST_BASELINE_CODE': '.registry',
     'build': '.registry',
     'estimator_names': '.registry',
-    'RULES': '.tuning',
+    'RULES': '.registry',
     'friction_noise_rms': '.tuning',
     'reference_estimator': '.tuning',
     'reference_noise_rms': '.tuning',

@@ -144,7 +144,7 @@ class DiscreteEstimator:
     Attributes
     ----------
     name : str
-        Registry name (``paper``, ``paper-k0``, ``eso``, ``kalman``, ``dob``).
+        Its name in :data:`obsdesign.estimators.ESTIMATORS`.
     dt : float
         Sample time [s] it was discretized at.
     Phi : ndarray, shape (nz, nz)

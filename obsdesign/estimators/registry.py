@@ -1,4 +1,19 @@
-"""The registry of estimators: integer codes, knobs, builders and tuners.
+"""The one catalogue of estimators: names, kernel codes, knobs, tuning rules and builders.
+
+:data:`ESTIMATORS` is a :class:`~obsdesign._registry.Registry` of :class:`EstimatorInfo`
+entries, read by the simulator and its kernel (the integer codes), the command line (the
+choices), the fair tuning rule (knob, search range, rules) and the docs. It is light: the
+builders are named by their module and imported on first use, so the command line reads it
+without loading NumPy, SciPy or python-control.
+
+Codes: ``paper`` and ``paper-k0`` (below :data:`FIRST_BASELINE_CODE`) are the paper's
+observer, run by the kernel itself with its stiffness schedule; the baselines (codes from
+:data:`FIRST_BASELINE_CODE` on) are linear :class:`~obsdesign.estimators.DiscreteEstimator`
+run by :func:`~obsdesign.estimators.estimator_step`. Codes are append-only (numba caches them).
+
+Adding a linear estimator: its module (a ``build_<name>(cfg, *, <knob>, sigma_model=None,
+tuning="manual")`` returning a ``DiscreteEstimator``) and one entry below; see
+docs/estimators.md, "Adding an estimator".
 
 Examples
 --------
@@ -11,112 +26,153 @@ Examples
 Traceback (most recent call last):
 ...
 ValueError: omega_o: 'eso' needs it, expected a finite number > 0 [rad/s], found None
+>>> ESTIMATORS.code("kalman"), [n for n, info in ESTIMATORS.items() if info.baseline]
+(3, ['eso', 'kalman', 'dob'])
 """
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
 from functools import partial
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
-from ..params import Config
-from .base import DiscreteEstimator
-from .dob import build_dob
-from .eso import build_eso
-from .kalman import build_kalman
-from .paper import build_paper, build_paper_k0
-from .tuning import tune
+from .._registry import Entry, Registry
 
-__all__ = ["EstimatorInfo", "ESTIMATORS", "build", "estimator_names"]
+if TYPE_CHECKING:
+    from ..params import Config
+    from .base import DiscreteEstimator
+
+__all__ = ["EstimatorInfo", "ESTIMATORS", "RULES", "FIRST_BASELINE_CODE", "build", "estimator_names"]
+
+#: Fair tuning rules (:func:`obsdesign.estimators.tune`): equal friction-noise RMS, equal slowest pole.
+RULES = ("noise", "rate")
 
 
 @dataclass(frozen=True, kw_only=True)
-class EstimatorInfo:
-    """One entry of :data:`ESTIMATORS`.
+class EstimatorInfo(Entry):
+    """One entry of :data:`ESTIMATORS`: everything the package knows about an estimator by name.
 
     Attributes
     ----------
-    code : int
-        Integer code for numba kernels.
-    doc : str
-        One line.
+    name, code, doc : str, int, str
+        The name, the kernel's integer code and one line of description.
     knob, knob_unit : str or None
         The design parameter :func:`build` takes (None: none) and its unit.
+    knob_default : float or None
+        The knob's value when :func:`build` is not given one (None: required).
+    knob_range : (float, float) or None
+        Search range of the fair tuning rule (log-uniform ``brentq``); None for the paper's
+        entries, which are the reference and are not tuned.
+    knob_noise_power : int
+        The range is for a measurement RMS of 1 um and scales with ``(eta / 1 um)**power``
+        (the Kalman filter's ``q``: 2, its gain depends on ``q / eta^2``); such an
+        estimator needs measurement noise ``eta > 0``.
+    knob_is_rate : bool
+        The knob is the slowest error pole's rate [rad/s], so ``rule="rate"`` sets it to the
+        paper's dominant rate in closed form (otherwise the rate rule solves for it).
+    rules : tuple of str
+        The tuning rules (of :data:`RULES`) it supports.
     lowpass : bool
         Whether the closed loop passes ``f_hat`` through eq:3:4:5 before compensating
         (the paper entries); the baselines' bandwidth is their own knob.
-    build : callable
-        ``build(cfg, *, <knob>=..., sigma_model=None) -> DiscreteEstimator``.
-    tune : callable
-        ``tune(cfg, *, rule="noise", sigma_model=None) -> DiscreteEstimator`` (the fair rule).
+    builder : str
+        ``"module:function"`` in :mod:`obsdesign.estimators`, imported on first use:
+        ``build(cfg, *, <knob>=..., sigma_model=None[, tuning=...]) -> DiscreteEstimator``.
     """
 
-    code: int
-    doc: str
     knob: str | None
     knob_unit: str | None
+    knob_default: float | None = None
+    knob_range: tuple[float, float] | None = None
+    knob_noise_power: int = 0
+    knob_is_rate: bool = False
+    rules: tuple[str, ...] = RULES
     lowpass: bool
-    build: Callable[..., DiscreteEstimator]
-    tune: Callable[..., DiscreteEstimator]
+    builder: str
+
+    @property
+    def baseline(self) -> bool:
+        """A linear estimator run by ``estimator_step``, its knob set by the fair rule (not the paper's)."""
+        return self.knob_range is not None
+
+    @property
+    def build(self) -> Callable[..., "DiscreteEstimator"]:
+        """The builder, imported on first use."""
+        module, _, function = self.builder.partition(":")
+        return getattr(importlib.import_module(f"{__package__}.{module}"), function)
+
+    @property
+    def tune(self) -> Callable[..., "DiscreteEstimator"]:
+        """``tune(cfg, *, rule="noise", sigma_model=None)``: :func:`obsdesign.estimators.tune` of this entry."""
+        return partial(importlib.import_module(f"{__package__}.tuning").tune, self.name)
 
 
-ESTIMATORS: dict[str, EstimatorInfo] = {
-    "paper": EstimatorInfo(code=0, doc="the paper's reduced-order observer (fixed-k form; the kernel schedules k)",
-                           knob="stiffness", knob_unit="N/m", lowpass=True, build=build_paper, tune=partial(tune, "paper")),
-    "paper-k0": EstimatorInfo(code=1, doc="the paper's gains with the stiffness schedule off (k = 0): ablation",
-                              knob=None, knob_unit=None, lowpass=True, build=build_paper_k0, tune=partial(tune, "paper-k0")),
-    "eso": EstimatorInfo(code=2, doc="linear extended state observer, all three poles at -omega_o (Gao 2003)",
-                         knob="omega_o", knob_unit="rad/s", lowpass=False, build=build_eso, tune=partial(tune, "eso")),
-    "kalman": EstimatorInfo(code=3, doc="steady-state Kalman filter (current estimator), friction random walk",
-                            knob="q", knob_unit="N^2/s", lowpass=False, build=build_kalman, tune=partial(tune, "kalman")),
-    "dob": EstimatorInfo(code=4, doc="disturbance observer, Q(s) = omega_q^2/(s + omega_q)^2, v_hat = s Q y",
-                         knob="omega_q", knob_unit="rad/s", lowpass=False, build=build_dob, tune=partial(tune, "dob")),
-}
+#: The estimators, in code order.
+ESTIMATORS = Registry("estimator", [
+    EstimatorInfo(name="paper", code=0,
+                  doc="the paper's reduced-order observer with its stiffness schedule (eq:3:1:2, Prop. 2); "
+                      "fixed-k form outside the kernel",
+                  knob="stiffness", knob_unit="N/m", knob_default=0.0, lowpass=True, builder="paper:build_paper"),
+    EstimatorInfo(name="paper-k0", code=1,
+                  doc="the same gains with the schedule off (k = 0 always: a linear reduced-order observer), "
+                      "the ablation of the pre-sliding schedule",
+                  knob=None, knob_unit=None, lowpass=True, builder="paper:build_paper_k0"),
+    EstimatorInfo(name="eso", code=2,
+                  doc="linear extended state observer, all three poles at -omega_o (Gao 2003)",
+                  knob="omega_o", knob_unit="rad/s", knob_range=(1e-3, 1e5), knob_is_rate=True,
+                  lowpass=False, builder="eso:build_eso"),
+    EstimatorInfo(name="kalman", code=3,
+                  doc="steady-state Kalman filter (current estimator) with a random-walk friction",
+                  knob="q", knob_unit="N^2/s", knob_range=(1e-20, 1e8), knob_noise_power=2,
+                  lowpass=False, builder="kalman:build_kalman"),
+    EstimatorInfo(name="dob", code=4,
+                  doc="disturbance observer, Q(s) = omega_q^2/(s + omega_q)^2",
+                  knob="omega_q", knob_unit="rad/s", knob_range=(1e-3, 1e5), knob_is_rate=True,
+                  lowpass=False, builder="dob:build_dob"),
+])
+
+#: Codes from this one on are baselines (linear, ``estimator_step``); those below are the paper's observer.
+FIRST_BASELINE_CODE = min(info.code for info in ESTIMATORS.values() if info.baseline)
+if any(info.baseline != (info.code >= FIRST_BASELINE_CODE) or (info.baseline and info.lowpass)
+       for info in ESTIMATORS.values()):  # what the kernel assumes
+    raise RuntimeError("estimators: every baseline follows the paper's codes and compensates with its own estimate")
 
 
 def estimator_names() -> tuple[str, ...]:
     """Names of the registry, in code order."""
-    return tuple(ESTIMATORS)
+    return ESTIMATORS.names()
 
 
-def _info(name) -> EstimatorInfo:
-    if not isinstance(name, str) or name not in ESTIMATORS:
-        raise ValueError(f"name: expected one of {', '.join(ESTIMATORS)}, found {name!r}")
-    return ESTIMATORS[name]
-
-
-def build(name: str, cfg: Config, *, stiffness: float = 0.0, omega_o: float | None = None, q: float | None = None,
-          omega_q: float | None = None, sigma_model: float | None = None) -> DiscreteEstimator:
-    """An estimator of the registry with its knob given explicitly.
+def build(name: str, cfg: "Config", *, sigma_model: float | None = None, **knob: float) -> "DiscreteEstimator":
+    """An estimator of :data:`ESTIMATORS` with its knob given explicitly.
 
     Parameters
     ----------
-    name : {"paper", "paper-k0", "eso", "kalman", "dob"}
+    name : str
+        A name of :data:`ESTIMATORS`.
     cfg : Config
-    stiffness : float
-        ``paper`` only: the fixed stiffness k [N/m] (default 0).
-    omega_o, q, omega_q : float
-        The knob of ``eso`` [rad/s], ``kalman`` [N^2/s], ``dob`` [rad/s]; required for that entry.
+        The design.
     sigma_model : float, optional
         Viscous coefficient of the model [N s/m]; default ``sigma`` for ``static``, 0 for ``lag``.
+    **knob : float
+        The entry's knob by its name (:attr:`EstimatorInfo.knob`, e.g. ``omega_o=300.0`` for
+        ``eso``, ``stiffness=`` [N/m] for ``paper``); required unless the entry has a default.
+        ``None`` counts as not given.
 
     Raises
     ------
     ValueError
         Unknown name; a knob missing, not positive, or given to an entry that has another knob.
     """
-    info = _info(name)
-    knobs = {"omega_o": omega_o, "q": q, "omega_q": omega_q}
-    extra = [k for k, v in knobs.items() if v is not None and k != info.knob]
+    info = ESTIMATORS[ESTIMATORS.check(name, kind="name")]
+    given = {k: v for k, v in knob.items() if v is not None}
+    extra = [k for k in given if k != info.knob]
     if extra:
-        raise ValueError(f"{extra[0]}: {name!r} takes {info.knob or 'no knob'}, found {extra[0]} = {knobs[extra[0]]!r}")
-    if name == "paper":
-        return build_paper(cfg, stiffness=stiffness, sigma_model=sigma_model)
-    if stiffness != 0.0:
-        raise ValueError(f"stiffness: only 'paper' takes a stiffness, found {stiffness!r} for {name!r}")
-    if name == "paper-k0":
-        return build_paper_k0(cfg, sigma_model=sigma_model)
-    if knobs[info.knob] is None:
+        raise ValueError(f"{extra[0]}: {name!r} takes {info.knob or 'no knob'}, found {extra[0]} = {given[extra[0]]!r}")
+    if info.knob is None:
+        return info.build(cfg, sigma_model=sigma_model)
+    value = given.get(info.knob, info.knob_default)
+    if value is None:
         raise ValueError(f"{info.knob}: {name!r} needs it, expected a finite number > 0 [{info.knob_unit}], found None")
-    builder = {"eso": build_eso, "kalman": build_kalman, "dob": build_dob}[name]
-    return builder(cfg, **{info.knob: knobs[info.knob]}, sigma_model=sigma_model)
+    return info.build(cfg, **{info.knob: value}, sigma_model=sigma_model)

@@ -43,19 +43,15 @@ import scipy.optimize
 
 from ..params import Config
 from .base import DiscreteEstimator, check_positive
-from .dob import build_dob
-from .eso import build_eso
-from .kalman import build_kalman, noise_level
-from .paper import _check_config, build_paper, build_paper_k0, paper_dominant_pole, with_lowpass
+from .kalman import noise_level
+from .paper import _check_config, build_paper, paper_dominant_pole, with_lowpass
+from .registry import ESTIMATORS, RULES
 
 __all__ = ["RULES", "friction_noise_rms", "velocity_noise_rms", "estimate_noise_rms",
            "reference_noise_rms", "reference_estimator", "tune", "noise_level"]
 
-RULES = ("noise", "rate")
-
-#: Search ranges of the knobs (log-uniform) for brentq.
-#: The Kalman range is for a sensor RMS of 1 um and scales with eta^2 (the gain depends on q / eta^2).
-_KNOBS = {"eso": ("omega_o", 1e-3, 1e5), "dob": ("omega_q", 1e-3, 1e5), "kalman": ("q", 1e-20, 1e8)}
+#: Measurement RMS [m] the knobs' search ranges (``EstimatorInfo.knob_range``) are written for.
+_RANGE_ETA = 1e-6
 #: Relative tolerance of the solved knob (the RMS is a power of it: well inside 1 %).
 _XTOL = 1e-9
 
@@ -170,10 +166,6 @@ def _check_paper_stable(cfg: Config) -> float:
     return pole
 
 
-def _builder(name: str):
-    return {"eso": build_eso, "dob": build_dob, "kalman": build_kalman}[name]
-
-
 def _solve_log(fun, lo: float, hi: float, what: str) -> float:
     """Root of ``fun(log knob)`` on ``[log lo, log hi]`` (``fun`` increasing in the knob)."""
     a, b = math.log(lo), math.log(hi)
@@ -187,13 +179,19 @@ def _solve_log(fun, lo: float, hi: float, what: str) -> float:
 def tune(name: str, cfg: Config, *, rule: str = "noise", sigma_model: float | None = None) -> DiscreteEstimator:
     """An estimator of the registry with its knob set by the fair tuning rule.
 
+    The knob, its search range and the rules come from the entry of
+    :data:`~obsdesign.estimators.ESTIMATORS` (:class:`~obsdesign.estimators.EstimatorInfo`).
+
     Parameters
     ----------
-    name : {"paper", "paper-k0", "eso", "kalman", "dob"}
-        The paper entries are the reference and are returned as designed (``k = 0``).
+    name : str
+        A name of :data:`~obsdesign.estimators.ESTIMATORS`. The paper entries are the reference
+        and are returned as designed (``k = 0``).
     cfg : Config
-    rule : {"noise", "rate"}
-        Equal friction-noise RMS with the paper's filtered estimate, or equal slowest pole.
+        The design.
+    rule : str
+        One of :data:`RULES`: equal friction-noise RMS with the paper's filtered estimate
+        (``"noise"``), or equal slowest pole (``"rate"``).
     sigma_model : float, optional
         Viscous coefficient of the baselines' model (default: ``sigma`` for ``static``, 0 for ``lag``).
 
@@ -203,28 +201,26 @@ def tune(name: str, cfg: Config, *, rule: str = "noise", sigma_model: float | No
         Unknown name or rule; unstable reference (``rho <= 1``); no sensor noise for ``"noise"``
         or for the Kalman filter; no knob in the search range reaches the target.
     """
-    if not isinstance(name, str) or name not in ("paper", "paper-k0", *_KNOBS):
-        raise ValueError(f"name: expected one of paper, paper-k0, eso, kalman, dob, found {name!r}")
-    if not isinstance(rule, str) or rule not in RULES:
-        raise ValueError(f"rule: expected one of {', '.join(RULES)}, found {rule!r}")
+    info = ESTIMATORS[ESTIMATORS.check(name, kind="name")]
+    if not isinstance(rule, str) or rule not in info.rules:
+        raise ValueError(f"rule: expected one of {', '.join(info.rules)}, found {rule!r}")
     cfg = _check_config(cfg)
-    if name == "paper":
-        return build_paper(cfg, sigma_model=sigma_model)
-    if name == "paper-k0":
-        return build_paper_k0(cfg, sigma_model=sigma_model)
+    if not info.baseline:
+        return info.build(cfg, sigma_model=sigma_model)
     pole = _check_paper_stable(cfg)
-    knob, lo, hi = _KNOBS[name]
-    build = _builder(name)
+    knob, (lo, hi), build = info.knob, info.knob_range, info.build
 
     def make(value: float) -> DiscreteEstimator:
         return build(cfg, **{knob: value}, sigma_model=sigma_model, tuning=rule)
 
-    if rule == "rate" and name in ("eso", "dob"):
+    if rule == "rate" and info.knob_is_rate:
         return make(-pole)
-    if name == "kalman":
+    if info.knob_noise_power:
         eta = noise_level(cfg)[0]
         check_positive("measurement_rms (sensor noise_rms or quantization)", eta, "m")
-        lo, hi = lo * eta * eta / 1e-12, hi * eta * eta / 1e-12
+        for _ in range(info.knob_noise_power):   # lo eta^p / eta_range^p, in this order of operations
+            lo, hi = lo * eta, hi * eta
+        lo, hi = lo / _RANGE_ETA ** info.knob_noise_power, hi / _RANGE_ETA ** info.knob_noise_power
     if rule == "rate":
         target = pole * cfg.observer.dt          # log of the target pole radius
 

@@ -1,7 +1,7 @@
 """Plant friction models (numba kernels), chosen by name.
 
 * :mod:`~obsdesign.friction.presliding`: the paper's Coulomb friction with pre-sliding
-  memory (eq:2:3:1-2:3:5), code 0 (``paper``), run by the simulator's own plant step;
+  memory (eq:2:3:1-2:3:5), code :data:`PAPER` (``paper``), run by the simulator's own plant step;
 * ``lugre``, ``dahl``, ``gms`` (+ asymmetric levels and an offset): flat parameter and state
   arrays, dispatched on an integer code (:mod:`~obsdesign.friction.kernels`); the registry
   (:mod:`~obsdesign.friction.registry`) turns named parameters into those arrays.
@@ -22,10 +22,6 @@ __all__ = [
 
 #: Public name -> module it comes from; loaded on first use (obsdesign._lazy).
 _LAZY = {
-    'DAHL': '.common',
-    'GMS': '.common',
-    'LUGRE': '.common',
-    'PAPER': '.common',
     'drive_displacement': '.driver',
     'simulate_block': '.driver',
     'friction_advance': '.kernels',
@@ -41,8 +37,12 @@ _LAZY = {
     'presliding_shape': '.presliding',
     'stiffness': '.presliding',
     'track_reversal': '.presliding',
+    'DAHL': '.registry',
     'FRICTION_MODELS': '.registry',
     'FrictionModelInfo': '.registry',
+    'GMS': '.registry',
+    'LUGRE': '.registry',
+    'PAPER': '.registry',
     'ParameterSpec': '.registry',
     'friction_code': '.registry',
 }

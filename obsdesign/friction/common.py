@@ -35,13 +35,9 @@ import math
 from numba import njit
 
 __all__ = [
-    "PAPER", "LUGRE", "DAHL", "GMS",
     "P_CF", "P_CF_NEG", "P_SIGMA", "P_SIGMA_NEG", "P_OFFSET", "P_MODEL",
     "sign", "coulomb_level", "viscous", "stribeck_level",
 ]
-
-#: Integer model codes dispatched by :mod:`obsdesign.friction.kernels`.
-PAPER, LUGRE, DAHL, GMS = 0, 1, 2, 3
 
 P_CF, P_CF_NEG, P_SIGMA, P_SIGMA_NEG, P_OFFSET = 0, 1, 2, 3, 4
 #: Index of the first model-specific parameter.

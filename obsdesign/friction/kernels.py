@@ -1,7 +1,7 @@
 """Dispatch on the integer model code: the functions the simulator kernel calls (numba).
 
-Codes: ``paper`` = 0 (reserved: its kernel is :mod:`obsdesign.friction.presliding`),
-``lugre`` = 1, ``dahl`` = 2, ``gms`` = 3. ``p`` comes from
+Codes: those of :data:`obsdesign.friction.registry.FRICTION_MODELS` (``paper`` is reserved:
+its kernel is :mod:`obsdesign.friction.presliding`). ``p`` comes from
 :meth:`obsdesign.friction.registry.FrictionModelInfo.pack`, ``st`` has
 :func:`friction_n_state` entries. Calling convention inside one plant substep
 of length ``h`` (Heun, as in :mod:`obsdesign.sim.kernel`)::
@@ -36,12 +36,13 @@ import math
 import numpy as np
 from numba import njit
 
-from .common import DAHL, GMS, LUGRE, viscous
+from .common import viscous
 from .dahl import N_STATE as DAHL_N_STATE
 from .dahl import dahl_advance, dahl_force, dahl_init, dahl_steady, dahl_stiffness
 from .gms import gms_advance, gms_force, gms_init, gms_n_state, gms_steady, gms_stiffness
 from .lugre import N_STATE as LUGRE_N_STATE
 from .lugre import lugre_advance, lugre_force, lugre_init, lugre_steady, lugre_stiffness
+from .registry import DAHL, GMS, LUGRE
 
 __all__ = ["friction_n_state", "friction_init", "friction_force", "friction_advance",
            "friction_viscous", "friction_stiffness", "stribeck"]

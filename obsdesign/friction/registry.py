@@ -1,10 +1,14 @@
 """Registry of the plant friction models: names, codes, documented parameters, packing.
 
-Each model is a :class:`FrictionModelInfo` in :data:`FRICTION_MODELS`. Its
+Each model is a :class:`FrictionModelInfo` in :data:`FRICTION_MODELS` (a
+:class:`~obsdesign._registry.Registry`), the one place where the models are listed and
+their integer codes typed (:data:`PAPER`, :data:`LUGRE`, :data:`DAHL`, :data:`GMS`, read
+by the numba kernels of :mod:`obsdesign.friction.kernels` and the simulator). Its
 ``parameters`` are ``ParameterSpec(name, unit, doc, default, low, high)`` tuples
 (closed ranges); :meth:`FrictionModelInfo.pack` validates named values, fills the
 defaults and returns the flat ``float64`` array the numba kernels take (layout in
-:mod:`obsdesign.friction.common`).
+:mod:`obsdesign.friction.common`). This module imports neither NumPy nor numba (NumPy
+loads in :meth:`~FrictionModelInfo.pack`), so the config and the command line read it.
 
 Defaults. The force levels are the paper's presets (``Cf`` = 0.35 N,
 ``sigma`` = 21.1 N s/m, Table 1 and section 4, for the 0.538 kg axis). The
@@ -30,6 +34,8 @@ Traceback (most recent call last):
 ValueError: lugre.sigma0: expected a finite number in [1000, 1e+09] N/m, found -1.0
 >>> FRICTION_MODELS["gms"].n_state({"N": 6})
 14
+>>> FRICTION_MODELS.names(), FRICTION_MODELS.code("dahl") == DAHL
+(('paper', 'lugre', 'dahl', 'gms'), True)
 """
 
 from __future__ import annotations
@@ -38,13 +44,19 @@ import math
 import numbers
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
-import numpy as np
+from .._registry import Entry, Registry
 
-from .common import DAHL, GMS, LUGRE, PAPER
+__all__ = ["ParameterSpec", "FrictionModelInfo", "FRICTION_MODELS", "friction_code", "PAPER", "LUGRE", "DAHL", "GMS"]
 
-__all__ = ["ParameterSpec", "FrictionModelInfo", "FRICTION_MODELS", "friction_code"]
+#: Integer model codes (append-only: numba caches compiled code that reads them).
+#: ``PAPER`` is reserved: its kernel is :mod:`obsdesign.friction.presliding`, run by the
+#: simulator's own plant step; :mod:`obsdesign.friction.kernels` dispatches the others.
+PAPER, LUGRE, DAHL, GMS = 0, 1, 2, 3
+
+if TYPE_CHECKING:
+    import numpy as np
 
 
 class ParameterSpec(NamedTuple):
@@ -59,13 +71,17 @@ class ParameterSpec(NamedTuple):
 
 
 @dataclass(frozen=True, kw_only=True)
-class FrictionModelInfo:
-    """A plant friction model: code for the kernels, documented parameters, packing rule."""
+class FrictionModelInfo(Entry):
+    """A plant friction model: code for the kernels, documented parameters, packing rule.
 
-    name: str
-    code: int
-    doc: str
-    parameters: tuple[ParameterSpec, ...]
+    Attributes
+    ----------
+    name, code, doc : str, int, str
+        As every :class:`~obsdesign._registry.Entry`.
+    parameters : tuple of ParameterSpec
+        The named parameters, their units, defaults and closed ranges.
+    """
+
     _layout: Callable[[dict[str, Any]], list[float]]
     _n_state: Callable[[dict[str, Any]], int]
 
@@ -110,7 +126,13 @@ class FrictionModelInfo:
         TypeError
             A value of the wrong type (e.g. a string, a bool, a float for ``N``).
         """
+        import numpy as np  # here, not at the top: the config and the command line read the registry
+
         return np.array(self._layout(self.resolve(params)), dtype=np.float64)
+
+    def scalar_parameters(self) -> tuple[str, ...]:
+        """Names of the parameters set by one number (not the per-element sequences)."""
+        return tuple(spec.name for spec in self.parameters if (self.name, spec.name) not in _SEQUENCE)
 
     def n_state(self, params: Mapping[str, Any]) -> int:
         """Length of the internal state array for these parameters."""
@@ -127,9 +149,7 @@ def friction_code(name: str) -> int:
     """
     if not isinstance(name, str):
         raise TypeError(f"friction model: expected a string, found {type(name).__name__} {name!r}")
-    if name not in FRICTION_MODELS:
-        raise ValueError(f"friction model: expected one of {', '.join(FRICTION_MODELS)}, found {name!r}")
-    return FRICTION_MODELS[name].code
+    return FRICTION_MODELS.code(name)
 
 
 def _fmt(a: float) -> str:
@@ -229,10 +249,12 @@ def _gms_layout(q: dict[str, Any]) -> list[float]:
     return _header(q) + _stribeck(q) + [q["C"], q["sigma1"], float(q["N"])] + k + alpha
 
 
-FRICTION_MODELS: dict[str, FrictionModelInfo] = {
-    "paper": FrictionModelInfo(
+#: The plant friction models, in code order: name -> :class:`FrictionModelInfo`.
+FRICTION_MODELS = Registry("friction model", [
+    FrictionModelInfo(
         name="paper", code=PAPER,
-        doc="Coulomb with log-shaped pre-sliding memory (eq:2:3:1-2:3:5) and viscous lag; kernel in sim/friction.py",
+        doc="Coulomb with log-shaped pre-sliding memory (eq:2:3:1-2:3:5) and viscous lag; "
+            "kernel in friction/presliding.py",
         parameters=(
             ParameterSpec("Cf", "N", "Coulomb friction level", 0.35, 0.0, 1e3),
             ParameterSpec("sigma", "N s/m", "viscous coefficient", 21.1, 0.0, 1e4),
@@ -241,7 +263,7 @@ FRICTION_MODELS: dict[str, FrictionModelInfo] = {
         ),
         _layout=_paper_layout, _n_state=lambda q: 3,
     ),
-    "lugre": FrictionModelInfo(
+    FrictionModelInfo(
         name="lugre", code=LUGRE,
         doc="LuGre bristle model with Stribeck curve (Canudas de Wit et al. 1995)",
         parameters=(_CF, _SIGMA) + _COMMON + _STRIBECK + (
@@ -250,7 +272,7 @@ FRICTION_MODELS: dict[str, FrictionModelInfo] = {
         ),
         _layout=_lugre_layout, _n_state=lambda q: 3,
     ),
-    "dahl": FrictionModelInfo(
+    FrictionModelInfo(
         name="dahl", code=DAHL,
         doc="Dahl rate-independent pre-sliding model (Dahl 1968)",
         parameters=(_CF, _SIGMA) + _COMMON + (
@@ -259,7 +281,7 @@ FRICTION_MODELS: dict[str, FrictionModelInfo] = {
         ),
         _layout=_dahl_layout, _n_state=lambda q: 3,
     ),
-    "gms": FrictionModelInfo(
+    FrictionModelInfo(
         name="gms", code=GMS,
         doc="Generalized Maxwell-slip model with N elements (Al-Bender et al. 2005)",
         parameters=(_CF, _SIGMA) + _COMMON + _STRIBECK + (
@@ -273,4 +295,4 @@ FRICTION_MODELS: dict[str, FrictionModelInfo] = {
         ),
         _layout=_gms_layout, _n_state=lambda q: 2 + 2 * q["N"],
     ),
-}
+])

@@ -61,8 +61,9 @@ def experiments_figure(study: ExperimentsStudy):
     grid = fig.add_gridspec(3, len(CHIRP_BAND_LABELS))
     full = fig.add_subplot(grid[0, :])
     zoom = fig.add_subplot(grid[1, :], sharex=full)
+    # choice subset: labels of the study's two controllers
     names = {"pid": "PID alone", "pid+observer": "PID + friction observer"}
-    for ctrl in ("pid", "pid+observer"):
+    for ctrl in study.positioning:
         r = study.runs[("positioning", ctrl)]
         full.plot(r.t, r.e * 1e6, lw=0.8, label=names[ctrl])
         zoom.plot(r.t, r.e * 1e6, lw=0.8, label=names[ctrl])
@@ -75,7 +76,7 @@ def experiments_figure(study: ExperimentsStudy):
         ax.legend(loc="best", fontsize="small")
     for i, (label, lo, hi) in enumerate(CHIRP_BAND_LABELS):
         ax = fig.add_subplot(grid[2, i])
-        for ctrl in ("pid", "pid+observer"):
+        for ctrl in study.tracking:
             r = study.runs[("tracking", ctrl)]
             i0, i1 = _band_slice(r, lo, hi)
             t_band, e_band = r.t[i0:i1], r.e[i0:i1] * 1e6

@@ -7,7 +7,7 @@ Two public steps, :func:`prepare` (design and sample the inputs of a run) and :f
 from .._lazy import keep_functions, lazy_names
 
 
-__all__ = ["CONTROLLERS", "ESTIMATORS", "PLANT_FRICTION", "PLANTS", "SCHEDULES", "COLUMNS", "SimResult",
+__all__ = ["CONTROLLERS", "ESTIMATORS", "PLANTS", "SCHEDULES", "COLUMNS", "SimResult",
            "SCENARIOS", "Chirp", "ConstantForce", "Excitation", "Positioning", "band_limited_noise",
            "LoopInputs", "prepare", "run", "simulate"]
 
@@ -15,7 +15,6 @@ __all__ = ["CONTROLLERS", "ESTIMATORS", "PLANT_FRICTION", "PLANTS", "SCHEDULES",
 _LAZY = {
     'CONTROLLERS': '..sampled.choices',
     'ESTIMATORS': '..sampled.choices',
-    'PLANT_FRICTION': '..sampled.choices',
     'PLANTS': '..sampled.choices',
     'SCHEDULES': '..sampled.choices',
     'COLUMNS': '.result',

@@ -103,8 +103,8 @@ def fastest_rate(cfg: Config, *, plant: str = "physical") -> tuple[str, float]:
     ----------
     cfg : Config
         The design (plant and friction parameters).
-    plant : {'physical', 'model'}
-        The simulated plant structure.
+    plant : str
+        The simulated plant structure, a name of :data:`obsdesign.sampled.choices.PLANTS`.
 
     Examples
     --------
@@ -141,8 +141,8 @@ def substeps_for(cfg: Config, dt: float, requested: int = 10, *, plant: str = "p
         Sample time [s].
     requested : int
         Substeps asked for (1 to :data:`MAX_SUBSTEPS`).
-    plant : {'physical', 'model'}
-        The simulated plant structure.
+    plant : str
+        The simulated plant structure, a name of :data:`obsdesign.sampled.choices.PLANTS`.
 
     Returns
     -------
