@@ -197,17 +197,11 @@ SUBSET_MARK = "# choice subset:"
 #: its copy is gone; the test fails on a stale line so that this list only shrinks.
 PENDING = {
     ("cli/_output.py", "controllers", ("pid", "pid+observer")),             # --controller choices=
-    ("comparison_data.py", "estimators", ("paper", "paper-k0")),           # the paper test of compare_data
     ("export/controller.py", "controllers", ("pid", "pid+observer")),      # CONTROLLERS
     ("export/controller.py", "export formats", ("c", "js", "octave", "python")),  # LANGUAGES, _TEMPLATES
     ("export/files.py", "export formats", ("c", "js", "octave", "python")),       # CONTROLLER_FORMATS
     ("export/files.py", "export formats", ("c", "js", "latex", "octave", "python")),  # export's docstring sets
     ("export/files.py", "controllers", ("pid", "pid+observer")),
-    ("sim/simulate.py", "controllers", ("open-loop", "pid", "pid+observer")),    # prepare's docstring sets
-    ("sim/simulate.py", "schedules", ("constant", "estimated", "estimated-raw", "true")),
-    ("sim/simulate.py", "plants", ("model", "physical")),
-    ("sim/simulate.py", "estimators", ("dob", "eso", "kalman", "paper", "paper-k0")),
-    ("data/observe.py", "schedules", ("constant", "estimated", "true")),             # observe's docstring
 }
 
 

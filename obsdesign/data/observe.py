@@ -123,7 +123,7 @@ class Observation(ResultDisplay):
     config : Config
         The design that ran (its ``observer.dt`` is the trace's sample time).
     stiffness_schedule : str
-        ``estimated``, ``estimated-raw``, ``true`` or ``constant``.
+        The schedule that ran (:data:`obsdesign.sampled.choices.SCHEDULES`).
     source : str
         Where the trace came from.
     reversals : int
@@ -233,8 +233,9 @@ def observe(cfg: "Config | SampledController", trace: Trace, *, stiffness: str |
         the trace's sample time (the trace's wins; see the module notes).
     trace : Trace
         Measured displacement [m] and actuator force [N].
-    stiffness : {'estimated', 'true', 'constant', 'estimated-raw'}, optional
-        Stiffness schedule of a Config's observer (default ``estimated``, with the reversal
+    stiffness : str, optional
+        A name of :data:`obsdesign.sampled.choices.SCHEDULES`: the stiffness schedule of a Config's
+        observer (default ``estimated``, with the reversal
         hysteresis of the simulator); ``true`` is the pre-sliding stiffness along the measured
         position and the zero-phase velocity (module notes). Not with a SampledController, which
         has its own.

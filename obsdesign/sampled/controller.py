@@ -237,9 +237,6 @@ class SampledController:
         return o, e, c
 
 
-_PAPER_ESTIMATORS = ("paper", "paper-k0")
-
-
 def sampled_controller(cfg: Config, *, controller: str = "pid+observer", schedule: str = "estimated",
                        estimator: "str | DiscreteEstimator" = "paper",
                        initial_estimate: tuple[float, float] = (0.0, 0.0)) -> SampledController:
@@ -250,13 +247,15 @@ def sampled_controller(cfg: Config, *, controller: str = "pid+observer", schedul
     cfg : Config
         The design (change parameters with :meth:`obsdesign.Config.override` before); its
         ``[compensation]`` section sets the law of ``pid+observer``.
-    controller : {'open-loop', 'pid', 'pid+observer'}
-        ``pid`` runs the estimator for monitoring without compensating.
-    schedule : {'estimated', 'true', 'constant', 'estimated-raw'}
-        Stiffness schedule of the paper observer (``estimated``: a reversal hysteresis of
-        :data:`REVERSAL_NOISE_FACTOR` times ``sensor.noise_rms``; ``estimated-raw``: none).
-    estimator : {'paper', 'paper-k0', 'eso', 'kalman', 'dob'} or DiscreteEstimator
-        A baseline named here is tuned by the fair noise rule (:func:`obsdesign.estimators.tune`);
+    controller : str
+        A name of :data:`~obsdesign.sampled.choices.CONTROLLERS`; ``pid`` runs the estimator for
+        monitoring without compensating.
+    schedule : str
+        A name of :data:`~obsdesign.sampled.choices.SCHEDULES`: the stiffness schedule of the paper
+        observer (``estimated``: a reversal hysteresis of :data:`REVERSAL_NOISE_FACTOR` times
+        ``sensor.noise_rms``; ``estimated-raw``: none).
+    estimator : str or DiscreteEstimator
+        A name of :data:`~obsdesign.sampled.choices.ESTIMATORS`; a baseline named here is tuned by the fair noise rule (:func:`obsdesign.estimators.tune`);
         a :class:`~obsdesign.estimators.DiscreteEstimator` (another tuning) runs as given.
     initial_estimate : (float, float)
         The observer's ``(v_hat, f_hat)`` at the first sample.
@@ -290,7 +289,7 @@ def sampled_controller(cfg: Config, *, controller: str = "pid+observer", schedul
                          f"found {initial_estimate!r}")
     initial_estimate = tuple(FINITE.check("initial_estimate", x) for x in initial_estimate)
     dt = cfg.observer.dt
-    if estimator in _PAPER_ESTIMATORS:
+    if not ESTIMATORS[estimator].baseline:
         baseline = None  # the paper entries run in the observer kernel, with the schedule
     elif baseline is None:
         from ..estimators import tune

@@ -28,6 +28,7 @@ from numba import njit
 from ..design.discretize import coefficients
 from ..estimators.base import estimator_output, estimator_step
 from ..friction.presliding import stiffness, track_reversal, track_reversal_hysteresis
+from ..estimators.registry import FIRST_BASELINE_CODE
 from .choices import CONTROLLERS, ESTIMATORS, SCHEDULES
 
 __all__ = ["observer_sample", "controller_sample", "compensation_force", "observe_loop", "OBSERVER_STATE",
@@ -40,8 +41,6 @@ SCHEDULE_TRUE = SCHEDULES.code("true")
 SCHEDULE_CONSTANT = SCHEDULES.code("constant")
 SCHEDULE_ESTIMATED_RAW = SCHEDULES.code("estimated-raw")
 ESTIMATOR_PAPER_K0 = ESTIMATORS.code("paper-k0")
-#: Codes above this one are the linear baselines of :mod:`obsdesign.estimators`.
-LAST_PAPER_CODE = max(ESTIMATORS.code("paper"), ESTIMATOR_PAPER_K0)
 CONTROLLER_OPEN = CONTROLLERS.code("open-loop")
 CONTROLLER_PID_OBSERVER = CONTROLLERS.code("pid+observer")
 
@@ -129,7 +128,7 @@ def observer_sample(st, n, xm, u_prev, k_true, obs):
 @njit(cache=True, error_model="numpy", inline="always")
 def _estimate(ost, ez, n, xm, u_prev, xm_prev, k_true, obs, est):
     """Step 1 of :func:`controller_sample`: ``(ost, v_hat, f_hat, compensated signal, k)``."""
-    if obs.estimator > LAST_PAPER_CODE:
+    if obs.estimator >= FIRST_BASELINE_CODE:  # a linear baseline of obsdesign.estimators
         if n == 0:
             for i in range(ez.shape[0]):
                 ez[i] = est.init[i, 0] * xm + est.init[i, 1] * obs.v_hat0 + est.init[i, 2] * obs.f_hat0

@@ -28,15 +28,17 @@ from numba import njit
 from ..friction.kernels import friction_advance, friction_force, friction_n_state, friction_stiffness
 from ..friction.kernels import friction_viscous
 from ..friction.presliding import coulomb_normalized, stiffness, track_reversal
+from ..friction.registry import FRICTION_MODELS
 from ..sampled.choices import PLANTS, SCHEDULES
 from ..sampled.kernel import CONTROLLER_STATE, OBSERVER_STATE, controller_sample
 
 __all__ = ["run_loop", "PlantArgs", "Signals", "Outputs", "empty_outputs", "OUTPUT_NAMES", "PLANT_PHYSICAL",
            "PLANT_MODEL"]
 
-PLANT_PHYSICAL, PLANT_MODEL = PLANTS.code("physical"), PLANTS.code("model")
+PLANT_PHYSICAL = PLANTS.code("physical")
+PLANT_MODEL = PLANTS.code("model")
 SCHEDULE_TRUE = SCHEDULES.code("true")
-FRICTION_PAPER = 0  # plant friction codes: obsdesign.friction (paper 0, lugre 1, dahl 2, gms 3)
+FRICTION_PAPER = FRICTION_MODELS.code("paper")  # other codes: the models of obsdesign.friction
 #: Paper plant parameter array: Cf, Cf_neg, sigma, sigma_neg, offset, s, beta, kappa.
 PP_CF, PP_CF_NEG, PP_SIGMA, PP_SIGMA_NEG, PP_OFFSET, PP_S, PP_BETA, PP_KAPPA = 0, 1, 2, 3, 4, 5, 6, 7
 

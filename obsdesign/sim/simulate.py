@@ -157,19 +157,21 @@ def prepare(
     scenario : str or scenario spec
         A name of :data:`obsdesign.sim.SCENARIOS` (its default options) or a spec such as
         ``Positioning(step_size=2e-3)`` (see :mod:`obsdesign.sim.scenarios`).
-    controller : {'open-loop', 'pid', 'pid+observer'}, optional
-        Default ``open-loop`` for ``excitation``/``constant``, ``pid+observer`` otherwise.
-    stiffness : {'estimated', 'true', 'constant', 'estimated-raw'}
-        Stiffness schedule of the observer (``estimated``: with a reversal hysteresis of
-        :data:`REVERSAL_NOISE_FACTOR` times ``sensor.noise_rms``; ``estimated-raw``: none).
-    plant : {'physical', 'model'} or Config
-        ``physical``: the friction model of ``cfg``'s ``[plant_friction]`` (default: Coulomb with
+    controller : str, optional
+        A name of :data:`obsdesign.sampled.choices.CONTROLLERS`; default ``open-loop`` for
+        ``excitation``/``constant``, ``pid+observer`` otherwise.
+    stiffness : str
+        Stiffness schedule of the observer, a name of :data:`obsdesign.sampled.choices.SCHEDULES`
+        (``estimated``: with a reversal hysteresis of :data:`REVERSAL_NOISE_FACTOR` times
+        ``sensor.noise_rms``; ``estimated-raw``: none).
+    plant : str or Config
+        A name of :data:`obsdesign.sampled.choices.PLANTS`, or a Config. ``physical``: the friction model of ``cfg``'s ``[plant_friction]`` (default: Coulomb with
         pre-sliding memory and viscous friction, with lag when ``friction.beta`` is set).
         ``model``: the 3-state LTV model eq:3:1 of the variant. A Config: a ``physical`` plant
         with that config's mass, actuator gain, load and friction (model mismatch); the observer
         and the controller are still designed from ``cfg``.
-    estimator : {'paper', 'paper-k0', 'eso', 'kalman', 'dob'} or DiscreteEstimator
-        The estimator of :data:`obsdesign.sampled.choices.ESTIMATORS`; the baselines are tuned by
+    estimator : str or DiscreteEstimator
+        A name of :data:`obsdesign.sampled.choices.ESTIMATORS`; the baselines are tuned by
         the fair noise rule (:func:`obsdesign.estimators.tune`). A
         :class:`~obsdesign.estimators.DiscreteEstimator` (other tuning) runs as given.
     duration : float, optional
