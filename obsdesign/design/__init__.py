@@ -7,7 +7,7 @@ __all__ = [
     "NoiseAnalysis", "band_limited_rms", "lowpass", "noise_analysis",
     "FrozenSystems", "ObserverArrays", "ObserverDesign", "is_stable", "StabilityReport", "check_stability", "design_observer",
     "PIDDesign", "design_pid", "pid_from_config", "pid_from_gains", "Condition",
-    "design_warnings",
+    "design_warnings", "certified_rho_range", "certify", "StabilityCertificate",
 ]
 
 #: Public name -> module it comes from; loaded on first use (obsdesign._lazy).
@@ -29,5 +29,8 @@ _LAZY = {
     'ObserverArrays': '.observer',
     'is_stable': '.observer',
     'design_warnings': '.advisories',
+    'certified_rho_range': '.advisories',
+    'certify': '.certificate',
+    'StabilityCertificate': '.certificate',
 }
 __getattr__, __dir__ = lazy_names(__name__, _LAZY)

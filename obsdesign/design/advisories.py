@@ -1,5 +1,6 @@
-"""Warnings about a design, shared by every command that uses one (``check``, ``simulate``,
-``noise``, ``export``): the one place that decides what deserves a ``warning:`` line.
+"""Warnings and advice about a design, shared by every command that uses one (``check``, ``simulate``,
+``noise``, ``export``): the one place that decides what deserves a ``warning:`` line, and the rho
+range whose switched sampled observer is certified (:func:`certified_rho_range`).
 
 A design gets a warning when
 
@@ -26,9 +27,12 @@ from __future__ import annotations
 import warnings
 
 from ..params import Config
-from .observer import check_stability
+import numpy as np
 
-__all__ = ["design_warnings"]
+from .certificate import certify
+from .observer import check_stability, design_observer
+
+__all__ = ["design_warnings", "certified_rho_range"]
 
 
 def design_warnings(cfg: Config) -> tuple[str, ...]:
@@ -53,3 +57,41 @@ def design_warnings(cfg: Config) -> tuple[str, ...]:
     if failed:
         notes.append(f"the observer design fails check ({', '.join(failed)}; see obsdesign check)")
     return tuple(notes)
+
+
+def certified_rho_range(cfg: Config, rhos=None) -> tuple[float, float] | None:
+    """The interval of ``rho`` over which the continuous certificate holds (so every dt is certified).
+
+    Parameters
+    ----------
+    cfg : Config
+        The design; ``rho`` is varied, everything else kept.
+    rhos : array_like, optional
+        The values tried (default 80 values, log-spaced from 0.5 to 20).
+
+    Returns
+    -------
+    (float, float) or None
+        The smallest and largest certified ``rho`` of the longest run of certified values, or None.
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> lo, hi = certified_rho_range(od.load_preset("table1"), [0.9, 0.99, 1.01, 2.0, 5.0])
+    >>> lo, hi
+    (1.01, 5.0)
+    """
+    rhos = np.geomspace(0.5, 20.0, 80) if rhos is None else np.asarray(rhos, float)
+    ok = []
+    for rho in rhos:
+        c = certify(design_observer(cfg.override(rho=float(rho))))
+        ok.append(c.certified and c.method == "continuous")
+    best, run = None, None
+    for i, flag in enumerate(ok):
+        if flag:
+            run = (run[0], i) if run else (i, i)
+            if best is None or run[1] - run[0] > best[1] - best[0]:
+                best = run
+        else:
+            run = None
+    return None if best is None else (float(rhos[best[0]]), float(rhos[best[1]]))

@@ -32,12 +32,13 @@ the verification, so a weak search can only cost a certificate, never give a fal
 Examples
 --------
 >>> import obsdesign as od
->>> cert = certify(od.load_preset("table1"))               # rho = 1.02
+>>> design = od.design_observer(od.load_preset("table1"))  # rho = 1.02
+>>> cert = certify(design)
 >>> cert.certified, cert.method, round(cert.decay_rate, 3)  # the dominant pole is -2.439 1/s
 (True, 'continuous', 2.439)
 >>> cert.max_dt
 inf
->>> bad = certify(od.load_preset("table1").override(rho=0.98))
+>>> bad = certify(od.design_observer(od.load_preset("table1").override(rho=0.98)))
 >>> bad.verdict, bad.sequence                               # k = 0 held has a pole at +2.44 1/s
 ('not certified', (0.0,))
 """
@@ -50,9 +51,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._display import Condition, ResultDisplay
-from ..params import Config
 
-__all__ = ["StabilityCertificate", "certify", "certified_rho_range", "log_norm", "p_norm"]
+__all__ = ["StabilityCertificate", "certify", "common_lyapunov", "log_norm", "p_norm"]
 
 #: Relative safety margin of a verified decay rate (floating point of the 2x2 eigenvalues).
 MARGIN = 1e-9
@@ -184,8 +184,13 @@ def _gen_eig_max(S: np.ndarray, P: np.ndarray) -> float:
     a = P[0, 0] * P[1, 1] - P[0, 1] * P[0, 1]
     b = -(S[0, 0] * P[1, 1] + S[1, 1] * P[0, 0] - 2.0 * S[0, 1] * P[0, 1])
     c = S[0, 0] * S[1, 1] - S[0, 1] * S[0, 1]
-    disc = max(b * b - 4.0 * a * c, 0.0)
-    return (-b + math.sqrt(disc)) / (2.0 * a) if b <= 0.0 else 2.0 * c / (-b - math.sqrt(disc))
+    if not (a > 0.0 and math.isfinite(a) and math.isfinite(b) and math.isfinite(c)):
+        return 1e300  # a degenerate candidate: never the minimiser (finite: the simplex subtracts)
+    sq = math.sqrt(max(b * b - 4.0 * a * c, 0.0))
+    if b <= 0.0:
+        return (-b + sq) / (2.0 * a)
+    den = -b - sq  # the stable form of the larger root when b > 0
+    return 2.0 * c / den if den != 0.0 else 0.0
 
 
 def _mu2(A: np.ndarray, P: np.ndarray) -> float:
@@ -235,10 +240,7 @@ def _search(objective, starts) -> np.ndarray:
     return _from_params(best_x) if best_x is not None else np.eye(2)
 
 
-def _ends(cfg: Config):
-    from .observer import design_observer
-
-    d = design_observer(cfg)
+def _ends(d):
     A_lo, A_hi = d.matrices(0.0)[0], d.matrices(d.kappa)[0]
     # balanced coordinates (as the kernel's discretization): x = D x', D = diag(1, c)
     c = math.sqrt(abs(A_lo[1, 0] / A_lo[0, 1])) if A_lo[0, 1] != 0.0 and A_lo[1, 0] != 0.0 else 1.0
@@ -247,13 +249,14 @@ def _ends(cfg: Config):
     return d, Di @ A_lo @ D, Di @ A_hi @ D, D, Di
 
 
-def certify(cfg: Config) -> StabilityCertificate:
+def certify(design) -> StabilityCertificate:
     """Certify (or refute) stability of the switched, exactly discretized observer of a design.
 
     Parameters
     ----------
-    cfg : Config
-        The design; its ``observer.dt`` is the sample time of the sampled verdict.
+    design : ObserverDesign
+        The designed observer (:func:`obsdesign.design_observer`); its ``dt`` is the sample time of
+        the sampled verdict.
 
     Returns
     -------
@@ -263,23 +266,20 @@ def certify(cfg: Config) -> StabilityCertificate:
     Examples
     --------
     >>> import obsdesign as od
-    >>> certify(od.load_preset("vcm")).condition().holds
+    >>> certify(od.design_observer(od.load_preset("vcm"))).condition().holds
     True
     """
-    if not isinstance(cfg, Config):
-        raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
-    d, B_lo, B_hi, D, Di = _ends(cfg)
+    if not all(hasattr(design, a) for a in ("matrices", "kappa", "dt")):
+        raise TypeError(f"design: expected an ObserverDesign, found {type(design).__name__}")
+    d, B_lo, B_hi, D, Di = _ends(design)
     dt = d.dt
-    scale = max(np.abs(np.linalg.eigvals(B_lo)).max(), np.abs(np.linalg.eigvals(B_hi)).max(), 1e-300)
     frozen_stable = all(np.linalg.eigvals(B).real.max() < 0.0 for B in (B_lo, B_hi))
     # 1. continuous CQLF (exact at the two ends)
     if frozen_stable:
-        starts = [_lyap(B_lo), _lyap(B_hi), _lyap(0.5 * (B_lo + B_hi)), np.eye(2)]
-        P = _search(lambda P: max(_mu2(B_lo, P), _mu2(B_hi, P)), starts)
-        mu = max(log_norm(B_lo, P), log_norm(B_hi, P))  # the verification, by Cholesky and eigvalsh
-        if mu < -MARGIN * scale:
-            alpha = -mu * (1.0 - MARGIN)
-            return _certified(cfg, "continuous", alpha, Di.T @ P @ Di, dt, math.inf, 0)
+        found = common_lyapunov(B_lo, B_hi)
+        if found is not None:
+            alpha, P = found
+            return _certified("continuous", alpha, Di.T @ P @ Di, dt, math.inf, 0)
     # 2. sampled CQLF at dt, on a refined grid with the Lipschitz bound
     from .discretize import coefficient_matrices
 
@@ -305,7 +305,7 @@ def certify(cfg: Config) -> StabilityCertificate:
         h = d.kappa / n
         bound = r + lip * h / 2.0
         if bound < 1.0 - MARGIN:
-            return _certified(cfg, "sampled", -math.log(bound) / dt, Di.T @ P @ Di, dt, dt, n + 1)
+            return _certified("sampled", -math.log(bound) / dt, Di.T @ P @ Di, dt, dt, n + 1)
         if n >= MAX_GRID:
             break
         n *= 2
@@ -313,6 +313,37 @@ def certify(cfg: Config) -> StabilityCertificate:
         Phis = [phi(k) for k in grid]
     # 3. a destabilising sequence
     return _refute(d, B_lo, B_hi, phi, dt)
+
+
+def common_lyapunov(A_a: np.ndarray, A_b: np.ndarray) -> tuple[float, np.ndarray] | None:
+    """A verified common quadratic Lyapunov function of two 2x2 matrices (and of their convex hull).
+
+    Parameters
+    ----------
+    A_a, A_b : ndarray, shape (2, 2)
+        The ends of the interval of matrices (best in balanced coordinates).
+
+    Returns
+    -------
+    (float, ndarray) or None
+        ``(alpha, P)`` with ``A^T P + P A <= -2 alpha P`` verified for both (``alpha > 0``), or None.
+
+    Examples
+    --------
+    >>> alpha, P = common_lyapunov(np.array([[-1.0, 0.0], [0.0, -2.0]]), np.array([[-3.0, 1.0], [0.0, -1.0]]))
+    >>> round(alpha, 6)   # the slowest pole of both: no CQLF can give more
+    1.0
+    """
+    A_a, A_b = np.asarray(A_a, float), np.asarray(A_b, float)
+    if max(np.linalg.eigvals(A_a).real.max(), np.linalg.eigvals(A_b).real.max()) >= 0.0:
+        return None
+    scale = max(np.abs(np.linalg.eigvals(A_a)).max(), np.abs(np.linalg.eigvals(A_b)).max(), 1e-300)
+    starts = [_lyap(A_a), _lyap(A_b), _lyap(0.5 * (A_a + A_b)), np.eye(2)]
+    P = _search(lambda P: max(_mu2(A_a, P), _mu2(A_b, P)), starts)
+    mu = max(log_norm(A_a, P), log_norm(A_b, P))  # the verification, by Cholesky and eigvalsh
+    if mu < -MARGIN * scale:
+        return -mu * (1.0 - MARGIN), P
+    return None
 
 
 def _dlyap(F: np.ndarray):
@@ -323,7 +354,7 @@ def _dlyap(F: np.ndarray):
     return solve_discrete_lyapunov(F.T, np.eye(2))
 
 
-def _certified(cfg, method, alpha, P, dt, max_dt, grid) -> StabilityCertificate:
+def _certified(method, alpha, P, dt, max_dt, grid) -> StabilityCertificate:
     return StabilityCertificate(verdict="certified", method=method, decay_rate=float(alpha),
                                 radius=float(math.exp(-alpha * dt)), P=P, dt=dt, max_dt=max_dt, sequence=None,
                                 growth=None, jsr_lower=float(math.exp(-alpha * dt)), grid=grid)
@@ -356,40 +387,3 @@ def _refute(d, B_lo, B_hi, phi, dt) -> StabilityCertificate:
                                 radius=None, P=None, dt=dt, max_dt=None, sequence=best_seq if refuted else None,
                                 growth=best_growth if refuted else None, jsr_lower=best_growth, grid=0)
 
-
-def certified_rho_range(cfg: Config, rhos=None) -> tuple[float, float] | None:
-    """The interval of ``rho`` over which the continuous certificate holds (so every dt is certified).
-
-    Parameters
-    ----------
-    cfg : Config
-        The design; ``rho`` is varied, everything else kept.
-    rhos : array_like, optional
-        The values tried (default 80 values, log-spaced from 0.5 to 20).
-
-    Returns
-    -------
-    (float, float) or None
-        The smallest and largest certified ``rho`` of the longest run of certified values, or None.
-
-    Examples
-    --------
-    >>> import obsdesign as od
-    >>> lo, hi = certified_rho_range(od.load_preset("table1"), [0.9, 0.99, 1.01, 2.0, 5.0])
-    >>> lo, hi
-    (1.01, 5.0)
-    """
-    rhos = np.geomspace(0.5, 20.0, 80) if rhos is None else np.asarray(rhos, float)
-    ok = []
-    for rho in rhos:
-        c = certify(cfg.override(rho=float(rho)))
-        ok.append(c.certified and c.method == "continuous")
-    best, run = None, None
-    for i, flag in enumerate(ok):
-        if flag:
-            run = (run[0], i) if run else (i, i)
-            if best is None or run[1] - run[0] > best[1] - best[0]:
-                best = run
-        else:
-            run = None
-    return None if best is None else (float(rhos[best[0]]), float(rhos[best[1]]))

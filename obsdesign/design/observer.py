@@ -7,7 +7,7 @@ Examples
 >>> rep.stable, rep.eigenvalues_real, round(rep.dominant_pole, 3)
 (True, True, -2.439)
 >>> od.check_stability(od.load_preset("table1").override(rho=0.98)).failed()
-('Proposition 1: L_2 < sigma/beta', 'eigenvalues negative on [0, kappa]', 'Ignatyev (ii) at kdot = 0', 'discrete poles inside unit circle')
+('Proposition 1: L_2 < sigma/beta', 'eigenvalues negative on [0, kappa]', 'Ignatyev (ii) at kdot = 0', 'discrete poles inside unit circle', 'switched sampled observer certified')
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ import sympy as sp
 from .._display import Condition, ResultDisplay
 from ..params import Config
 from ..symbolic import derive
+from .certificate import StabilityCertificate, certify
 from .numeric import compiled, model_values
 
 if TYPE_CHECKING:  # python-control loads on first use: `obsdesign check` does not need it
@@ -249,7 +250,11 @@ class StabilityReport(ResultDisplay):
         transition with the stiffness rate of eq:3:2:7 (corrected sign), for ``D = 2``
         (reversal from gross sliding) and ``D = 1`` (start from rest).
     discrete_pole_radii : dict
-        Radii of the exactly discretized observer poles at ``dt``, at k = 0 and kappa.
+        Radii of the exactly discretized observer poles at ``dt``, at k = 0 and kappa (frozen
+        stiffness: this does not prove stability under switching).
+    certificate : StabilityCertificate
+        The verdict on the switched, exactly discretized observer that runs
+        (:func:`obsdesign.design.certificate.certify`): its own condition of ``check``.
     conditions : tuple of Condition
     warnings : tuple of str
     """
@@ -266,6 +271,7 @@ class StabilityReport(ResultDisplay):
     alpha2: float | None
     presliding_velocity_bound: dict
     discrete_pole_radii: dict
+    certificate: "StabilityCertificate"
     conditions: tuple[Condition, ...]
     warnings: tuple[str, ...] = field(default=())
 
@@ -287,6 +293,7 @@ class StabilityReport(ResultDisplay):
             "alpha1": self.alpha1, "alpha2": self.alpha2,
             "presliding_velocity_bound": self.presliding_velocity_bound,
             "discrete_pole_radii": {str(k): v for k, v in self.discrete_pole_radii.items()},
+            "certificate": self.certificate.to_dict(),
             "conditions": [c.to_dict() for c in self.conditions], "warnings": list(self.warnings),
         }
 
@@ -431,7 +438,10 @@ def check_stability(cfg: Config) -> StabilityReport:
     radii = {k: np.exp(np.linalg.eigvals(d.matrices(k)[0]).real * d.dt) for k in ends}
     rmax = max(float(r.max()) for r in radii.values())
     conditions.append(Condition("discrete poles inside unit circle", rmax < 1.0,
-                                f"largest pole radius at dt = {d.dt:g} s: {rmax:.6g}"))
+                                f"largest pole radius at dt = {d.dt:g} s (frozen stiffness): {rmax:.6g}"))
+    # ... and under switching: a common Lyapunov function of the sampled observer (or a refutation)
+    certificate = certify(d)
+    conditions.append(certificate.condition())
 
     reals = np.concatenate([e.real for e in eig.values()])
     dominant, fastest = float(reals.max()), float(reals.min())
@@ -449,5 +459,5 @@ def check_stability(cfg: Config) -> StabilityReport:
         eigenvalues_at_ends=eig, alpha1=alpha1, alpha2=alpha2 if ig2 else None,
         presliding_velocity_bound=velocity_bound,
         discrete_pole_radii={k: tuple(float(x) for x in r) for k, r in radii.items()},
-        conditions=tuple(conditions), warnings=tuple(notes),
+        certificate=certificate, conditions=tuple(conditions), warnings=tuple(notes),
     )
