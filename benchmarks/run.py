@@ -15,6 +15,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
+import bench_certificate  # noqa: E402
 import bench_data  # noqa: E402
 import bench_cli  # noqa: E402
 import bench_compare  # noqa: E402
@@ -29,6 +30,7 @@ SUITES = {
     "Measured data (issue 10)": bench_data.run,
     "Command-line start-up (issue 13)": bench_cli.run,
     "Estimator comparison (issue 11)": bench_compare.run,
+    "Stability certificate (issue 18)": bench_certificate.run,
 }
 
 
