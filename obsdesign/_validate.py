@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 __all__ = [
-    "Range", "Choice", "Text", "POSITIVE", "NONNEGATIVE", "FINITE",
+    "Range", "Choice", "Text", "Integer", "POSITIVE", "NONNEGATIVE", "FINITE",
     "check_choice", "check_integer", "parse_number", "as_float", "FrozenMap",
 ]
 
@@ -127,6 +127,28 @@ class Text:
         if not isinstance(value, str):
             raise TypeError(f"{name}: expected a string, found {type(value).__name__} {value!r}")
         return value
+
+
+@dataclass(frozen=True)
+class Integer:
+    """An integer within ``[minimum, maximum]`` (``None``: open-ended), checked by :func:`check_integer`.
+
+    >>> Integer(minimum=0).check("pid.delay_samples", -1)
+    Traceback (most recent call last):
+    ...
+    ValueError: pid.delay_samples: expected an integer >= 0, found -1
+    """
+
+    minimum: int | None = None
+    maximum: int | None = None
+
+    def describe(self) -> str:
+        bounds = [f">= {self.minimum}"] if self.minimum is not None else []
+        bounds += [f"<= {self.maximum}"] if self.maximum is not None else []
+        return "an integer" + (" " + " and ".join(bounds) if bounds else "")
+
+    def check(self, name: str, value: Any) -> int:
+        return check_integer(name, value, minimum=self.minimum, maximum=self.maximum)
 
 
 POSITIVE = Range(low=0.0)

@@ -36,24 +36,11 @@ from typing import Any, Mapping, NamedTuple
 from ._io import atomic_write
 from .compensation import CompensationSpec
 from ._format import toml_value
-from ._validate import FINITE, NONNEGATIVE, POSITIVE, Choice, FrozenMap, Range, Text
+from ._validate import FINITE, NONNEGATIVE, POSITIVE, Choice, FrozenMap, Integer, Range, Text
 from .plant_spec import PlantFrictionSpec
 
-__all__ = [
-    "PlantParams",
-    "FrictionParams",
-    "SensorSpec",
-    "ObserverSpec",
-    "PIDSpec",
-    "CompensationSpec",
-    "Config",
-    "load_preset",
-    "load_config",
-    "preset_names",
-    "VARIANTS",
-    "PARAMETERS",
-    "FieldRow",
-]
+__all__ = ["PlantParams", "FrictionParams", "SensorSpec", "ObserverSpec", "PIDSpec", "CompensationSpec", "Config",
+           "load_preset", "load_config", "preset_names", "VARIANTS", "PARAMETERS", "FieldRow"]
 
 VARIANTS = ("lag", "static")
 
@@ -186,6 +173,9 @@ class PIDSpec:
     derivative_N: float = _param(
         _POSITIVE, "-", "derivative filter: time constant (kd/kp)/N in simulations", 10.0
     )
+    delay_samples: int = _param(
+        Integer(minimum=0), "samples", "computation delay: the command of sample n is applied from n + d", 0
+    )
 
     def __post_init__(self) -> None:
         _validate_fields(self)
@@ -274,7 +264,7 @@ class Config:
         >>> load_preset("table1").override(mass=1.0)
         Traceback (most recent call last):
         ...
-        ValueError: override: unknown parameter 'mass'; expected one of Cf, G, K, beta, deadzone, derivative_N, dt, gain, kappa, m, max_S, noise_bandwidth, noise_rms, omega_co, phase_margin_deg, phi, quantization, rho, s, sigma, tau, u_max, variant, viscous
+        ValueError: override: unknown parameter 'mass'; expected one of Cf, G, K, beta, deadzone, delay_samples, derivative_N, dt, gain, kappa, m, max_S, noise_bandwidth, noise_rms, omega_co, phase_margin_deg, phi, quantization, rho, s, sigma, tau, u_max, variant, viscous
         """
         changes: dict[str, dict[str, Any]] = {}
         for name, value in values.items():

@@ -1,6 +1,11 @@
 """Loop views of the sensitivity-based PID: margins, sensitivities, bandwidth, poles.
 
-The loop is the one of :mod:`obsdesign.design.pid`: plant ``H = phi / (s (tau s + 1))``
+Two systems, each labelled where it is printed: the **continuous idealisation** below (ideal PID, no
+sampling; the top-level numbers) and the **sampled loop** that runs (ZOH plant, the kernel's discrete
+PID with its derivative filter, ``pid.delay_samples`` of computation delay;
+:mod:`obsdesign.design.sampled_loop`, the ``sampled`` attribute and key).
+
+The continuous loop is the one of :mod:`obsdesign.design.pid`: plant ``H = phi / (s (tau s + 1))``
 (eq:linplant), controller ``C = k (tau s + 1)(T_I s + 1) / (T_I s)`` (eq:Cpid) and the
 loop transfer ``L = C H``. Everything is computed with python-control:
 
@@ -26,6 +31,8 @@ Examples
 (18.796, 1.3416, 25.8)
 >>> la.to_dict()["gain_margin_db"] is None
 True
+>>> round(la.sampled.phase_margin_deg, 2), round(la.sampled.gain_margin, 1)  # the loop that runs
+(60.02, 1121.5)
 """
 
 from __future__ import annotations
@@ -38,6 +45,7 @@ import numpy as np
 
 from ..params import Config, load_preset
 from .pid import PIDDesign, design_pid, peak_magnitude
+from .sampled_loop import SampledLoop, sampled_loop
 from .._display import ResultDisplay
 
 __all__ = ["LoopAnalysis", "loop_analysis", "loop_figure"]
@@ -48,7 +56,9 @@ _HALF_POWER_DB = 20.0 * math.log10(1.0 / math.sqrt(2.0))
 
 @dataclass(frozen=True, kw_only=True)
 class LoopAnalysis(ResultDisplay):
-    """Margins, sensitivity peaks, bandwidth and closed-loop poles of ``L = C H``.
+    """Margins, sensitivity peaks, bandwidth and closed-loop poles of ``L = C H``, and the sampled loop.
+
+    The attributes but ``sampled`` are those of the continuous idealisation (ideal PID, no sampling).
 
     Attributes
     ----------
@@ -71,13 +81,19 @@ class LoopAnalysis(ResultDisplay):
         First frequency where ``|T| = 1/sqrt(2)`` [rad/s].
     closed_loop_poles : tuple of complex
         Roots of the characteristic polynomial ``den(L) + num(L)`` [rad/s], sorted by real part.
+    delay_margin_s : float
+        ``PM / omega_c`` [s]: the delay the continuous loop tolerates.
+    max_CS : float
+        Peak of ``|C / (1 + L)|`` [V/m] (noise to command): ``inf`` for the ideal PID (``kd s``).
+    sampled : SampledLoop
+        The loop that runs (:func:`obsdesign.design.sampled_loop.sampled_loop`).
     pid : PIDDesign
         The PID design the loop is built from.
     L, S, T : control.TransferFunction
         Loop transfer, output sensitivity and complementary sensitivity.
     """
 
-    _title = "PID loop (L = C H)"
+    _title = "Continuous idealisation: PID loop L = C H (ideal PID, no sampling)"
     gain_margin_db: float
     phase_margin_deg: float
     crossover_rad_s: float
@@ -89,13 +105,22 @@ class LoopAnalysis(ResultDisplay):
     max_S_disturbance: float
     bandwidth_rad_s: float
     closed_loop_poles: tuple[complex, ...]
+    delay_margin_s: float
+    max_CS: float
+    sampled: SampledLoop
     pid: PIDDesign = field(repr=False, compare=False)
     L: ct.TransferFunction = field(repr=False, compare=False)
     S: ct.TransferFunction = field(repr=False, compare=False)
     T: ct.TransferFunction = field(repr=False, compare=False)
 
+    @property
+    def system(self) -> str:
+        """Which system the top-level numbers are about."""
+        return "continuous idealisation: ideal PID kp + ki/s + kd s on phi/(s (tau s + 1)), no sampling"
+
     def to_dict(self) -> dict:
-        """JSON-ready values: an infinite gain margin is ``None``, poles are ``[re, im]`` pairs."""
+        """JSON-ready values: an infinite gain margin is ``None``, poles are ``[re, im]`` pairs; the
+        sampled loop under ``"sampled"`` (:meth:`SampledLoop.to_dict`)."""
         gm = self.gain_margin_db
         return {
             "gain_margin_db": None if not math.isfinite(gm) else gm,
@@ -106,7 +131,17 @@ class LoopAnalysis(ResultDisplay):
             "bandwidth_rad_s": self.bandwidth_rad_s,
             "closed_loop_poles": [[p.real, p.imag] for p in self.closed_loop_poles],
             "max_S_disturbance": self.max_S_disturbance,
+            "system": self.system,
+            "delay_margin_s": self.delay_margin_s,
+            "max_CS": None if not math.isfinite(self.max_CS) else self.max_CS,
+            "sampled": self.sampled.to_dict(),
         }
+
+    def __str__(self) -> str:
+        return super().__str__() + "\n\n" + str(self.sampled)
+
+    def _repr_html_(self) -> str:
+        return super()._repr_html_() + self.sampled._repr_html_()
 
     def _rows(self):
         gm = self.gain_margin_db
@@ -121,6 +156,9 @@ class LoopAnalysis(ResultDisplay):
             ("max |H/(1+HC)| input disturbance [m/V]", self.max_S_disturbance),
             ("bandwidth of T, |T| = 1/sqrt(2) [rad/s]", self.bandwidth_rad_s),
             ("closed-loop poles [rad/s]", ", ".join(_fmt_pole(p) for p in self.closed_loop_poles)),
+            ("delay margin PM / omega_c [s]", self.delay_margin_s),
+            ("max |CS| noise to command [V/m]", "infinite (ideal derivative kd s)" if math.isinf(self.max_CS)
+             else self.max_CS),
         ]
 
 
@@ -128,8 +166,9 @@ def _fmt_pole(p: complex) -> str:
     return f"{p.real:.4g}" if p.imag == 0 else f"{p.real:.4g}{p.imag:+.4g}j"
 
 
-def loop_analysis(cfg: Config | None = None, *, phi: float | None = None, tau: float | None = None) -> LoopAnalysis:
-    """Analyse the loop of the config's sensitivity-based PID with python-control.
+def loop_analysis(cfg: Config | None = None, *, phi: float | None = None, tau: float | None = None,
+                  delay_samples: int | None = None) -> LoopAnalysis:
+    """Analyse the loop of the config's sensitivity-based PID with python-control, continuous and sampled.
 
     Parameters
     ----------
@@ -138,6 +177,8 @@ def loop_analysis(cfg: Config | None = None, *, phi: float | None = None, tau: f
     phi, tau : float, optional
         Overrides of the plant gain [m/(V s)] and time constant [s] of eq:linplant;
         the PID is designed for (and the loop closed around) the overridden plant.
+    delay_samples : int, optional
+        Computation delay of the sampled loop [samples] (>= 0); default ``cfg.pid.delay_samples``.
 
     Returns
     -------
@@ -148,7 +189,7 @@ def loop_analysis(cfg: Config | None = None, *, phi: float | None = None, tau: f
     TypeError
         ``cfg`` is not a Config.
     ValueError
-        An override is out of range.
+        An override is out of range, or ``delay_samples`` is not an integer >= 0.
 
     Examples
     --------
@@ -160,7 +201,7 @@ def loop_analysis(cfg: Config | None = None, *, phi: float | None = None, tau: f
         cfg = load_preset("vcm")
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config or None, found {type(cfg).__name__}")
-    cfg = cfg.override(phi=phi, tau=tau)
+    cfg = cfg.override(phi=phi, tau=tau, delay_samples=delay_samples)
     pid = design_pid(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S, phase_margin_deg=cfg.pid.phase_margin_deg)
     L = pid.C * pid.H
     S = ct.feedback(ct.tf([1.0], [1.0]), L)  # 1 / (1 + L)
@@ -169,12 +210,13 @@ def loop_analysis(cfg: Config | None = None, *, phi: float | None = None, tau: f
     max_S, w_S = peak_magnitude(S)
     max_T, w_T = peak_magnitude(T)
     poles = sorted((complex(p) for p in ct.poles(T)), key=lambda p: (p.real, p.imag))
+    sampled = sampled_loop(cfg)
     return LoopAnalysis(
         gain_margin_db=20.0 * math.log10(gm) if math.isfinite(gm) else math.inf,
         phase_margin_deg=float(pm), crossover_rad_s=float(wgc), phase_crossover_rad_s=float(wpc),
         max_S=max_S, omega_max_S=w_S, max_T=max_T, omega_max_T=w_T, max_S_disturbance=pid.max_S_achieved,
         bandwidth_rad_s=float(ct.bandwidth(T, dbdrop=_HALF_POWER_DB)), closed_loop_poles=tuple(poles),
-        pid=pid, L=L, S=S, T=T,
+        delay_margin_s=math.radians(float(pm)) / float(wgc), max_CS=math.inf, sampled=sampled, pid=pid, L=L, S=S, T=T,
     )
 
 
@@ -185,6 +227,10 @@ def _mag_phase(sys, w):
 
 def loop_figure(analysis: LoopAnalysis):
     """Bode plot of ``L`` with the margins, Nyquist plot, ``|S|`` and ``|T|``, closed-loop poles.
+
+    Each panel shows the continuous idealisation and, beside it in the same axes (dashed, labelled
+    "sampled"), the sampled loop ``L(z) = C(z) H_zoh(z) z^-d`` up to the Nyquist frequency; sampled
+    poles are drawn at ``s = ln(z) / dt``.
 
     Parameters
     ----------
@@ -211,12 +257,18 @@ def loop_figure(analysis: LoopAnalysis):
     resp, mag_db, phase = _mag_phase(a.L, w)
     # phase of L is -180 deg + atan(T_I w) here; keep the unwrapped branch that starts near -180 deg
     phase -= 360.0 * np.round((phase[0] + 180.0) / 360.0)
+    sl = a.sampled
+    tag = f"sampled (ZOH, discrete PID N={sl.derivative_N:g}, delay {sl.delay_samples})"
+    wz = w[w < math.pi / sl.dt]
+    _, zmag_db, zphase = _mag_phase(sl.L, wz)
+    zphase -= 360.0 * np.round((zphase[0] + 180.0) / 360.0)
     fig = Figure(figsize=(15, 8.5), layout="constrained")
     gs = fig.add_gridspec(2, 3)
     ax_mag, ax_ph = fig.add_subplot(gs[0, 0]), fig.add_subplot(gs[1, 0])
     ax_ny, ax_st, ax_pz = fig.add_subplot(gs[:, 1]), fig.add_subplot(gs[0, 2]), fig.add_subplot(gs[1, 2])
 
-    ax_mag.semilogx(w, mag_db, label="loop gain |L|")
+    ax_mag.semilogx(w, mag_db, label="loop gain |L|, continuous idealisation")
+    ax_mag.semilogx(wz, zmag_db, ls="--", color="C1", label=f"|L(z)| {tag}: GM {sl.gain_margin:.3g}")
     ax_mag.axhline(0.0, color="0.5", lw=0.8, ls="--", label="0 dB")
     ax_mag.axvline(wc, color="C3", lw=0.8, ls=":", label=f"gain crossover {wc:.4g} rad/s")
     if math.isfinite(a.gain_margin_db):
@@ -230,7 +282,9 @@ def loop_figure(analysis: LoopAnalysis):
     ax_mag.legend(fontsize="small")
     ax_mag.grid(True, which="both", alpha=0.3)
 
-    ax_ph.semilogx(w, phase, label="phase of L")
+    ax_ph.semilogx(w, phase, label="phase of L, continuous idealisation")
+    ax_ph.semilogx(wz, zphase, ls="--", color="C1",
+                   label=f"phase of L(z) {tag}: PM {sl.phase_margin_deg:.3g} deg at {sl.crossover_rad_s:.4g} rad/s")
     ax_ph.axhline(-180.0, color="0.5", lw=0.8, ls="--", label="-180 deg")
     ax_ph.annotate("", xy=(wc, -180.0), xytext=(wc, -180.0 + a.phase_margin_deg),
                    arrowprops={"arrowstyle": "<->", "color": "C3"})
@@ -242,7 +296,10 @@ def loop_figure(analysis: LoopAnalysis):
     wn = np.logspace(math.log10(wc) - 2, math.log10(wc) + 4, 3000)
     ln = np.asarray(ct.frequency_response(a.L, wn).complex).ravel()
     ax_ny.plot(ln.real, ln.imag, label="L(jw), w > 0")
-    ax_ny.plot(ln.real, -ln.imag, ls="--", color="C0", alpha=0.5, label="L(jw), w < 0 (mirror image)")
+    ax_ny.plot(ln.real, -ln.imag, ls=":", color="C0", alpha=0.5, label="L(jw), w < 0 (mirror image)")
+    wzn = np.logspace(math.log10(wc) - 2, math.log10(0.999999 * math.pi / sl.dt), 3000)
+    lz = np.asarray(ct.frequency_response(sl.L, wzn).complex).ravel()
+    ax_ny.plot(lz.real, lz.imag, ls="--", color="C1", label=f"L(exp(jw dt)) {tag}, 0 < w <= pi/dt")
     theta = np.linspace(0.0, 2.0 * math.pi, 361)
     ax_ny.plot(np.cos(theta), np.sin(theta), color="0.5", lw=0.8, label="unit circle |L| = 1")
     ax_ny.plot([-1.0], [0.0], "r+", ms=12, mew=2, label="critical point -1")
@@ -255,6 +312,8 @@ def loop_figure(analysis: LoopAnalysis):
     _, t_db, _ = _mag_phase(a.T, w)
     ax_st.semilogx(w, s_db, label=f"output sensitivity |S|, peak {a.max_S:.3g}")
     ax_st.semilogx(w, t_db, label=f"complementary sensitivity |T|, peak {a.max_T:.3g}")
+    ax_st.semilogx(wz, _mag_phase(sl.S, wz)[1], ls="--", color="C0", label=f"|S| sampled, peak {sl.max_S:.3g}")
+    ax_st.semilogx(wz, _mag_phase(sl.T, wz)[1], ls="--", color="C1", label=f"|T| sampled, peak {sl.max_T:.3g}")
     ax_st.axvline(a.bandwidth_rad_s, color="C1", lw=0.8, ls=":",
                   label=f"bandwidth of T {a.bandwidth_rad_s:.4g} rad/s")
     ax_st.set(xlabel="frequency [rad/s]", ylabel="magnitude [dB]", title="Sensitivities")
@@ -262,7 +321,9 @@ def loop_figure(analysis: LoopAnalysis):
     ax_st.grid(True, which="both", alpha=0.3)
 
     p = np.array(a.closed_loop_poles)
-    ax_pz.plot(p.real, p.imag, "x", ms=10, mew=2, label="closed-loop poles")
+    ax_pz.plot(p.real, p.imag, "x", ms=10, mew=2, label="closed-loop poles, continuous idealisation")
+    ps = np.log(np.array([z for z in sl.poles if z != 0] or [1.0])) / sl.dt
+    ax_pz.plot(ps.real, ps.imag, "+", ms=10, mew=2, color="C1", label=f"{tag} poles at s = ln(z)/dt")
     ax_pz.axvline(0.0, color="0.5", lw=0.8, label="imaginary axis")
     ax_pz.set(xlabel="real part [rad/s]", ylabel="imaginary part [rad/s]", title="Closed-loop poles")
     ax_pz.legend(fontsize="small")

@@ -1,0 +1,340 @@
+"""The sampled loop that runs: ZOH plant, the kernel's discrete PID, a computation delay of d samples.
+
+At sample ``n`` the controller (:func:`obsdesign.sampled.kernel.controller_sample`) computes, from
+the error ``e[n] = x_ref[n] - x_meas[n]``,
+
+* ``I[n] = I[n-1] + dt e[n]`` (the integral includes the current sample),
+* ``D[n] = a D[n-1] + (1 - a) (e[n] - e[n-1]) / dt`` with ``a = exp(-dt / tau_d)``,
+  ``tau_d = kd / (kp N)`` (``N = pid.derivative_N``),
+* ``u[n] = kp e[n] + ki I[n] + kd D[n]``,
+
+so its z-transform (zero initial state) is exactly
+
+``C(z) = kp + ki dt z / (z - 1) + kd (1 - a) / dt (z - 1) / (z - a)``.
+
+The command is held over ``[n dt, (n + 1) dt)`` (ZOH) on the plant ``H = phi / (s (tau s + 1))``
+of eq:linplant, ``H_zoh(z) = c2d(H, dt, 'zoh')``, after ``d = pid.delay_samples`` samples of
+computation delay: ``L(z) = C(z) H_zoh(z) z^-d``. The linear loop leaves out the feed-forward, the
+friction compensation, the saturation (with its conditional integration) and quantization.
+
+Computed with python-control on the discrete system: margins (``stability_margins``), the delay
+margin ``PM / omega_c`` (the extra delay the loop tolerates, exact for whole samples: the loop stays
+stable with ``k`` more samples of delay for ``k < delay_margin_samples``), the gang of four
+``S = 1/(1+L)``, ``T = L/(1+L)``, ``PS = H_zoh/(1+L)`` [m/V] (input disturbance to position),
+``CS = C z^-d/(1+L)`` [V/m] (measurement noise to command), their peaks over ``0 < omega <= pi/dt``,
+the closed-loop poles ``roots(den L + num L)`` and the step metrics of ``T`` (``step_info``, 2 %).
+
+Examples
+--------
+>>> import obsdesign as od
+>>> sl = sampled_loop(od.load_preset("vcm"))
+>>> round(sl.phase_margin_deg, 2), round(sl.gain_margin, 1), sl.delay_samples
+(60.02, 1121.5, 0)
+>>> sl2 = sampled_loop(od.load_preset("vcm"), delay_samples=1)
+>>> round(sl2.phase_margin_deg, 2), round(sl2.delay_margin_samples, 1)
+(59.91, 555.6)
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+
+import control as ct
+import numpy as np
+import scipy.optimize
+
+from .._display import ResultDisplay
+from .._validate import POSITIVE, check_integer
+from ..params import Config
+from .pid import pid_gains
+
+__all__ = ["SampledLoop", "sampled_loop", "discrete_pid", "zoh_plant", "discrete_peak"]
+
+
+def discrete_pid(*, kp: float, ki: float, kd: float, tau_d: float, dt: float) -> ct.TransferFunction:
+    """``C(z)`` of the kernel's PID recursion (module docstring), as one transfer function.
+
+    Parameters
+    ----------
+    kp, ki, kd : float
+        Parallel PID gains [V/m, V/(m s), V s/m].
+    tau_d : float
+        Time constant of the derivative filter [s] (> 0).
+    dt : float
+        Sample time [s] (> 0).
+
+    Returns
+    -------
+    control.TransferFunction
+        ``(kp (z-1)(z-a) + ki dt z (z-a) + kd (1-a)/dt (z-1)^2) / ((z-1)(z-a))``, ``a = exp(-dt/tau_d)``.
+
+    Examples
+    --------
+    >>> C = discrete_pid(kp=2.0, ki=0.0, kd=0.0, tau_d=1.0, dt=0.1)
+    >>> round(float(abs(C(1j))), 12)
+    2.0
+    """
+    tau_d, dt = POSITIVE.check("tau_d", tau_d), POSITIVE.check("dt", dt)
+    a = math.exp(-dt / tau_d)
+    zm1, zma = np.array([1.0, -1.0]), np.array([1.0, -a])
+    num = (kp * np.polymul(zm1, zma) + ki * dt * np.polymul([1.0, 0.0], zma)
+           + kd * (1.0 - a) / dt * np.polymul(zm1, zm1))
+    return ct.tf(num, np.polymul(zm1, zma), dt)
+
+
+def zoh_plant(*, phi: float, tau: float, dt: float) -> ct.TransferFunction:
+    """``H_zoh(z) = c2d(phi / (s (tau s + 1)), dt, 'zoh')`` [m/V].
+
+    Parameters
+    ----------
+    phi, tau, dt : float
+        Plant gain [m/(V s)], time constant [s] and sample time [s].
+
+    Examples
+    --------
+    >>> H = zoh_plant(phi=1.0, tau=1.0, dt=0.1)
+    >>> H.dt, len(H.poles())
+    (0.1, 2)
+    """
+    H = ct.tf([POSITIVE.check("phi", phi)], [POSITIVE.check("tau", tau), 1.0, 0.0])
+    return ct.c2d(H, POSITIVE.check("dt", dt), "zoh")
+
+
+def discrete_peak(sys: ct.TransferFunction, dt: float, w_low: float) -> tuple[float, float]:
+    """``max |sys(exp(j w dt))|`` over ``w_low <= w <= pi/dt`` and where it is [rad/s].
+
+    A log grid of 4001 points ending at the Nyquist frequency, then a bounded refinement.
+
+    Parameters
+    ----------
+    sys : control.TransferFunction
+        A discrete, stable SISO system.
+    dt : float
+        Its sample time [s].
+    w_low : float
+        Lowest frequency of the search [rad/s] (below the Nyquist frequency).
+
+    Examples
+    --------
+    >>> z = ct.tf([1.0, 0.0], [1.0], 0.1)
+    >>> peak, w = discrete_peak(1 / (z + 0.5), 0.1, 0.01)   # largest at z = -1 (w = pi/dt): 1 / 0.5
+    >>> round(peak, 9), round(w * 0.1, 9)
+    (2.0, 3.141592654)
+    """
+    w_nyq = math.pi / dt
+    w = np.logspace(math.log10(w_low), math.log10(w_nyq), 4001)
+    w[-1] = w_nyq
+
+    def mag(x):
+        return np.abs(np.asarray(sys(np.exp(1j * np.asarray(x) * dt)))).ravel()
+
+    m = mag(w)
+    i = int(m.argmax())
+    lo, hi = w[max(i - 1, 0)], w[min(i + 1, w.size - 1)]
+    res = scipy.optimize.minimize_scalar(lambda x: -float(mag(x)[0]), bounds=(lo, hi), method="bounded",
+                                         options={"xatol": 1e-12 * hi})
+    best = -float(res.fun)
+    return (best, float(res.x)) if best > m[i] else (float(m[i]), float(w[i]))
+
+
+@dataclass(frozen=True, kw_only=True)
+class SampledLoop(ResultDisplay):
+    """Margins, gang of four, poles and step of the sampled loop ``L(z) = C(z) H_zoh(z) z^-d``.
+
+    Attributes
+    ----------
+    dt : float
+        Sample time [s] (``observer.dt``).
+    delay_samples : int
+        Computation delay ``d`` [samples].
+    derivative_N : float
+        The derivative filter's ``N``.
+    gain_margin, gain_margin_db : float
+        Gain margin as python-control's ``stability_margins`` reports it [-] and in dB (``inf``: none).
+    phase_margin_deg : float
+        Phase margin [deg].
+    crossover_rad_s, phase_crossover_rad_s : float
+        Gain and phase crossover frequencies [rad/s] (``nan``: none).
+    delay_margin_s, delay_margin_samples : float
+        Smallest ``PM_i / omega_i`` over the gain crossovers [s], and in samples.
+    max_S, omega_max_S, max_T, omega_max_T : float
+        Peaks of ``|S|``, ``|T|`` [-] and where they are [rad/s].
+    max_PS : float
+        Peak of ``|H_zoh / (1 + L)|`` [m/V].
+    max_CS, omega_max_CS : float
+        Peak of ``|C z^-d / (1 + L)|`` [V/m] (noise to command) and where it is [rad/s].
+    poles : tuple of complex
+        Closed-loop poles in the z-plane, sorted by magnitude.
+    max_pole_magnitude : float
+        ``max |z|`` of the poles (stable when < 1).
+    overshoot_pct, rise_time_s, settling_time_s : float or None
+        ``step_info`` of ``T``: overshoot [%], 10-90 % rise and 2 % settling time [s] (None if unstable).
+    kp, ki, kd, tau_d : float
+        The PID the kernel runs.
+    C, H, L, S, T, PS, CS : control.TransferFunction
+        The discrete systems (sample time ``dt``).
+    """
+
+    _title = "Sampled loop (what runs): L(z) = C(z) H_zoh(z) z^-d"
+    dt: float
+    delay_samples: int
+    derivative_N: float
+    gain_margin: float
+    gain_margin_db: float
+    phase_margin_deg: float
+    crossover_rad_s: float
+    phase_crossover_rad_s: float
+    delay_margin_s: float
+    delay_margin_samples: float
+    max_S: float
+    omega_max_S: float
+    max_T: float
+    omega_max_T: float
+    max_PS: float
+    max_CS: float
+    omega_max_CS: float
+    poles: tuple[complex, ...]
+    max_pole_magnitude: float
+    overshoot_pct: float | None
+    rise_time_s: float | None
+    settling_time_s: float | None
+    kp: float
+    ki: float
+    kd: float
+    tau_d: float
+    C: ct.TransferFunction = field(repr=False, compare=False)
+    H: ct.TransferFunction = field(repr=False, compare=False)
+    L: ct.TransferFunction = field(repr=False, compare=False)
+    S: ct.TransferFunction = field(repr=False, compare=False)
+    T: ct.TransferFunction = field(repr=False, compare=False)
+    PS: ct.TransferFunction = field(repr=False, compare=False)
+    CS: ct.TransferFunction = field(repr=False, compare=False)
+
+    @property
+    def system(self) -> str:
+        """Which system the numbers are about, in words."""
+        return (f"sampled loop: ZOH plant, discrete PID with derivative filter N={self.derivative_N:g}, "
+                f"delay {self.delay_samples} samples, dt = {self.dt:g} s")
+
+    @property
+    def stable(self) -> bool:
+        """All closed-loop poles inside the unit circle."""
+        return self.max_pole_magnitude < 1.0
+
+    def to_dict(self) -> dict:
+        """JSON-ready values (infinite margins are ``None``, poles ``[re, im]`` pairs)."""
+        def fin(x):
+            return None if x is None or not math.isfinite(x) else x
+
+        return {
+            "system": self.system, "dt": self.dt, "delay_samples": self.delay_samples,
+            "derivative_N": self.derivative_N, "gain_margin": fin(self.gain_margin),
+            "gain_margin_db": fin(self.gain_margin_db), "phase_margin_deg": self.phase_margin_deg,
+            "crossover_rad_s": fin(self.crossover_rad_s), "phase_crossover_rad_s": fin(self.phase_crossover_rad_s),
+            "delay_margin_s": fin(self.delay_margin_s), "delay_margin_samples": fin(self.delay_margin_samples),
+            "max_S": self.max_S, "max_T": self.max_T, "max_PS": self.max_PS, "max_CS": self.max_CS,
+            "poles": [[p.real, p.imag] for p in self.poles], "max_pole_magnitude": self.max_pole_magnitude,
+            "stable": self.stable, "overshoot_pct": self.overshoot_pct, "rise_time_s": self.rise_time_s,
+            "settling_time_s": self.settling_time_s,
+        }
+
+    def _rows(self):
+        unstable = "" if self.stable else " (UNSTABLE)"
+        return [
+            ("system", self.system + unstable),
+            ("gain margin [-] ([dB])", f"{self.gain_margin:.4g} ({self.gain_margin_db:.3g} dB)"),
+            ("phase margin [deg]", self.phase_margin_deg),
+            ("gain crossover [rad/s]", self.crossover_rad_s),
+            ("phase crossover [rad/s]", self.phase_crossover_rad_s),
+            ("delay margin [s] ([samples])", f"{self.delay_margin_s:.4g} ({self.delay_margin_samples:.3g} samples)"),
+            ("max |S| [-]", self.max_S),
+            ("max |T| [-]", self.max_T),
+            ("max |PS| input disturbance to position [m/V]", self.max_PS),
+            ("max |CS| noise to command [V/m]", self.max_CS),
+            ("  at [rad/s]", self.omega_max_CS),
+            ("closed-loop poles, max |z| [-]", self.max_pole_magnitude),
+            ("step of T: overshoot [%]", self.overshoot_pct),
+            ("step of T: rise 10-90 % [s]", self.rise_time_s),
+            ("step of T: settling 2 % [s]", self.settling_time_s),
+        ]
+
+
+def _margins(L: ct.TransferFunction) -> tuple[float, float, float, float, float]:
+    """``(gm, pm_deg, w_gc, w_pc, delay margin [s])`` of a discrete loop."""
+    with warnings.catch_warnings():  # its 'frd' fallback refines on the exact response: accurate here
+        warnings.filterwarnings("ignore", message="stability_margins: Falling back")
+        gm, pm, _, wpc, wgc, _ = ct.stability_margins(L)
+        _, pms, _, _, wgcs, _ = ct.stability_margins(L, returnall=True)
+    dms = [math.radians(float(p)) / float(w) for p, w in zip(np.atleast_1d(pms), np.atleast_1d(wgcs)) if w > 0]
+    dm = max(0.0, min(dms)) if dms else math.inf
+    return float(gm), float(pm), float(wgc), float(wpc), dm
+
+
+def sampled_loop(cfg: Config, *, delay_samples: int | None = None) -> SampledLoop:
+    """Analyse the sampled loop of the config's PID as the kernel runs it (module docstring).
+
+    Parameters
+    ----------
+    cfg : Config
+        The design: ``pid`` section, ``phi``, ``observer.dt``, ``pid.derivative_N``.
+    delay_samples : int, optional
+        Computation delay [samples] (>= 0); default ``cfg.pid.delay_samples``.
+
+    Returns
+    -------
+    SampledLoop
+
+    Raises
+    ------
+    TypeError
+        ``cfg`` is not a Config.
+    ValueError
+        ``delay_samples`` is not an integer >= 0.
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> sampled_loop(od.load_preset("vcm"), delay_samples=-1)
+    Traceback (most recent call last):
+    ...
+    ValueError: delay_samples: expected an integer >= 0, found -1
+    """
+    if not isinstance(cfg, Config):
+        raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
+    d = cfg.pid.delay_samples if delay_samples is None else check_integer("delay_samples", delay_samples, minimum=0)
+    dt, N = cfg.observer.dt, cfg.pid.derivative_N
+    _, _, kp, ki, kd = pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
+                                 phase_margin_deg=cfg.pid.phase_margin_deg)
+    tau_d = kd / kp / N  # as obsdesign.sampled.controller.sampled_controller
+    C = discrete_pid(kp=kp, ki=ki, kd=kd, tau_d=tau_d, dt=dt)
+    H = zoh_plant(phi=cfg.phi, tau=cfg.pid.tau, dt=dt)
+    Cd = C * ct.tf([1.0], [1.0] + [0.0] * d, dt)  # C z^-d
+    L = Cd * H
+    one = ct.tf([1.0], [1.0], dt)
+    S, T = ct.feedback(one, L), ct.feedback(L, one)
+    PS, CS = ct.feedback(H, Cd), ct.feedback(Cd, H)
+    gm, pm, wgc, wpc, dm = _margins(L)
+    num, den = (np.atleast_1d(np.squeeze(x)) for x in ct.tfdata(L))
+    poles = tuple(sorted((complex(p) for p in np.roots(np.polyadd(den, num))), key=lambda p: (abs(p), p.imag)))
+    rmax = max(abs(p) for p in poles)
+    w_low = (wgc if math.isfinite(wgc) and wgc > 0 else 1.0 / cfg.pid.tau) * 1e-3
+    max_S, w_S = discrete_peak(S, dt, w_low)
+    max_T, w_T = discrete_peak(T, dt, w_low)
+    max_PS, _ = discrete_peak(PS, dt, w_low)
+    max_CS, w_CS = discrete_peak(CS, dt, w_low)
+    over = rise = settle = None
+    if rmax < 1.0:
+        n = int(min(2e6, max(1000, 20.0 / (-math.log(rmax)))))  # 20 time constants of the slowest pole
+        info = ct.step_info(T, T=np.arange(n) * dt, SettlingTimeThreshold=0.02)
+        over, rise, settle = (float(info[k]) for k in ("Overshoot", "RiseTime", "SettlingTime"))
+    return SampledLoop(
+        dt=dt, delay_samples=d, derivative_N=N, gain_margin=gm,
+        gain_margin_db=20.0 * math.log10(gm) if math.isfinite(gm) else math.inf,
+        phase_margin_deg=pm, crossover_rad_s=wgc, phase_crossover_rad_s=wpc, delay_margin_s=dm,
+        delay_margin_samples=dm / dt, max_S=max_S, omega_max_S=w_S, max_T=max_T, omega_max_T=w_T, max_PS=max_PS,
+        max_CS=max_CS, omega_max_CS=w_CS, poles=poles, max_pole_magnitude=rmax, overshoot_pct=over,
+        rise_time_s=rise, settling_time_s=settle, kp=kp, ki=ki, kd=kd, tau_d=tau_d,
+        C=C, H=H, L=L, S=S, T=T, PS=PS, CS=CS,
+    )
