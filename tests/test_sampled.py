@@ -56,6 +56,7 @@ def test_run_loop_takes_the_groups_in_the_order_loop_inputs_gives_them():
     assert [type(a) for a in args] == [GROUPS[p] for p in params[:-1]]
     sample = inspect.signature(sk.controller_sample.py_func).parameters
     assert list(sample)[-3:] == ["obs", "est", "ctrl"]
+    assert list(sample)[:4] == ["cst", "ost", "ez", "ubuf"]
 
 
 def test_pid_step_on_a_constant_error_is_its_closed_form():
@@ -67,17 +68,57 @@ def test_pid_step_on_a_constant_error_is_its_closed_form():
     obs, est, c = ctrl.kernel_args()
     e0, dt = 1e-4, cfg.observer.dt
     cst, ost = sk.CONTROLLER_STATE, sk.OBSERVER_STATE
-    ez = np.zeros(1)
+    ez, ub = np.zeros(1), sk.delay_buffer(c)
     for n in range(50):
-        cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, n, e0, 0.0, 0.0, 0.0, obs, est, c)
+        cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, ub, n, e0, 0.0, 0.0, 0.0, obs, est, c)
         expected = c.kp * e0 + c.ki * (n + 1) * e0 * dt + c.G / c.K
         assert cmd == pytest.approx(expected, rel=1e-13)
         assert cst[3] == 0.0  # derivative state
     # a large error saturates: the command is u_max and the integral is not advanced
-    cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, 50, 1.0, 0.0, 0.0, 0.0, obs, est, c)
+    cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, ub, 50, 1.0, 0.0, 0.0, 0.0, obs, est, c)
     assert cmd == c.u_max
     assert cst[2] == pytest.approx(50 * e0 * dt, rel=1e-13)
     assert cst[0] == c.K * c.u_max - c.G  # the net force the estimator is fed next
+
+
+def test_computation_delay_shifts_the_command_by_whole_samples():
+    """delay d: the command applied at sample n is the one computed at n - d (the saturated feed-forward
+    before), and the estimator is fed the applied force; d = 0 is the undelayed loop."""
+    cfg = od.load_preset("vcm")
+    rng = np.random.default_rng(1)
+    xm = 1e-4 * np.cumsum(rng.standard_normal(300))
+    runs = {}
+    for d in (0, 1, 3):
+        ctrl = sampled_controller(cfg.override(delay_samples=d))
+        obs, est, c = ctrl.kernel_args()
+        cst, ost, ez, ub = sk.CONTROLLER_STATE, sk.OBSERVER_STATE, np.zeros(1), sk.delay_buffer(c)
+        out, fed = [], []
+        for n in range(300):
+            cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, ub, n, 1e-3, 0.0, xm[n], 0.0, obs, est, c)
+            out.append(cmd)
+            fed.append(cst[0])
+        runs[d] = (np.array(out), np.array(fed), c)
+    u0 = runs[0][0]
+    for d in (1, 3):
+        u, fed, c = runs[d]
+        assert np.all(u[:d] == c.G / c.K)
+        assert np.array_equal(fed, c.K * u - c.G)
+    # the PID part does not see the delay (same measurements), only the observer's input does:
+    # with the observer's input frozen out (controller 'pid') the delayed command is the shifted one
+    for d in (1, 3):
+        ctrl = sampled_controller(cfg.override(delay_samples=d), controller="pid")
+        obs, est, c = ctrl.kernel_args()
+        ref = sampled_controller(cfg, controller="pid").kernel_args()
+        cst, ost, ez, ub = sk.CONTROLLER_STATE, sk.OBSERVER_STATE, np.zeros(1), sk.delay_buffer(c)
+        rst, rost, rub = sk.CONTROLLER_STATE, sk.OBSERVER_STATE, sk.delay_buffer(ref[2])
+        got, want = [], []
+        for n in range(300):
+            cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, ub, n, 1e-3, 0.0, xm[n], 0.0, obs, est, c)
+            rst, rost, rcmd, *_ = sk.controller_sample(rst, rost, ez, rub, n, 1e-3, 0.0, xm[n], 0.0, *ref)
+            got.append(cmd)
+            want.append(rcmd)
+        assert np.array_equal(np.array(got)[d:], np.array(want)[:-d])
+    assert len(u0) == 300
 
 
 def test_derivative_filter_is_first_order_with_pole_alpha():
@@ -86,9 +127,9 @@ def test_derivative_filter_is_first_order_with_pole_alpha():
     ctrl = sampled_controller(cfg, controller="pid")
     obs, est, c = ctrl.kernel_args()
     assert c.alpha_d == pytest.approx(math.exp(-cfg.observer.dt * c.kp * cfg.pid.derivative_N / c.kd), rel=1e-14)
-    cst, ost, ez = sk.CONTROLLER_STATE, sk.OBSERVER_STATE, np.zeros(1)
+    cst, ost, ez, ub = sk.CONTROLLER_STATE, sk.OBSERVER_STATE, np.zeros(1), sk.delay_buffer(c)
     for n in range(20):
-        cst, ost, *_ = sk.controller_sample(cst, ost, ez, n, 0.0 if n == 0 else 1.0, 0.0, 0.0, 0.0, obs, est, c)
+        cst, ost, *_ = sk.controller_sample(cst, ost, ez, ub, n, 0.0 if n == 0 else 1.0, 0.0, 0.0, 0.0, obs, est, c)
         if n >= 1:
             assert cst[3] == pytest.approx((1 - c.alpha_d) * c.alpha_d ** (n - 1) / c.dt, rel=1e-12)
 

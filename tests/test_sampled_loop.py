@@ -86,10 +86,12 @@ def test_discrete_pid_is_the_kernels_recursion(make):
     e = rng.standard_normal(400) * 1e-4
     e[0] = 0.0  # the kernel takes e_prev = e at n = 0; zero initial state needs e[0] = e[-1] = 0
     e[150:] = 1e-4  # and a step
-    cst, ost, ez = CONTROLLER_STATE, OBSERVER_STATE, np.zeros(1)
+    from obsdesign.sampled.kernel import delay_buffer
+
+    cst, ost, ez, ub = CONTROLLER_STATE, OBSERVER_STATE, np.zeros(1), delay_buffer(ctrl)
     u = np.empty(e.size)
     for n in range(e.size):  # x_ref = 0, x_meas = -e
-        cst, ost, u[n], *_ = controller_sample(cst, ost, ez, n, 0.0, 0.0, -e[n], 0.0, obs, est, ctrl)
+        cst, ost, u[n], *_ = controller_sample(cst, ost, ez, ub, n, 0.0, 0.0, -e[n], 0.0, obs, est, ctrl)
     dt = cfg.observer.dt
     C = discrete_pid(kp=sc.kp, ki=sc.ki, kd=sc.kd, tau_d=sc.tau_d, dt=dt)
     y = ct.forced_response(C, np.arange(e.size) * dt, e).outputs.ravel()
@@ -226,15 +228,16 @@ def test_the_reviewers_numbers_come_from_a_tustin_pid():
 
 # --------------------------------------------------------------------------------------------
 # The linear sampled loop's step against the simulator's positioning step while the plant is linear
-def test_simulated_step_is_the_sampled_loops_step_response():
+@pytest.mark.parametrize("delay", [0, 1, 2])
+def test_simulated_step_is_the_sampled_loops_step_response(delay):
     """vcm with friction effectively off, no saturation, no quantization, the PID's plant equal to the
     simulated one (tau = m / sigma): x at the samples against step_response(T) of the sampled loop, and
-    the step metrics against step_info (delay 0; the simulator has no computation delay yet)."""
+    the step metrics against step_info, with the simulator's computation delay of 0, 1 and 2 samples."""
     import control as ct
 
     base = od.load_preset("vcm")
     m, sigma = base.plant.m, base.friction.sigma
-    cfg = base.override(Cf=1e-12, tau=m / sigma, u_max=1e3, quantization=0.0, G=0.0)
+    cfg = base.override(Cf=1e-12, tau=m / sigma, u_max=1e3, quantization=0.0, G=0.0, delay_samples=delay)
     size = 1e-3
     res = od.simulate(cfg, od.sim.Positioning(step_size=size, step_up=0.5, step_down=1.5), controller="pid",
                       duration=2.0)

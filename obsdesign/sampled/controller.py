@@ -141,6 +141,8 @@ class ControllerArgs(NamedTuple):
         Saturation of the command [V].
     comp_gain, comp_viscous, comp_deadzone : float, bool, float
         The compensation law of :class:`obsdesign.params.CompensationSpec`.
+    delay : int
+        Computation delay [samples] between the measurement and the command's output.
     """
 
     controller: int
@@ -156,6 +158,7 @@ class ControllerArgs(NamedTuple):
     comp_gain: float
     comp_viscous: bool
     comp_deadzone: float
+    delay: int
 
 
 @dataclass(frozen=True, eq=False)
@@ -209,6 +212,12 @@ class SampledController:
         return self.config.observer.dt
 
     @property
+    def delay(self) -> int:
+        """Computation delay [samples] (``[pid] delay_samples``): the command computed at sample ``n`` is
+        applied from ``n + delay`` on."""
+        return self.config.pid.delay_samples
+
+    @property
     def alpha_d(self) -> float:
         """Pole of the first-order derivative filter per sample, ``exp(-dt / tau_d)`` (0 without one)."""
         return math.exp(-self.dt / self.tau_d) if self.tau_d > 0.0 else 0.0
@@ -233,7 +242,8 @@ class SampledController:
         comp = self.compensation
         c = ControllerArgs(controller=CONTROLLERS.code(self.controller), dt=self.dt, K=pl.K, G=pl.G, sigma=fr.sigma,
                            kp=self.kp, ki=self.ki, kd=self.kd, alpha_d=self.alpha_d, u_max=pl.u_max,
-                           comp_gain=comp.gain, comp_viscous=comp.viscous, comp_deadzone=comp.deadzone)
+                           comp_gain=comp.gain, comp_viscous=comp.viscous, comp_deadzone=comp.deadzone,
+                           delay=self.delay)
         return o, e, c
 
 

@@ -12,8 +12,11 @@ same order):
 2. controller: open loop (``u_open / K``), or the parallel PID eq:PIDparallel on the measured error
    with a first-order filtered derivative and conditional integration under saturation, plus
    ``comp / K`` for ``pid+observer`` (:func:`compensation_force`);
-3. load feed-forward ``G / K``, saturation at ``u_max``; the controller's net force ``K command - G``
-   is what the estimator is fed at the next sample.
+3. load feed-forward ``G / K``, saturation at ``u_max``;
+4. computation delay of ``d`` samples (``[pid] delay_samples``): the command computed at sample ``n``
+   is applied from sample ``n + d`` on (a ring buffer of ``d`` commands, which holds the saturated
+   feed-forward ``G / K`` before the first computed command reaches the output); the applied
+   command's net force ``K command - G`` is what the estimator is fed at the next sample.
 
 :func:`observe_loop` runs step 1 alone over measured data. The arguments come in named groups
 (:class:`~obsdesign.sampled.controller.ObserverArgs`, ``EstimatorArgs``, ``ControllerArgs``) built
@@ -23,6 +26,7 @@ by :meth:`obsdesign.sampled.SampledController.kernel_args`; the integer codes ar
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 from ..design.discretize import coefficients
@@ -31,8 +35,8 @@ from ..friction.presliding import stiffness, track_reversal, track_reversal_hyst
 from ..estimators.registry import FIRST_BASELINE_CODE
 from .choices import CONTROLLERS, ESTIMATORS, SCHEDULES
 
-__all__ = ["observer_sample", "controller_sample", "compensation_force", "observe_loop", "OBSERVER_STATE",
-           "CONTROLLER_STATE"]
+__all__ = ["observer_sample", "controller_sample", "compensation_force", "observe_loop", "delay_buffer",
+           "OBSERVER_STATE", "CONTROLLER_STATE"]
 
 # Codes read once from the registries; numba freezes module globals at compile time (the registries
 # are append-only: a code never changes meaning).
@@ -156,14 +160,15 @@ def compensation_force(ff, vh, ctrl):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def controller_sample(cst, ost, ez, n, x_ref, u_open, xm, k_true, obs, est, ctrl):
+def controller_sample(cst, ost, ez, ubuf, n, x_ref, u_open, xm, k_true, obs, est, ctrl):
     """One sample of the whole controller: measurement ``xm`` and reference ``x_ref`` in, command out.
 
     ``cst`` is the controller state (:data:`CONTROLLER_STATE`), ``ost`` the observer's
-    (:data:`OBSERVER_STATE`), ``ez`` the state array of a linear baseline (updated in place);
-    ``u_open`` is the open-loop force [N] of the sample (``open-loop`` only). Returns ``(cst, ost,
-    command [V] after saturation with the feed-forward, v_hat, f_hat, f_hat_filtered (the
-    compensated signal), k)``.
+    (:data:`OBSERVER_STATE`), ``ez`` the state array of a linear baseline and ``ubuf`` the
+    ``max(delay, 1)`` commands in flight (:func:`delay_buffer`; both updated in place); ``u_open`` is
+    the open-loop force [N] of the sample (``open-loop`` only). Returns ``(cst, ost, command [V]
+    applied from this sample on (after saturation, with the feed-forward, delayed), v_hat, f_hat,
+    f_hat_filtered (the compensated signal), k)``.
     """
     u_prev, xm_prev, integ, deriv, e_prev = cst
     ost, vh, fh, ff, k_now = _estimate(ost, ez, n, xm, u_prev, xm_prev, k_true, obs, est)
@@ -188,8 +193,34 @@ def controller_sample(cst, ost, ez, n, x_ref, u_open, xm, k_true, obs, est, ctrl
         total = ctrl.u_max
     elif total < -ctrl.u_max:
         total = -ctrl.u_max
+    if ctrl.delay > 0:  # the computation delay: apply the command of sample n - delay
+        slot = n % ctrl.delay
+        applied = ubuf[slot]
+        ubuf[slot] = total
+        total = applied
     cst = (K * total - ctrl.G, xm, integ, deriv, e_prev)
     return cst, ost, total, vh, fh, ff, k_now
+
+
+@njit(cache=True, error_model="numpy")
+def delay_buffer(ctrl):
+    """The commands in flight before the first sample: ``max(delay, 1)`` times the saturated
+    feed-forward ``G / K`` [V] (the output holds the load until the first computed command arrives).
+
+    Parameters
+    ----------
+    ctrl : ControllerArgs
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> from obsdesign.sampled import sampled_controller
+    >>> _, _, c = sampled_controller(od.load_preset("vcm").override(delay_samples=2)).kernel_args()
+    >>> [round(float(u), 4) for u in delay_buffer(c)]   # G / K = 5.27 / 3.28 V
+    [1.6067, 1.6067]
+    """
+    ff = min(max(ctrl.G / ctrl.K, -ctrl.u_max), ctrl.u_max)
+    return np.full(max(ctrl.delay, 1), ff)
 
 
 @njit(cache=True, error_model="numpy")

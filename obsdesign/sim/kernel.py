@@ -30,7 +30,7 @@ from ..friction.kernels import friction_viscous
 from ..friction.presliding import coulomb_normalized, stiffness, track_reversal
 from ..friction.registry import FRICTION_MODELS
 from ..sampled.choices import PLANTS, SCHEDULES
-from ..sampled.kernel import CONTROLLER_STATE, OBSERVER_STATE, controller_sample
+from ..sampled.kernel import CONTROLLER_STATE, OBSERVER_STATE, controller_sample, delay_buffer
 
 __all__ = ["run_loop", "PlantArgs", "Signals", "Outputs", "empty_outputs", "OUTPUT_NAMES", "PLANT_PHYSICAL",
            "PLANT_MODEL"]
@@ -220,6 +220,7 @@ def run_loop(obs, est, ctrl, plant, sig, out):
     cst = CONTROLLER_STATE
     fst = np.zeros(max(friction_n_state(fcode, pp), 1))  # the friction state of lugre/dahl/gms
     ez = np.zeros(est.Phi.shape[0])  # state of a linear estimator
+    ubuf = delay_buffer(ctrl)  # the commands in flight of the computation delay
     # the paper plant's parameters as scalars (the hot loop below reads no arrays)
     Cf_p, Cfn_p, sig_p, sgn_p, off_p, s_p, beta_p, kap_p = pp[0], pp[0], pp[0], pp[0], 0.0, pp[0], pp[0], pp[0]
     if fcode == FRICTION_PAPER:
@@ -238,8 +239,8 @@ def run_loop(obs, est, ctrl, plant, sig, out):
                 k_true = stiffness(x, p_dir, p_xr, p_fr, Cf_p, s_p, kappa)
             else:
                 k_true = min(friction_stiffness(fcode, pp, fst, x, v), kappa)
-        cst, ost, total, vh, fh, ff, k_now = controller_sample(cst, ost, ez, n, x_ref[n], u_open[n], xm, k_true,
-                                                               obs, est, ctrl)
+        cst, ost, total, vh, fh, ff, k_now = controller_sample(cst, ost, ez, ubuf, n, x_ref[n], u_open[n], xm,
+                                                               k_true, obs, est, ctrl)
         u = K_plant * total - G_plant  # net driving force, load compensated
         # record
         out.x[n] = x
