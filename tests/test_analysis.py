@@ -9,6 +9,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("script", sorted(p.name for p in (ROOT / "analysis").glob("fig_*.py")))
 def test_analysis_script(script, tmp_path):
     proc = subprocess.run([sys.executable, str(ROOT / "analysis" / script), "--out", str(tmp_path)],

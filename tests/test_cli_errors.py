@@ -177,6 +177,7 @@ def test_a_full_stdout_is_one_line_and_status_2(argv):
 SETPRIV = shutil.which("setpriv")
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not (SETPRIV and os.geteuid() == 0), reason="needs root and setpriv to drop DAC capabilities")
 def test_unreadable_and_unwritable_paths_without_dac_capabilities(tmp_path):  # p6, s15, e5, r6
     (tmp_path / "u.toml").write_text(Path(PRESET).read_text())

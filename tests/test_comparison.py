@@ -72,6 +72,7 @@ def test_settling_time_agrees_with_the_simulator_metric(small):
     assert row["settling_time"] == pytest.approx(np.mean(sim.metrics["settling_time"]), abs=2 * cfg.observer.dt)
 
 
+@pytest.mark.slow
 def test_parallel_rows_equal_serial_rows(small):
     cfg, res = small
     par = compare(cfg, plants=("paper", "dahl"), estimators=("paper", "dob"), scenarios=("excitation", "positioning"),

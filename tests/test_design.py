@@ -215,6 +215,7 @@ def _band_limited_noise(n, dt, rms, bandwidth, seed):
     return x * rms / np.sqrt(np.mean(x * x))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("cfg", [TABLE1, VCM], ids=["table1", "vcm"])
 def test_noise_rms_against_a_time_domain_run(cfg):
     eta, B = 1e-6, 1000.0

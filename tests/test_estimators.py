@@ -242,6 +242,7 @@ def test_reference_close_to_continuous_analysis(cfg):
     assert ref == pytest.approx(od.noise_analysis(cfg).rms_filtered, rel=0.02)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["reference", "eso", "kalman", "dob"])
 def test_equal_noise_dlsim(name):
     """A long dlsim of band-limited noise through y -> f_hat (vcm: correlation times of a few ms).
