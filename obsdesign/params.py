@@ -52,13 +52,11 @@ __all__ = [
     "preset_names",
     "VARIANTS",
     "PARAMETERS",
+    "SECTIONS",
     "FieldRow",
 ]
 
 VARIANTS = ("lag", "static")
-
-
-_POSITIVE, _NONNEGATIVE, _FINITE = POSITIVE, NONNEGATIVE, FINITE
 
 
 def _param(check, unit: str, doc: str, default: Any = dataclasses.MISSING):
@@ -87,10 +85,10 @@ class PlantParams:
     """
 
     _section = "plant"
-    m: float = _param(_POSITIVE, "kg", "moving mass")
-    K: float = _param(_POSITIVE, "N/V", "actuator force constant")
-    G: float = _param(_FINITE, "N", "known load force, pre-compensated", 0.0)
-    u_max: float = _param(_POSITIVE, "V", "actuator voltage limit (saturation)", 10.0)
+    m: float = _param(POSITIVE, "kg", "moving mass")
+    K: float = _param(POSITIVE, "N/V", "actuator force constant")
+    G: float = _param(FINITE, "N", "known load force, pre-compensated", 0.0)
+    u_max: float = _param(POSITIVE, "V", "actuator voltage limit (saturation)", 10.0)
 
     def __post_init__(self) -> None:
         _validate_fields(self)
@@ -110,10 +108,10 @@ class FrictionParams:
     """
 
     _section = "friction"
-    Cf: float = _param(_POSITIVE, "N", "Coulomb friction level")
-    sigma: float = _param(_POSITIVE, "N s/m", "viscous friction coefficient")
-    s: float = _param(_POSITIVE, "1/m", "pre-sliding distance scaling factor")
-    kappa: float = _param(_POSITIVE, "N/m", "pre-sliding stiffness bound")
+    Cf: float = _param(POSITIVE, "N", "Coulomb friction level")
+    sigma: float = _param(POSITIVE, "N s/m", "viscous friction coefficient")
+    s: float = _param(POSITIVE, "1/m", "pre-sliding distance scaling factor")
+    kappa: float = _param(POSITIVE, "N/m", "pre-sliding stiffness bound")
     beta: float | None = _param(
         Range(low=0.0, optional=True), "s", "viscous friction lag time constant", None
     )
@@ -133,9 +131,9 @@ class SensorSpec:
     """
 
     _section = "sensor"
-    noise_rms: float = _param(_NONNEGATIVE, "m", "RMS of the measurement noise", 0.0)
-    noise_bandwidth: float = _param(_POSITIVE, "Hz", "bandwidth of the measurement noise", 1000.0)
-    quantization: float = _param(_NONNEGATIVE, "m", "encoder resolution (0: none)", 0.0)
+    noise_rms: float = _param(NONNEGATIVE, "m", "RMS of the measurement noise", 0.0)
+    noise_bandwidth: float = _param(POSITIVE, "Hz", "bandwidth of the measurement noise", 1000.0)
+    quantization: float = _param(NONNEGATIVE, "m", "encoder resolution (0: none)", 0.0)
 
     def __post_init__(self) -> None:
         _validate_fields(self)
@@ -152,10 +150,10 @@ class ObserverSpec:
     """
 
     _section = "observer"
-    rho: float = _param(_POSITIVE, "-", "gain design parameter (stable for rho > 1)")
-    omega_co: float = _param(_POSITIVE, "rad/s", "cutoff of the low-pass filter eq:3:4:5", 2 * math.pi * 40)
+    rho: float = _param(POSITIVE, "-", "gain design parameter (stable for rho > 1)")
+    omega_co: float = _param(POSITIVE, "rad/s", "cutoff of the low-pass filter eq:3:4:5", 2 * math.pi * 40)
     variant: str = _param(Choice(VARIANTS), "-", "model variant the observer is derived from", "lag")
-    dt: float = _param(_POSITIVE, "s", "controller sample time", 1e-4)
+    dt: float = _param(POSITIVE, "s", "controller sample time", 1e-4)
 
     def __post_init__(self) -> None:
         _validate_fields(self)
@@ -175,16 +173,16 @@ class PIDSpec:
     """
 
     _section = "pid"
-    max_S: float = _param(_POSITIVE, "m/V", "upper bound of |S| (eq:pidGain)")
+    max_S: float = _param(POSITIVE, "m/V", "upper bound of |S| (eq:pidGain)")
     phase_margin_deg: float = _param(
         Range(low=0.0, high=90.0), "deg", "phase margin Phi at crossover (eq:L_omegas)"
     )
-    tau: float = _param(_POSITIVE, "s", "plant time constant of eq:linplant")
+    tau: float = _param(POSITIVE, "s", "plant time constant of eq:linplant")
     phi: float | None = _param(
         Range(low=0.0, optional=True), "m/(V s)", "plant gain of eq:linplant (default K tau / m)", None
     )
     derivative_N: float = _param(
-        _POSITIVE, "-", "derivative filter: time constant (kd/kp)/N in simulations", 10.0
+        POSITIVE, "-", "derivative filter: time constant (kd/kp)/N in simulations", 10.0
     )
 
     def __post_init__(self) -> None:
@@ -206,14 +204,15 @@ class FieldRow(NamedTuple):
     is_default: bool
 
 
-_SECTIONS: dict[str, type] = {
+#: Section name -> its dataclass, in the order of a TOML file.
+SECTIONS: Mapping[str, type] = FrozenMap({
     "plant": PlantParams,
     "friction": FrictionParams,
     "sensor": SensorSpec,
     "observer": ObserverSpec,
     "pid": PIDSpec,
     "compensation": CompensationSpec,
-}
+})
 #: Sections that may be left out of a TOML file (their defaults apply).
 _OPTIONAL_SECTIONS = ("sensor", "compensation")
 
@@ -245,7 +244,7 @@ class Config:
         if not isinstance(self.plant_friction, (PlantFrictionSpec, type(None))):
             raise TypeError(f"config.plant_friction: expected PlantFrictionSpec or None, found {self.plant_friction!r}")
         object.__setattr__(self, "sources", FrozenMap(_check_sources(self.sources)))
-        for key, cls in _SECTIONS.items():
+        for key, cls in SECTIONS.items():
             value = getattr(self, key)
             if not isinstance(value, cls):
                 raise TypeError(f"config.{key}: expected {cls.__name__}, found {type(value).__name__}")
@@ -303,7 +302,7 @@ class Config:
         """
         if not isinstance(data, dict):
             raise TypeError(f"{source}: expected a table, found {type(data).__name__}")
-        allowed = set(_SECTIONS) | {"name", "sources", "plant_friction"}
+        allowed = set(SECTIONS) | {"name", "sources", "plant_friction"}
         unknown = sorted(set(data) - allowed)
         if unknown:
             raise ValueError(
@@ -316,7 +315,7 @@ class Config:
             kwargs["sources"] = data["sources"]
         if "plant_friction" in data:
             kwargs["plant_friction"] = PlantFrictionSpec.from_dict(data["plant_friction"])
-        for key, section in _SECTIONS.items():
+        for key, section in SECTIONS.items():
             table = data.get(key)
             if table is None:
                 if key in _OPTIONAL_SECTIONS:
@@ -351,7 +350,7 @@ class Config:
         out: dict[str, Any] = {"name": self.name}
         if self.sources:
             out["sources"] = dict(self.sources)
-        for key in _SECTIONS:
+        for key in SECTIONS:
             section = getattr(self, key)
             out[key] = {
                 f.name: getattr(section, f.name)
@@ -407,7 +406,7 @@ class Config:
         FieldRow(name='plant.m', value=0.538, unit='kg', doc='moving mass', is_default=False)
         """
         rows = []
-        for key in _SECTIONS:
+        for key in SECTIONS:
             section = getattr(self, key)
             for f in dataclasses.fields(section):
                 value = getattr(section, f.name)
@@ -417,13 +416,13 @@ class Config:
 
 
 _FIELD_SECTION: dict[str, str] = {
-    f.name: key for key, cls in _SECTIONS.items() for f in dataclasses.fields(cls)
+    f.name: key for key, cls in SECTIONS.items() for f in dataclasses.fields(cls)
 }
 #: Every parameter :meth:`Config.override` accepts, mapped to its section.
 PARAMETERS: Mapping[str, str] = FrozenMap(dict(sorted(_FIELD_SECTION.items())))
 
 
-_PARAMETER_NAMES = frozenset(f"{key}.{f.name}" for key, cls in _SECTIONS.items() for f in dataclasses.fields(cls))
+_PARAMETER_NAMES = frozenset(f"{key}.{f.name}" for key, cls in SECTIONS.items() for f in dataclasses.fields(cls))
 
 
 def _check_sources(sources: Any) -> dict[str, str]:
