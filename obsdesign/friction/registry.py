@@ -66,7 +66,9 @@ class FrictionModelInfo:
     code: int
     doc: str
     parameters: tuple[ParameterSpec, ...]
-    _layout: Callable[[dict[str, Any]], list[float]]
+    #: The kernel array of the resolved parameters; None where the array is not the model's alone
+    #: (the paper plant's also holds ``[friction] kappa``: :func:`obsdesign.sim.simulate.plant_friction_arrays`).
+    _layout: Callable[[dict[str, Any]], list[float]] | None
     _n_state: Callable[[dict[str, Any]], int]
 
     def defaults(self) -> dict[str, Any]:
@@ -106,11 +108,16 @@ class FrictionModelInfo:
         Raises
         ------
         ValueError
-            Unknown name, non-finite or out-of-range value, inconsistent values.
+            Unknown name, non-finite or out-of-range value, inconsistent values; the ``paper``
+            model, whose array :func:`obsdesign.sim.simulate.plant_friction_arrays` builds from a config.
         TypeError
             A value of the wrong type (e.g. a string, a bool, a float for ``N``).
         """
-        return np.array(self._layout(self.resolve(params)), dtype=np.float64)
+        values = self.resolve(params)
+        if self._layout is None:
+            raise ValueError(f"{self.name}: its kernel array also holds [friction] kappa; "
+                             f"build it from a Config with obsdesign.sim.simulate.plant_friction_arrays")
+        return np.array(self._layout(values), dtype=np.float64)
 
     def n_state(self, params: Mapping[str, Any]) -> int:
         """Length of the internal state array for these parameters."""
@@ -194,10 +201,6 @@ def _stribeck(q: dict[str, Any]) -> list[float]:
     return [q["Fs"], q["Fs"] * q["Cf_neg"] / q["Cf"], q["vs"]]
 
 
-def _paper_layout(q: dict[str, Any]) -> list[float]:
-    return [q["Cf"], q["Cf"], q["sigma"], q["sigma"], 0.0, q["s"], q["beta"]]
-
-
 def _lugre_layout(q: dict[str, Any]) -> list[float]:
     return _header(q) + _stribeck(q) + [q["sigma0"], q["sigma1"]]
 
@@ -232,14 +235,14 @@ def _gms_layout(q: dict[str, Any]) -> list[float]:
 FRICTION_MODELS: dict[str, FrictionModelInfo] = {
     "paper": FrictionModelInfo(
         name="paper", code=PAPER,
-        doc="Coulomb with log-shaped pre-sliding memory (eq:2:3:1-2:3:5) and viscous lag; kernel in sim/friction.py",
+        doc="Coulomb with log-shaped pre-sliding memory (eq:2:3:1-2:3:5) and viscous lag; kernel in friction/presliding.py",
         parameters=(
             ParameterSpec("Cf", "N", "Coulomb friction level", 0.35, 0.0, 1e3),
             ParameterSpec("sigma", "N s/m", "viscous coefficient", 21.1, 0.0, 1e4),
             ParameterSpec("s", "1/m", "pre-sliding shape factor (z = s x)", 3000.0, 1.0, 1e7),
             ParameterSpec("beta", "s", "viscous lag time constant (0: static)", 0.001, 0.0, 1.0),
         ),
-        _layout=_paper_layout, _n_state=lambda q: 3,
+        _layout=None, _n_state=lambda q: 3,
     ),
     "lugre": FrictionModelInfo(
         name="lugre", code=LUGRE,
