@@ -189,8 +189,8 @@ def test_killed_worker_is_reported_and_resumable(tmp_path, monkeypatch, capsys):
             return fut
 
     monkeypatch.setattr(sweep_mod, "_run_batch", dying)
-    real_executor = sweep_mod._Executor
-    monkeypatch.setattr(sweep_mod, "_Executor", lambda executor, workers: real_executor(InlinePool(), None))
+    real_executor = sweep_mod.Executor
+    monkeypatch.setattr(sweep_mod, "Executor", lambda executor, workers: real_executor(InlinePool(), None))
     assert main([*args]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "a worker failed (BrokenProcessPool)" in err[0]
