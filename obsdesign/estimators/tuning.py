@@ -46,11 +46,11 @@ import scipy.linalg
 import scipy.optimize
 
 from ..params import Config
-from .base import DiscreteEstimator, check_positive
+from .base import DiscreteEstimator, check_config, check_positive
 from .dob import build_dob
 from .eso import build_eso
 from .kalman import build_kalman, noise_level
-from .paper import _check_config, build_paper, build_paper_k0, paper_dominant_pole, with_lowpass
+from .paper import build_paper, build_paper_k0, paper_dominant_pole, with_lowpass
 
 __all__ = ["RULES", "friction_noise_rms", "velocity_noise_rms", "estimate_noise_rms",
            "reference_noise_rms", "reference_estimator", "tune", "noise_level"]
@@ -259,7 +259,7 @@ def reference_estimator(cfg: Config) -> DiscreteEstimator:
     cfg : Config
         The design.
     """
-    cfg = _check_config(cfg)
+    cfg = check_config(cfg)
     _check_paper_stable(cfg)
     return with_lowpass(build_paper(cfg, stiffness=0.0), cfg.observer.omega_co)
 
@@ -321,7 +321,7 @@ def tune(name: str, cfg: Config, *, rule: str = "noise", sigma_model: float | No
         raise ValueError(f"name: expected one of paper, paper-k0, eso, kalman, dob, found {name!r}")
     if not isinstance(rule, str) or rule not in RULES:
         raise ValueError(f"rule: expected one of {', '.join(RULES)}, found {rule!r}")
-    cfg = _check_config(cfg)
+    cfg = check_config(cfg)
     if name == "paper":
         return build_paper(cfg, sigma_model=sigma_model)
     if name == "paper-k0":
