@@ -36,7 +36,8 @@ from typing import Any, Mapping, NamedTuple
 from ._io import atomic_write
 from .compensation import CompensationSpec
 from ._format import toml_value
-from ._validate import FINITE, NONNEGATIVE, POSITIVE, Choice, FrozenMap, Range, Text
+from ._validate import (FINITE, NONNEGATIVE, POSITIVE, Choice, FrozenMap, Range, Text, document_fields, param_field,
+                        validate_fields)
 from .plant_spec import PlantFrictionSpec
 
 __all__ = [
@@ -59,21 +60,7 @@ __all__ = [
 VARIANTS = ("lag", "static")
 
 
-def _param(check, unit: str, doc: str, default: Any = dataclasses.MISSING):
-    """A dataclass field with its validation rule, unit and description."""
-    return field(default=default, metadata={"check": check, "unit": unit, "doc": doc})
-
-
-def _validate_fields(obj: Any) -> None:
-    """Check every field of a parameter dataclass against its metadata rule."""
-    for f in dataclasses.fields(obj):
-        rule = f.metadata.get("check")
-        if rule is None:
-            continue
-        value = rule.check(f"{obj._section}.{f.name}", getattr(obj, f.name))
-        object.__setattr__(obj, f.name, value)
-
-
+@document_fields
 @dataclass(frozen=True, kw_only=True)
 class PlantParams:
     """Rigid-body plant of eq:2:1, ``m x'' + f = u - g`` with ``u = K u_volt``.
@@ -85,15 +72,16 @@ class PlantParams:
     """
 
     _section = "plant"
-    m: float = _param(POSITIVE, "kg", "moving mass")
-    K: float = _param(POSITIVE, "N/V", "actuator force constant")
-    G: float = _param(FINITE, "N", "known load force, pre-compensated", 0.0)
-    u_max: float = _param(POSITIVE, "V", "actuator voltage limit (saturation)", 10.0)
+    m: float = param_field(POSITIVE, "kg", "moving mass")
+    K: float = param_field(POSITIVE, "N/V", "actuator force constant")
+    G: float = param_field(FINITE, "N", "known load force, pre-compensated", 0.0)
+    u_max: float = param_field(POSITIVE, "V", "actuator voltage limit (saturation)", 10.0)
 
     def __post_init__(self) -> None:
-        _validate_fields(self)
+        validate_fields(self)
 
 
+@document_fields
 @dataclass(frozen=True, kw_only=True)
 class FrictionParams:
     """Coulomb friction with pre-sliding (eq:2:3:1-2:3:5) and viscous friction.
@@ -108,18 +96,19 @@ class FrictionParams:
     """
 
     _section = "friction"
-    Cf: float = _param(POSITIVE, "N", "Coulomb friction level")
-    sigma: float = _param(POSITIVE, "N s/m", "viscous friction coefficient")
-    s: float = _param(POSITIVE, "1/m", "pre-sliding distance scaling factor")
-    kappa: float = _param(POSITIVE, "N/m", "pre-sliding stiffness bound")
-    beta: float | None = _param(
+    Cf: float = param_field(POSITIVE, "N", "Coulomb friction level")
+    sigma: float = param_field(POSITIVE, "N s/m", "viscous friction coefficient")
+    s: float = param_field(POSITIVE, "1/m", "pre-sliding distance scaling factor")
+    kappa: float = param_field(POSITIVE, "N/m", "pre-sliding stiffness bound")
+    beta: float | None = param_field(
         Range(low=0.0, optional=True), "s", "viscous friction lag time constant", None
     )
 
     def __post_init__(self) -> None:
-        _validate_fields(self)
+        validate_fields(self)
 
 
+@document_fields
 @dataclass(frozen=True, kw_only=True)
 class SensorSpec:
     """Displacement sensor: band-limited noise and encoder quantization.
@@ -131,14 +120,15 @@ class SensorSpec:
     """
 
     _section = "sensor"
-    noise_rms: float = _param(NONNEGATIVE, "m", "RMS of the measurement noise", 0.0)
-    noise_bandwidth: float = _param(POSITIVE, "Hz", "bandwidth of the measurement noise", 1000.0)
-    quantization: float = _param(NONNEGATIVE, "m", "encoder resolution (0: none)", 0.0)
+    noise_rms: float = param_field(NONNEGATIVE, "m", "RMS of the measurement noise", 0.0)
+    noise_bandwidth: float = param_field(POSITIVE, "Hz", "bandwidth of the measurement noise", 1000.0)
+    quantization: float = param_field(NONNEGATIVE, "m", "encoder resolution (0: none)", 0.0)
 
     def __post_init__(self) -> None:
-        _validate_fields(self)
+        validate_fields(self)
 
 
+@document_fields
 @dataclass(frozen=True, kw_only=True)
 class ObserverSpec:
     """Observer design: gain parameter rho (Proposition 2), filter and sampling.
@@ -150,15 +140,16 @@ class ObserverSpec:
     """
 
     _section = "observer"
-    rho: float = _param(POSITIVE, "-", "gain design parameter (stable for rho > 1)")
-    omega_co: float = _param(POSITIVE, "rad/s", "cutoff of the low-pass filter eq:3:4:5", 2 * math.pi * 40)
-    variant: str = _param(Choice(VARIANTS), "-", "model variant the observer is derived from", "lag")
-    dt: float = _param(POSITIVE, "s", "controller sample time", 1e-4)
+    rho: float = param_field(POSITIVE, "-", "gain design parameter (stable for rho > 1)")
+    omega_co: float = param_field(POSITIVE, "rad/s", "cutoff of the low-pass filter eq:3:4:5", 2 * math.pi * 40)
+    variant: str = param_field(Choice(VARIANTS), "-", "model variant the observer is derived from", "lag")
+    dt: float = param_field(POSITIVE, "s", "controller sample time", 1e-4)
 
     def __post_init__(self) -> None:
-        _validate_fields(self)
+        validate_fields(self)
 
 
+@document_fields
 @dataclass(frozen=True, kw_only=True)
 class PIDSpec:
     """Sensitivity-based PID specification of section 4.1.
@@ -173,20 +164,20 @@ class PIDSpec:
     """
 
     _section = "pid"
-    max_S: float = _param(POSITIVE, "m/V", "upper bound of |S| (eq:pidGain)")
-    phase_margin_deg: float = _param(
+    max_S: float = param_field(POSITIVE, "m/V", "upper bound of |S| (eq:pidGain)")
+    phase_margin_deg: float = param_field(
         Range(low=0.0, high=90.0), "deg", "phase margin Phi at crossover (eq:L_omegas)"
     )
-    tau: float = _param(POSITIVE, "s", "plant time constant of eq:linplant")
-    phi: float | None = _param(
+    tau: float = param_field(POSITIVE, "s", "plant time constant of eq:linplant")
+    phi: float | None = param_field(
         Range(low=0.0, optional=True), "m/(V s)", "plant gain of eq:linplant (default K tau / m)", None
     )
-    derivative_N: float = _param(
+    derivative_N: float = param_field(
         POSITIVE, "-", "derivative filter: time constant (kd/kp)/N in simulations", 10.0
     )
 
     def __post_init__(self) -> None:
-        _validate_fields(self)
+        validate_fields(self)
 
     @property
     def phase_margin(self) -> float:
@@ -221,6 +212,17 @@ _OPTIONAL_SECTIONS = ("sensor", "compensation")
 class Config:
     """A complete design: plant, friction, sensor, observer and PID sections.
 
+    Attributes
+    ----------
+    name : str
+        Name of the design.
+    plant, friction, sensor, observer, pid, compensation : dataclass
+        The sections of :data:`SECTIONS`; ``sensor`` and ``compensation`` may be left out of a file.
+    sources : Mapping[str, str]
+        Where values come from (``"plant.m"`` -> text); not compared.
+    plant_friction : PlantFrictionSpec or None
+        ``[plant_friction]``: the simulated plant's friction model (None: the paper's).
+
     Examples
     --------
     >>> cfg = load_preset("vcm")
@@ -229,7 +231,7 @@ class Config:
     """
 
     _section = "config"
-    name: str = _param(Text(), "-", "name of the design", "custom")
+    name: str = param_field(Text(), "-", "name of the design", "custom")
     plant: PlantParams
     friction: FrictionParams
     observer: ObserverSpec
@@ -240,7 +242,7 @@ class Config:
     plant_friction: PlantFrictionSpec | None = None  # [plant_friction]: the simulated plant's model
 
     def __post_init__(self) -> None:
-        _validate_fields(self)
+        validate_fields(self)
         if not isinstance(self.plant_friction, (PlantFrictionSpec, type(None))):
             raise TypeError(f"config.plant_friction: expected PlantFrictionSpec or None, found {self.plant_friction!r}")
         object.__setattr__(self, "sources", FrozenMap(_check_sources(self.sources)))
