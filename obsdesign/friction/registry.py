@@ -60,7 +60,19 @@ class ParameterSpec(NamedTuple):
 
 @dataclass(frozen=True, kw_only=True)
 class FrictionModelInfo:
-    """A plant friction model: code for the kernels, documented parameters, packing rule."""
+    """A plant friction model: code for the kernels, documented parameters, packing rule.
+
+    Attributes
+    ----------
+    name : str
+        Registry name.
+    code : int
+        Integer code the kernels dispatch on.
+    doc : str
+        One-line description.
+    parameters : tuple of ParameterSpec
+        The model's parameters, defaults and ranges.
+    """
 
     name: str
     code: int
