@@ -47,6 +47,7 @@ def small():
                         scenarios=("excitation", "positioning"), seeds=1, workers=1)
 
 
+@pytest.mark.slow
 def test_rows_cover_every_case(small):
     _, res = small
     keys = [(r["plant"], r["estimator"], r["scenario"]) for r in res.rows]
@@ -54,6 +55,7 @@ def test_rows_cover_every_case(small):
     assert all(set(r) == set(COLUMNS) for r in res.rows)
 
 
+@pytest.mark.slow
 def test_baselines_have_the_paper_noise(small):
     cfg, res = small
     ref = reference_noise_rms(cfg)
@@ -61,6 +63,7 @@ def test_baselines_have_the_paper_noise(small):
         assert r["friction_noise_rms"] == pytest.approx(ref, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_settling_time_agrees_with_the_simulator_metric(small):
     """step_metrics (comparison) against loop_metrics (simulate): two implementations of one definition."""
     cfg, res = small
