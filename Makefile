@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: test report bench screenshot clean
+.PHONY: test test-fast report bench screenshot clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -16,6 +16,10 @@ $(STAMP): pyproject.toml | $(PY)
 
 test: $(STAMP)
 	$(PY) -m pytest
+
+# The quick loop while editing: everything but the cases marked @pytest.mark.slow.
+test-fast: $(STAMP)
+	$(PY) -m pytest -m "not slow"
 
 report: $(STAMP)
 	$(VENV)/bin/obsdesign report --preset vcm -o report.html

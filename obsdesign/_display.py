@@ -30,7 +30,17 @@ def tex_escape(text: str) -> str:
 
 @dataclass(frozen=True)
 class Condition:
-    """One verdict of a check: its name, whether it holds, and the numbers behind it."""
+    """One verdict of a check: its name, whether it holds, and the numbers behind it.
+
+    Attributes
+    ----------
+    name : str
+        What is checked.
+    holds : bool
+        Whether it holds.
+    detail : str
+        The numbers behind the verdict.
+    """
 
     name: str
     holds: bool

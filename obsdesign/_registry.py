@@ -39,8 +39,19 @@ __all__ = ["Entry", "Registry"]
 
 @dataclass(frozen=True)
 class Entry:
-    """One choice: its name, the kernel's integer code, a one-line description and its
-    parameters as ``(name, unit, description, ...)`` tuples."""
+    """One choice: its name, the kernel's integer code, a one-line description and its parameters.
+
+    Attributes
+    ----------
+    name : str
+        The choice's name (what the API, the command line and the docs say).
+    code : int
+        The numba kernels' integer code (append-only: numba caches it).
+    doc : str
+        One line of description.
+    parameters : tuple
+        Its parameters as ``(name, unit, description, ...)`` tuples (empty: none).
+    """
 
     name: str
     code: int

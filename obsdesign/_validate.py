@@ -30,6 +30,7 @@ ValueError: samples: expected an integer >= 1, found 0
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import numbers
 from dataclasses import dataclass
@@ -38,6 +39,7 @@ from typing import Any, Mapping
 __all__ = [
     "Range", "Choice", "Text", "Integer", "POSITIVE", "NONNEGATIVE", "FINITE",
     "check_choice", "check_integer", "parse_number", "as_float", "FrozenMap",
+    "param_field", "validate_fields", "document_fields",
 ]
 
 
@@ -229,3 +231,66 @@ class FrozenMap(Mapping):
 
     def __repr__(self) -> str:
         return repr(self._data)
+
+
+def param_field(check, unit: str, doc: str, default: Any = dataclasses.MISSING):
+    """A dataclass field carrying its validation rule, unit and description (its one definition).
+
+    Parameters
+    ----------
+    check : Range, Choice, Text or another rule with ``check(name, value)``
+        Applied by :func:`validate_fields`.
+    unit : str
+        Unit for messages, TOML comments and the generated docstring.
+    doc : str
+        One-line description.
+    default : object, optional
+        The field's default (required when left out).
+    """
+    return dataclasses.field(default=default, metadata={"check": check, "unit": unit, "doc": doc})
+
+
+def validate_fields(obj: Any) -> None:
+    """Check (and normalise) every :func:`param_field` of ``obj`` in place; ``obj._section`` names it.
+
+    Parameters
+    ----------
+    obj : dataclass instance
+        A frozen section dataclass, from its ``__post_init__``.
+    """
+    for f in dataclasses.fields(obj):
+        rule = f.metadata.get("check")
+        if rule is not None:
+            object.__setattr__(obj, f.name, rule.check(f"{obj._section}.{f.name}", getattr(obj, f.name)))
+
+
+def document_fields(cls: type) -> type:
+    """Insert a numpydoc ``Attributes`` section built from the :func:`param_field` metadata of ``cls``.
+
+    Parameters
+    ----------
+    cls : type
+        A dataclass; its docstring gets the section before ``Examples`` (or at the end).
+
+    Examples
+    --------
+    >>> @document_fields
+    ... @dataclass(frozen=True)
+    ... class Axis:
+    ...     'An axis.'
+    ...     m: float = param_field(POSITIVE, "kg", "moving mass", 1.0)
+    >>> print(Axis.__doc__.rstrip())
+    An axis.
+    <BLANKLINE>
+        Attributes
+        ----------
+        m : float
+            Moving mass [kg].
+    """
+    rows = [f"    {f.name} : {f.type}\n        {f.metadata['doc'][:1].upper()}{f.metadata['doc'][1:]} [{f.metadata['unit']}]."
+            for f in dataclasses.fields(cls) if "doc" in f.metadata]
+    section = "    Attributes\n    ----------\n" + "\n".join(rows) + "\n\n"
+    doc = cls.__doc__ or ""
+    at = doc.find("    Examples\n")
+    cls.__doc__ = doc[:at] + section + doc[at:] if at >= 0 else doc.rstrip() + "\n\n" + section
+    return cls

@@ -48,11 +48,12 @@ from .friction.registry import FRICTION_MODELS
 from .plant_spec import PlantFrictionSpec
 from .sim.scenarios import Chirp, Excitation, Positioning
 from .sim.simulate import simulate
+from .sim.metrics import rms
 from .sim.step_metrics import step_metrics
-from .sweeps.run import _Executor
+from .sweeps.pool import Executor
 
-__all__ = ["COLUMNS", "SCENARIOS", "TRANSIENT", "JUDGED", "TIE", "ComparisonResult", "compare", "compare_one", "summarize",
-           "plant_config"]
+__all__ = ["COLUMNS", "SCENARIOS", "TRANSIENT", "SETTLE_BAND", "JUDGED", "TIE", "ComparisonResult", "compare",
+           "compare_one", "summarize", "plant_config"]
 
 #: Columns of ``compare.csv``, in order.
 COLUMNS = ("plant", "estimator", "scenario", "seed", "friction_rms_error", "velocity_rms_error", "settling_time",
@@ -67,6 +68,8 @@ SCENARIOS = {
 TIE = 0.01
 #: Start-up interval [s] left out of the RMS errors.
 TRANSIENT = 0.5
+#: Settling band [m] of the positioning rows: 2 um, the simulator's default ``settle_tol``.
+SETTLE_BAND = 2e-6
 #: The metrics each scenario is judged by in the summary (lower is better): the friction
 #: estimate everywhere, and the control result where there is a controller.
 JUDGED = {"excitation": ("friction_rms_error",), "positioning": ("friction_rms_error", "settling_time"),
@@ -94,11 +97,6 @@ def plant_config(cfg: Config, model: str) -> Config:
     own = cfg.plant_friction
     params = dict(own.parameters) if own is not None and own.model == model else {}
     return dataclasses.replace(cfg, plant_friction=PlantFrictionSpec(model=model, parameters=params))
-
-
-def _rms(a: np.ndarray) -> float | None:
-    a = a[np.isfinite(a)]
-    return float(np.sqrt(np.mean(a * a))) if a.size else None
 
 
 def compare_one(cfg: Config, plant: Config, estimator: str | DiscreteEstimator, scenario: str, seed: int,
@@ -132,27 +130,22 @@ def compare_one(cfg: Config, plant: Config, estimator: str | DiscreteEstimator, 
         row["status"] = "failed: " + f"{type(e).__name__}: {e}".splitlines()[0]
         return row
     keep = res.t >= TRANSIENT
-    row["friction_rms_error"] = _rms((res.f_hat_filtered - res.f)[keep])
-    row["velocity_rms_error"] = _rms((res.v_hat - res.v)[keep])
+    row["friction_rms_error"] = rms((res.f_hat_filtered - res.f)[keep])
+    row["velocity_rms_error"] = rms((res.v_hat - res.v)[keep])
     if scenario == "positioning":
         times, over = [], []
         for t_step, y0, y1 in ((spec.step_up, 0.0, spec.step_size), (spec.step_down, spec.step_size, 0.0)):
             end = spec.step_down if t_step == spec.step_up else duration
             window = (res.t >= t_step) & (res.t < end)
-            m = step_metrics(res.t[window], res.x[window], t_step=t_step, y0=y0, y1=y1, settle_band=res_tol(cfg))
+            m = step_metrics(res.t[window], res.x[window], t_step=t_step, y0=y0, y1=y1, settle_band=SETTLE_BAND)
             times.append(m["settling_time"])
             over.append(m["overshoot"])
         row["settling_time"] = None if any(t is None for t in times) else float(np.mean(times))
         row["overshoot"] = float(max(over))
     if scenario == "tracking":
-        row["tracking_rms_error"] = _rms(res.e[keep])
+        row["tracking_rms_error"] = rms(res.e[keep])
     row["status"] = "diverged" if res.metrics["diverged"] else "ok"
     return row
-
-
-def res_tol(cfg: Config) -> float:
-    """Settling band [m]: 2 um (the simulator's default)."""
-    return 2e-6
 
 
 @dataclass(frozen=True, eq=False)
@@ -305,7 +298,7 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
             noise[name] = friction_noise_rms(tuned[name], eta, band)
     tasks = [(cfg, plant_config(cfg, p), tuned[e], s, seed, noise[e])
              for p in plants for e in estimators for s in scenarios for seed in range(seeds)]
-    pool = _Executor(executor, workers)
+    pool = Executor(executor, workers)
     done: dict[int, dict] = {}
     indexed = list(enumerate(tasks))
     try:

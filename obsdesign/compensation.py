@@ -26,10 +26,10 @@ TypeError: compensation.viscous: expected true or false, found int 1
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass
 from typing import Any
 
-from ._validate import NONNEGATIVE, Range
+from ._validate import NONNEGATIVE, Range, param_field, validate_fields
 
 __all__ = ["CompensationSpec", "Flag"]
 
@@ -57,10 +57,6 @@ class Flag:
         return value
 
 
-def _param(check, unit: str, doc: str, default: Any):
-    return field(default=default, metadata={"check": check, "unit": unit, "doc": doc})
-
-
 @dataclass(frozen=True, kw_only=True)
 class CompensationSpec:
     """Friction compensation of the ``pid+observer`` controller (defaults: the paper's law).
@@ -84,15 +80,13 @@ class CompensationSpec:
     """
 
     _section = "compensation"
-    gain: float = _param(Range(low=0.0, high=1.0, high_inclusive=True), "-",
+    gain: float = param_field(Range(low=0.0, high=1.0, high_inclusive=True), "-",
                          "fraction of the friction estimate compensated", 1.0)
-    viscous: bool = _param(Flag(), "-", "add sigma * v_hat to the filtered estimate", False)
-    deadzone: float = _param(NONNEGATIVE, "m/s", "compensation fades out below this |v_hat| (0: off)", 0.0)
+    viscous: bool = param_field(Flag(), "-", "add sigma * v_hat to the filtered estimate", False)
+    deadzone: float = param_field(NONNEGATIVE, "m/s", "compensation fades out below this |v_hat| (0: off)", 0.0)
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            object.__setattr__(self, f.name, f.metadata["check"].check(f"{self._section}.{f.name}",
-                                                                        getattr(self, f.name)))
+        validate_fields(self)
 
     @property
     def is_default(self) -> bool:

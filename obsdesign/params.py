@@ -36,33 +36,17 @@ from typing import Any, Mapping, NamedTuple
 from ._io import atomic_write
 from .compensation import CompensationSpec
 from ._format import toml_value
-from ._validate import FINITE, NONNEGATIVE, POSITIVE, Choice, FrozenMap, Integer, Range, Text
+from ._validate import (FINITE, NONNEGATIVE, POSITIVE, Choice, FrozenMap, Integer, Range, Text, document_fields,
+                        param_field, validate_fields)
 from .plant_spec import PlantFrictionSpec
 
 __all__ = ["PlantParams", "FrictionParams", "SensorSpec", "ObserverSpec", "PIDSpec", "CompensationSpec", "Config",
-           "load_preset", "load_config", "preset_names", "VARIANTS", "PARAMETERS", "FieldRow"]
+           "load_preset", "load_config", "preset_names", "VARIANTS", "PARAMETERS", "SECTIONS", "FieldRow"]
 
 VARIANTS = ("lag", "static")
 
 
-_POSITIVE, _NONNEGATIVE, _FINITE = POSITIVE, NONNEGATIVE, FINITE
-
-
-def _param(check, unit: str, doc: str, default: Any = dataclasses.MISSING):
-    """A dataclass field with its validation rule, unit and description."""
-    return field(default=default, metadata={"check": check, "unit": unit, "doc": doc})
-
-
-def _validate_fields(obj: Any) -> None:
-    """Check every field of a parameter dataclass against its metadata rule."""
-    for f in dataclasses.fields(obj):
-        rule = f.metadata.get("check")
-        if rule is None:
-            continue
-        value = rule.check(f"{obj._section}.{f.name}", getattr(obj, f.name))
-        object.__setattr__(obj, f.name, value)
-
-
+@document_fields
 @dataclass(frozen=True, kw_only=True)
 class PlantParams:
     """Rigid-body plant of eq:2:1, ``m x'' + f = u - g`` with ``u = K u_volt``.
@@ -74,15 +58,16 @@ class PlantParams:
     """
 
     _section = "plant"
-    m: float = _param(_POSITIVE, "kg", "moving mass")
-    K: float = _param(_POSITIVE, "N/V", "actuator force constant")
-    G: float = _param(_FINITE, "N", "known load force, pre-compensated", 0.0)
-    u_max: float = _param(_POSITIVE, "V", "actuator voltage limit (saturation)", 10.0)
+    m: float = param_field(POSITIVE, "kg", "moving mass")
+    K: float = param_field(POSITIVE, "N/V", "actuator force constant")
+    G: float = param_field(FINITE, "N", "known load force, pre-compensated", 0.0)
+    u_max: float = param_field(POSITIVE, "V", "actuator voltage limit (saturation)", 10.0)
 
     def __post_init__(self) -> None:
-        _validate_fields(self)
+        validate_fields(self)
 
 
+@document_fields
 @dataclass(frozen=True, kw_only=True)
 class FrictionParams:
     """Coulomb friction with pre-sliding (eq:2:3:1-2:3:5) and viscous friction.
@@ -97,18 +82,19 @@ class FrictionParams:
     """
 
     _section = "friction"
-    Cf: float = _param(_POSITIVE, "N", "Coulomb friction level")
-    sigma: float = _param(_POSITIVE, "N s/m", "viscous friction coefficient")
-    s: float = _param(_POSITIVE, "1/m", "pre-sliding distance scaling factor")
-    kappa: float = _param(_POSITIVE, "N/m", "pre-sliding stiffness bound")
-    beta: float | None = _param(
+    Cf: float = param_field(POSITIVE, "N", "Coulomb friction level")
+    sigma: float = param_field(POSITIVE, "N s/m", "viscous friction coefficient")
+    s: float = param_field(POSITIVE, "1/m", "pre-sliding distance scaling factor")
+    kappa: float = param_field(POSITIVE, "N/m", "pre-sliding stiffness bound")
+    beta: float | None = param_field(
         Range(low=0.0, optional=True), "s", "viscous friction lag time constant", None
     )
 
     def __post_init__(self) -> None:
-        _validate_fields(self)
+        validate_fields(self)
 
 
+@document_fields
 @dataclass(frozen=True, kw_only=True)
 class SensorSpec:
     """Displacement sensor: band-limited noise and encoder quantization.
@@ -120,14 +106,15 @@ class SensorSpec:
     """
 
     _section = "sensor"
-    noise_rms: float = _param(_NONNEGATIVE, "m", "RMS of the measurement noise", 0.0)
-    noise_bandwidth: float = _param(_POSITIVE, "Hz", "bandwidth of the measurement noise", 1000.0)
-    quantization: float = _param(_NONNEGATIVE, "m", "encoder resolution (0: none)", 0.0)
+    noise_rms: float = param_field(NONNEGATIVE, "m", "RMS of the measurement noise", 0.0)
+    noise_bandwidth: float = param_field(POSITIVE, "Hz", "bandwidth of the measurement noise", 1000.0)
+    quantization: float = param_field(NONNEGATIVE, "m", "encoder resolution (0: none)", 0.0)
 
     def __post_init__(self) -> None:
-        _validate_fields(self)
+        validate_fields(self)
 
 
+@document_fields
 @dataclass(frozen=True, kw_only=True)
 class ObserverSpec:
     """Observer design: gain parameter rho (Proposition 2), filter and sampling.
@@ -139,15 +126,16 @@ class ObserverSpec:
     """
 
     _section = "observer"
-    rho: float = _param(_POSITIVE, "-", "gain design parameter (stable for rho > 1)")
-    omega_co: float = _param(_POSITIVE, "rad/s", "cutoff of the low-pass filter eq:3:4:5", 2 * math.pi * 40)
-    variant: str = _param(Choice(VARIANTS), "-", "model variant the observer is derived from", "lag")
-    dt: float = _param(_POSITIVE, "s", "controller sample time", 1e-4)
+    rho: float = param_field(POSITIVE, "-", "gain design parameter (stable for rho > 1)")
+    omega_co: float = param_field(POSITIVE, "rad/s", "cutoff of the low-pass filter eq:3:4:5", 2 * math.pi * 40)
+    variant: str = param_field(Choice(VARIANTS), "-", "model variant the observer is derived from", "lag")
+    dt: float = param_field(POSITIVE, "s", "controller sample time", 1e-4)
 
     def __post_init__(self) -> None:
-        _validate_fields(self)
+        validate_fields(self)
 
 
+@document_fields
 @dataclass(frozen=True, kw_only=True)
 class PIDSpec:
     """Sensitivity-based PID specification of section 4.1.
@@ -162,23 +150,23 @@ class PIDSpec:
     """
 
     _section = "pid"
-    max_S: float = _param(_POSITIVE, "m/V", "upper bound of |S| (eq:pidGain)")
-    phase_margin_deg: float = _param(
+    max_S: float = param_field(POSITIVE, "m/V", "upper bound of |S| (eq:pidGain)")
+    phase_margin_deg: float = param_field(
         Range(low=0.0, high=90.0), "deg", "phase margin Phi at crossover (eq:L_omegas)"
     )
-    tau: float = _param(_POSITIVE, "s", "plant time constant of eq:linplant")
-    phi: float | None = _param(
+    tau: float = param_field(POSITIVE, "s", "plant time constant of eq:linplant")
+    phi: float | None = param_field(
         Range(low=0.0, optional=True), "m/(V s)", "plant gain of eq:linplant (default K tau / m)", None
     )
-    derivative_N: float = _param(
-        _POSITIVE, "-", "derivative filter: time constant (kd/kp)/N in simulations", 10.0
+    derivative_N: float = param_field(
+        POSITIVE, "-", "derivative filter: time constant (kd/kp)/N in simulations", 10.0
     )
-    delay_samples: int = _param(
+    delay_samples: int = param_field(
         Integer(minimum=0), "samples", "computation delay: the command of sample n is applied from n + d", 0
     )
 
     def __post_init__(self) -> None:
-        _validate_fields(self)
+        validate_fields(self)
 
     @property
     def phase_margin(self) -> float:
@@ -196,14 +184,15 @@ class FieldRow(NamedTuple):
     is_default: bool
 
 
-_SECTIONS: dict[str, type] = {
+#: Section name -> its dataclass, in the order of a TOML file.
+SECTIONS: Mapping[str, type] = FrozenMap({
     "plant": PlantParams,
     "friction": FrictionParams,
     "sensor": SensorSpec,
     "observer": ObserverSpec,
     "pid": PIDSpec,
     "compensation": CompensationSpec,
-}
+})
 #: Sections that may be left out of a TOML file (their defaults apply).
 _OPTIONAL_SECTIONS = ("sensor", "compensation")
 
@@ -211,6 +200,17 @@ _OPTIONAL_SECTIONS = ("sensor", "compensation")
 @dataclass(frozen=True, kw_only=True)
 class Config:
     """A complete design: plant, friction, sensor, observer and PID sections.
+
+    Attributes
+    ----------
+    name : str
+        Name of the design.
+    plant, friction, sensor, observer, pid, compensation : dataclass
+        The sections of :data:`SECTIONS`; ``sensor`` and ``compensation`` may be left out of a file.
+    sources : Mapping[str, str]
+        Where values come from (``"plant.m"`` -> text); not compared.
+    plant_friction : PlantFrictionSpec or None
+        ``[plant_friction]``: the simulated plant's friction model (None: the paper's).
 
     Examples
     --------
@@ -220,7 +220,7 @@ class Config:
     """
 
     _section = "config"
-    name: str = _param(Text(), "-", "name of the design", "custom")
+    name: str = param_field(Text(), "-", "name of the design", "custom")
     plant: PlantParams
     friction: FrictionParams
     observer: ObserverSpec
@@ -231,11 +231,11 @@ class Config:
     plant_friction: PlantFrictionSpec | None = None  # [plant_friction]: the simulated plant's model
 
     def __post_init__(self) -> None:
-        _validate_fields(self)
+        validate_fields(self)
         if not isinstance(self.plant_friction, (PlantFrictionSpec, type(None))):
             raise TypeError(f"config.plant_friction: expected PlantFrictionSpec or None, found {self.plant_friction!r}")
         object.__setattr__(self, "sources", FrozenMap(_check_sources(self.sources)))
-        for key, cls in _SECTIONS.items():
+        for key, cls in SECTIONS.items():
             value = getattr(self, key)
             if not isinstance(value, cls):
                 raise TypeError(f"config.{key}: expected {cls.__name__}, found {type(value).__name__}")
@@ -293,7 +293,7 @@ class Config:
         """
         if not isinstance(data, dict):
             raise TypeError(f"{source}: expected a table, found {type(data).__name__}")
-        allowed = set(_SECTIONS) | {"name", "sources", "plant_friction"}
+        allowed = set(SECTIONS) | {"name", "sources", "plant_friction"}
         unknown = sorted(set(data) - allowed)
         if unknown:
             raise ValueError(
@@ -306,7 +306,7 @@ class Config:
             kwargs["sources"] = data["sources"]
         if "plant_friction" in data:
             kwargs["plant_friction"] = PlantFrictionSpec.from_dict(data["plant_friction"])
-        for key, section in _SECTIONS.items():
+        for key, section in SECTIONS.items():
             table = data.get(key)
             if table is None:
                 if key in _OPTIONAL_SECTIONS:
@@ -341,7 +341,7 @@ class Config:
         out: dict[str, Any] = {"name": self.name}
         if self.sources:
             out["sources"] = dict(self.sources)
-        for key in _SECTIONS:
+        for key in SECTIONS:
             section = getattr(self, key)
             out[key] = {
                 f.name: getattr(section, f.name)
@@ -397,7 +397,7 @@ class Config:
         FieldRow(name='plant.m', value=0.538, unit='kg', doc='moving mass', is_default=False)
         """
         rows = []
-        for key in _SECTIONS:
+        for key in SECTIONS:
             section = getattr(self, key)
             for f in dataclasses.fields(section):
                 value = getattr(section, f.name)
@@ -407,13 +407,13 @@ class Config:
 
 
 _FIELD_SECTION: dict[str, str] = {
-    f.name: key for key, cls in _SECTIONS.items() for f in dataclasses.fields(cls)
+    f.name: key for key, cls in SECTIONS.items() for f in dataclasses.fields(cls)
 }
 #: Every parameter :meth:`Config.override` accepts, mapped to its section.
 PARAMETERS: Mapping[str, str] = FrozenMap(dict(sorted(_FIELD_SECTION.items())))
 
 
-_PARAMETER_NAMES = frozenset(f"{key}.{f.name}" for key, cls in _SECTIONS.items() for f in dataclasses.fields(cls))
+_PARAMETER_NAMES = frozenset(f"{key}.{f.name}" for key, cls in SECTIONS.items() for f in dataclasses.fields(cls))
 
 
 def _check_sources(sources: Any) -> dict[str, str]:

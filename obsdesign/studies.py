@@ -77,9 +77,25 @@ def _first_exceed(err: np.ndarray, level: float, dt: float, warmup: float = 1.0)
 
 @dataclass(frozen=True)
 class ConvergenceStudy:
-    rates: dict  # rho -> (measured, expected) growth rate [1/s] in steady sliding
-    excitation: dict  # (rho, seed) -> (observer_rms_error_f after 1 s, divergence time or None)
-    slow_excitation: dict  # (rho, seed) -> divergence time under a 0.2 Hz excitation (static variant)
+    """Result of :func:`convergence_study`.
+
+    Attributes
+    ----------
+    rates : dict
+        ``rho -> (measured, expected)`` growth rate [1/s] of the error in steady sliding.
+    excitation : dict
+        ``(rho, seed) -> (RMS of f_hat_filtered - f after 1 s [N], divergence time [s] or None)``.
+    slow_excitation : dict
+        ``(rho, seed) ->`` divergence time [s] or None under a 0.2 Hz excitation (static variant).
+    claims : tuple of Claim
+        The section's claims and what was measured.
+    runs : dict
+        ``("steady" | "excitation", rho) ->`` SimResult of the runs the figures show.
+    """
+
+    rates: dict
+    excitation: dict
+    slow_excitation: dict
     claims: tuple
     runs: dict = field(repr=False)
 
@@ -194,8 +210,20 @@ def convergence_study(cfg: Config | None = None, *, seeds: int = 5, duration: fl
 
 @dataclass(frozen=True)
 class ExperimentsStudy:
-    positioning: dict  # controller -> metrics
-    tracking: dict  # controller -> metrics
+    """Result of :func:`experiments_study`.
+
+    Attributes
+    ----------
+    positioning, tracking : dict
+        Controller (``"pid"``, ``"pid+observer"``) -> the run's metrics (:attr:`SimResult.metrics`).
+    claims : tuple of Claim
+        The section's claims and what was measured.
+    runs : dict
+        ``(scenario, controller) ->`` SimResult.
+    """
+
+    positioning: dict
+    tracking: dict
     claims: tuple
     runs: dict = field(repr=False)
 
@@ -249,6 +277,26 @@ def _um1(value) -> str:
 
 @dataclass(frozen=True)
 class FrictionLoopsStudy:
+    """Result of :func:`friction_loops_study` (positioning run of the ``vcm`` preset).
+
+    Attributes
+    ----------
+    rms_estimate_vs_true : float
+        RMS of the filtered friction estimate minus the plant's friction state [N].
+    rms_model_vs_true : float
+        RMS of the model's Coulomb friction (from the filtered velocity estimate) minus it [N].
+    claims : tuple of Claim
+        The figure's claim and what was measured.
+    x : ndarray
+        Measured displacement [m] per sample.
+    estimate : ndarray
+        Filtered friction estimate [N].
+    model_f, model_fc : ndarray
+        The friction model's ``f = Fc + sigma v`` and ``Fc`` [N] along the run.
+    true_f : ndarray
+        The plant's friction state [N].
+    """
+
     rms_estimate_vs_true: float
     rms_model_vs_true: float
     claims: tuple
@@ -295,7 +343,18 @@ def friction_loops_study(cfg: Config | None = None) -> FrictionLoopsStudy:
 
 @dataclass(frozen=True)
 class NoiseStudy:
-    rows: dict  # preset -> dict(predicted raw/filtered, simulated raw/filtered, direct_gain)
+    """Result of :func:`noise_study`.
+
+    Attributes
+    ----------
+    rows : dict
+        Preset name -> ``rho``, ``direct_gain`` [N/m] and the predicted and simulated RMS
+        (``predicted_raw``, ``simulated_raw``, ``predicted_filtered``, ``simulated_filtered``) [N].
+    claims : tuple of Claim
+        One claim per preset.
+    """
+
+    rows: dict
     claims: tuple
 
 

@@ -9,6 +9,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("script", sorted(p.name for p in (ROOT / "analysis").glob("fig_*.py")))
 def test_analysis_script(script, tmp_path):
     proc = subprocess.run([sys.executable, str(ROOT / "analysis" / script), "--out", str(tmp_path)],
@@ -19,6 +20,7 @@ def test_analysis_script(script, tmp_path):
     assert len(figures) == 1 and figures[0].stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_report_claims_are_honest():
     """Claims the simulation does not reproduce are reported as such (not bent to match)."""
     from obsdesign import studies as paper

@@ -9,6 +9,7 @@ import os
 import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -37,9 +38,9 @@ def one_line(capsys, argv, match, status=2):
 @pytest.fixture
 def fx(tmp_path):
     """Fixture files of the review (fx/)."""
-    (tmp_path / "latin.toml").write_bytes(open(PRESET, "rb").read().replace(b'name = "vcm"', b'name = "caf\xe9"'))
+    (tmp_path / "latin.toml").write_bytes(Path(PRESET).read_bytes().replace(b'name = "vcm"', b'name = "caf\xe9"'))
     (tmp_path / "binary.toml").write_bytes(bytes(range(256)) * 4)
-    (tmp_path / "big.toml").write_text(open(PRESET).read().replace("rho = 4.0", "rho = 1" + "0" * 400))
+    (tmp_path / "big.toml").write_text(Path(PRESET).read_text().replace("rho = 4.0", "rho = 1" + "0" * 400))
     (tmp_path / "existing_dir.csv").mkdir()
     (tmp_path / "dir.svg").mkdir()
     (tmp_path / "report_dir.html").mkdir()
@@ -176,9 +177,10 @@ def test_a_full_stdout_is_one_line_and_status_2(argv):
 SETPRIV = shutil.which("setpriv")
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not (SETPRIV and os.geteuid() == 0), reason="needs root and setpriv to drop DAC capabilities")
 def test_unreadable_and_unwritable_paths_without_dac_capabilities(tmp_path):  # p6, s15, e5, r6
-    (tmp_path / "u.toml").write_text(open(PRESET).read())
+    (tmp_path / "u.toml").write_text(Path(PRESET).read_text())
     (tmp_path / "u.toml").chmod(0)
     (tmp_path / "ro").mkdir()
     (tmp_path / "ro").chmod(0o555)

@@ -47,6 +47,7 @@ def small():
                         scenarios=("excitation", "positioning"), seeds=1, workers=1)
 
 
+@pytest.mark.slow
 def test_rows_cover_every_case(small):
     _, res = small
     keys = [(r["plant"], r["estimator"], r["scenario"]) for r in res.rows]
@@ -54,6 +55,7 @@ def test_rows_cover_every_case(small):
     assert all(set(r) == set(COLUMNS) for r in res.rows)
 
 
+@pytest.mark.slow
 def test_baselines_have_the_paper_noise(small):
     cfg, res = small
     ref = reference_noise_rms(cfg)
@@ -61,6 +63,7 @@ def test_baselines_have_the_paper_noise(small):
         assert r["friction_noise_rms"] == pytest.approx(ref, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_settling_time_agrees_with_the_simulator_metric(small):
     """step_metrics (comparison) against loop_metrics (simulate): two implementations of one definition."""
     cfg, res = small
@@ -72,6 +75,7 @@ def test_settling_time_agrees_with_the_simulator_metric(small):
     assert row["settling_time"] == pytest.approx(np.mean(sim.metrics["settling_time"]), abs=2 * cfg.observer.dt)
 
 
+@pytest.mark.slow
 def test_parallel_rows_equal_serial_rows(small):
     cfg, res = small
     par = compare(cfg, plants=("paper", "dahl"), estimators=("paper", "dob"), scenarios=("excitation", "positioning"),

@@ -110,13 +110,17 @@ def test_presliding_velocity_bound_against_brute_force():
         assert rep.presliding_velocity_bound[f"D={D:g}"] == pytest.approx(vmax, rel=1e-6)
 
 
+# Random designs may be faster than the 10 kHz sampling: that warning is expected here (and
+# asserted in test_stiff_kappa_warns_about_the_sampling_rate); any other warning fails.
+FASTER_THAN_SAMPLING = "ignore:fastest observer pole .* the observer is faster than the sampling:UserWarning"
+
+
+@pytest.mark.filterwarnings(FASTER_THAN_SAMPLING)
 @given(rho=st.floats(1.001, 12.0), kap=st.floats(100.0, 1e6), mass=st.floats(0.05, 10.0),
        frac=st.floats(0.0, 1.0), variant=st.sampled_from(["lag", "static"]))
 def test_property_rho_above_one_is_stable_with_real_eigenvalues(rho, kap, mass, frac, variant):
     cfg = TABLE1.override(m=mass, variant=variant)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        rep = od.check_stability(cfg.override(rho=rho, kappa=kap))
+    rep = od.check_stability(cfg.override(rho=rho, kappa=kap))
     assert rep.stable and rep.eigenvalues_real
     d = rep.design
     k = frac * kap
@@ -127,11 +131,10 @@ def test_property_rho_above_one_is_stable_with_real_eigenvalues(rho, kap, mass, 
     np.testing.assert_allclose(np.sort(numeric.real), np.sort(d.eigenvalues(k).real), rtol=1e-6, atol=1e-7 * scale)
 
 
+@pytest.mark.filterwarnings(FASTER_THAN_SAMPLING)
 @given(rho=st.floats(0.01, 0.999), kap=st.floats(100.0, 1e6), variant=st.sampled_from(["lag", "static"]))
 def test_property_rho_below_one_is_not_stable(rho, kap, variant):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        rep = od.check_stability(TABLE1.override(variant=variant, rho=rho, kappa=kap))
+    rep = od.check_stability(TABLE1.override(variant=variant, rho=rho, kappa=kap))
     assert not rep.stable
     assert rep.dominant_pole > 0
     np.testing.assert_allclose(rep.dominant_pole, math.sqrt(kap / 0.538) * (1 - rho), rtol=1e-6)
@@ -215,6 +218,7 @@ def _band_limited_noise(n, dt, rms, bandwidth, seed):
     return x * rms / np.sqrt(np.mean(x * x))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("cfg", [TABLE1, VCM], ids=["table1", "vcm"])
 def test_noise_rms_against_a_time_domain_run(cfg):
     eta, B = 1e-6, 1000.0

@@ -93,6 +93,7 @@ def test_config_of_a_config_file_is_stable_and_rejects_bad_input(tmp_path):
     assert code == 2 and "expected an existing TOML file" in err
 
 
+@pytest.mark.slow
 def test_every_command_accepts_the_printed_config(tmp_path):
     path = tmp_path / "knobs.toml"
     text = run("config", "--preset", "vcm")[1].replace("gain = 1.0", "gain = 0.75")

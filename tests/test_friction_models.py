@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+import obsdesign as od
 from obsdesign.friction import (
     FRICTION_MODELS,
     drive_displacement,
@@ -19,6 +20,7 @@ from obsdesign.friction import (
     simulate_block,
     stribeck,
 )
+from obsdesign.sim.simulate import plant_friction_arrays
 
 MASS = 0.538  # kg, paper Table 1
 DT = 1e-4  # s, 10 kHz
@@ -289,10 +291,13 @@ def test_registry_contract():
             assert len(spec) == 6 and spec.unit is not None and spec.doc
             if spec.default is not None and not isinstance(spec.default, (list, tuple)):
                 assert spec.low <= spec.default <= spec.high, (name, spec.name)
+        if name == "paper":     # its array also holds [friction] kappa: built from a Config
+            with pytest.raises(ValueError, match="paper: its kernel array also holds"):
+                info.pack({})
+            continue
         p = info.pack({})
         assert p.dtype == np.float64 and np.all(np.isfinite(p))
-        if name != "paper":
-            assert friction_n_state(info.code, p) == info.n_state({})
+        assert friction_n_state(info.code, p) == info.n_state({})
     assert FRICTION_MODELS["gms"].n_state({"N": 7}) == 16
     p = FRICTION_MODELS["gms"].pack({"N": 2, "k": [3e4, 7e4], "alpha": [0.25, 0.75]})
     assert p[-4:].tolist() == [3e4, 7e4, 0.25, 0.75]
@@ -314,6 +319,6 @@ def test_plant_spec_lists_come_from_the_registry():
 
 def test_paper_code_is_not_dispatched():
     """Code 0 is reserved (its kernel is obsdesign.friction.presliding): NaN, never a silent zero."""
-    p = FRICTION_MODELS["paper"].pack({})
+    _, p = plant_friction_arrays(od.load_preset("table1"))      # the paper plant's real array
     assert math.isnan(friction_force(0, p, np.zeros(3), 0.0, 0.0))
     assert math.isnan(stribeck(0, p, 0.01))

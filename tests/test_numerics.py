@@ -115,6 +115,7 @@ def test_design_warnings_flag_exactly_the_unstable_designs(rho):
     assert any(n.startswith("the observer design fails check") for n in notes) == _closed_form_unstable(rho)
 
 
+@pytest.mark.slow
 def test_simulate_prints_the_checks_warning_once_and_keeps_exit_0():
     proc = cli("simulate", "positioning", "--dt", "0.01", "--duration", "3.5", "--json")
     assert proc.returncode == 0, proc.stderr
@@ -125,6 +126,7 @@ def test_simulate_prints_the_checks_warning_once_and_keeps_exit_0():
     assert proc.returncode == 0 and proc.stderr == ""
 
 
+@pytest.mark.slow
 def test_noise_warns_for_an_unstable_design():
     proc = cli("noise", "--preset", "vcm", "--rho", "0.5")
     assert proc.returncode == 0
@@ -133,6 +135,7 @@ def test_noise_warns_for_an_unstable_design():
     assert cli("noise", "--preset", "vcm").stderr == ""
 
 
+@pytest.mark.slow
 def test_simulate_refusal_is_one_line_exit_2(tmp_path):
     cfg = tmp_path / "m.toml"
     text = (od.load_preset("vcm").to_toml()).replace("m = 0.538", "m = 1e-06")
@@ -143,6 +146,7 @@ def test_simulate_refusal_is_one_line_exit_2(tmp_path):
     assert len(lines) == 1 and "more than 1000 substeps" in lines[0] and "plant.m = 1e-06" in lines[0]
 
 
+@pytest.mark.slow
 def test_clipped_open_loop_force_is_warned():
     """table1: K = 3.28 N/V, u_max = 10 V, G = 0, so the actuator gives at most 32.8 N."""
     proc = cli("simulate", "constant", "--input-force", "1e30", "--duration", "0.1", "--json")

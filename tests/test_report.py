@@ -19,6 +19,7 @@ def report_file(tmp_path_factory):
     return path
 
 
+@pytest.mark.slow
 def test_report_is_self_contained(report_file):
     html = report_file.read_text()
     assert "<script src" not in html and "<link" not in html and "<img" not in html
@@ -29,6 +30,7 @@ def test_report_is_self_contained(report_file):
     assert urls <= {"http://www.w3.org/1998/Math/MathML", "http://www.w3.org/2000/svg", "http://www.w3.org/1999/xlink"}
 
 
+@pytest.mark.slow
 def test_report_contents(report_file):
     html = report_file.read_text()
     assert html.count("<svg") >= 7  # eigenvalues, |S|, noise, convergence, experiments, loops, explorer
@@ -43,6 +45,7 @@ def test_report_contents(report_file):
         assert needle in html
 
 
+@pytest.mark.slow
 def test_values_from_a_config_are_escaped():
     cfg = od.load_preset("table1").override(rho=1.5)
     import dataclasses
@@ -80,6 +83,7 @@ def _browser():
     return webdriver.Chrome(service=Service(DRIVER), options=opts)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not (CHROMIUM and DRIVER) and os.environ.get("CI") != "true",
                     reason="headless Chromium not installed (CI installs it)")
 def test_explorer_in_headless_chromium(report_file, tmp_path):
@@ -114,6 +118,7 @@ def test_explorer_in_headless_chromium(report_file, tmp_path):
         driver.quit()
 
 
+@pytest.mark.slow
 def test_report_includes_a_sweep_summary(tmp_path, capsys):
     sweep_dir = tmp_path / "sweep"
     assert main(["sweep", "--scenario", "constant", "--duration", "0.2", "--vary", "rho=1.5:3:2", "--workers", "1",

@@ -164,6 +164,7 @@ def test_python_exports_import_without_side_effects(exported, tmp_path, monkeypa
     assert list(tmp_path.iterdir()) == []  # nothing was created (no PWNED file)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not shutil.which("gcc"), reason="gcc not installed")
 def test_c_exports_compile_strictly_and_define_nothing_injected(exported, tmp_path):
     for name, folder in exported:

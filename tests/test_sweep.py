@@ -31,6 +31,7 @@ def local_results(tmp_path_factory):
     return (out / "results.csv").read_text()
 
 
+@pytest.mark.slow
 def test_local_results_file(local_results):
     rows = list(csv.DictReader(local_results.splitlines()))
     assert len(rows) == 9 and [int(r["run"]) for r in rows] == list(range(9))
@@ -41,6 +42,7 @@ def test_local_results_file(local_results):
     assert len({r["Cf"] for r in rows}) == 9  # every run its own draw
 
 
+@pytest.mark.slow
 def test_in_process_equals_process_pool(local_results, tmp_path):
     assert main(["sweep", *SWEEP, "--out", str(tmp_path), "--workers", "1"]) == 0
     assert (tmp_path / "results.csv").read_text() == local_results
@@ -75,6 +77,7 @@ def dask_cluster(tmp_path):
                 p.kill()
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not DASK.exists(), reason="dask[distributed] not installed")
 def test_dask_cluster_gives_identical_results(local_results, tmp_path):
     with dask_cluster(tmp_path) as address:
@@ -93,6 +96,7 @@ def test_dask_cluster_gives_identical_results(local_results, tmp_path):
         assert res.best("rho")[0] in (1.5, 2.75, 4.0)
 
 
+@pytest.mark.slow
 def test_interrupted_sweep_resumes_to_the_same_file(tmp_path):
     # 200 runs (several seconds), so the SIGINT always arrives while the sweep is running.
     args = ["sweep", "--preset", "vcm", "--scenario", "positioning", "--duration", "3.5", "--vary", "rho=1.5:4:10",
@@ -185,8 +189,8 @@ def test_killed_worker_is_reported_and_resumable(tmp_path, monkeypatch, capsys):
             return fut
 
     monkeypatch.setattr(sweep_mod, "_run_batch", dying)
-    real_executor = sweep_mod._Executor
-    monkeypatch.setattr(sweep_mod, "_Executor", lambda executor, workers: real_executor(InlinePool(), None))
+    real_executor = sweep_mod.Executor
+    monkeypatch.setattr(sweep_mod, "Executor", lambda executor, workers: real_executor(InlinePool(), None))
     assert main([*args]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "a worker failed (BrokenProcessPool)" in err[0]

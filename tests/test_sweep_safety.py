@@ -81,6 +81,7 @@ def test_force_replaces_and_resume_and_force_conflict(finished, tmp_path, capsys
 
 # -- lock ------------------------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_a_second_sweep_in_a_locked_folder_fails_at_once(tmp_path):
     out = tmp_path / "busy"
     out.mkdir()
@@ -96,6 +97,7 @@ def test_a_second_sweep_in_a_locked_folder_fails_at_once(tmp_path):
     assert cli(*SMALL, "--out", str(out)).returncode == 0
 
 
+@pytest.mark.slow
 def test_two_concurrent_sweeps_one_wins_the_other_refuses(tmp_path):
     out = tmp_path / "cc"
     first = subprocess.Popen([sys.executable, "-m", "obsdesign", *LONG, "--out", str(out)],
@@ -287,6 +289,7 @@ def _reap(pids) -> list[int]:
     return left
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
 def test_killing_the_sweep_leaves_no_worker_behind(tmp_path, sig):
@@ -298,6 +301,7 @@ def test_killing_the_sweep_leaves_no_worker_behind(tmp_path, sig):
     assert _reap(kids) == []
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_sigint_to_the_parent_alone_stops_within_3_s_and_keeps_rows(tmp_path):
     out = tmp_path / "i"
@@ -357,6 +361,7 @@ def tiny_server(reply: bytes | None, lifetime: float = 40.0):
         srv.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("reply, match", [(None, "sent no Dask handshake within 5 s"),
                                           (b"HTTP/1.1 400 Bad Request\r\n\r\n", "not a Dask handshake")])
 def test_scheduler_that_is_not_dask_ends_within_15_s(tmp_path, reply, match):
@@ -372,6 +377,7 @@ def test_scheduler_that_is_not_dask_ends_within_15_s(tmp_path, reply, match):
     assert not (tmp_path / "d").exists()
 
 
+@pytest.mark.slow
 def test_scheduler_port_that_is_closed_is_one_line(tmp_path):
     pytest.importorskip("distributed")
     s = socket.socket()
@@ -385,6 +391,7 @@ def test_scheduler_port_that_is_closed_is_one_line(tmp_path):
 DASK = Path(sys.executable).parent / "dask"
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not DASK.exists(), reason="dask[distributed] not installed")
 def test_a_dask_cluster_without_workers_ends_the_sweep(tmp_path, monkeypatch):
     """All workers gone: before, the sweep waited forever; now it ends after STALL_S without a worker."""

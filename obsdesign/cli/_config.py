@@ -16,7 +16,7 @@ import argparse
 import dataclasses
 
 from .._format import toml_value as _toml_value
-from ..params import _SECTIONS
+from ..params import SECTIONS
 from ._common import add_config_flags, load
 
 __all__ = ["add_commands", "config_toml"]
@@ -51,7 +51,7 @@ def config_toml(cfg, *, label: str | None = None) -> str:
     """
     label = label or f"design {cfg.name!r}"
     lines = [_HEADER.format(label=_comment(label)), "", f"name = {_toml_value(cfg.name)}"]
-    for key in _SECTIONS:
+    for key in SECTIONS:
         section = getattr(cfg, key)
         lines += ["", f"[{key}]"]
         for f in dataclasses.fields(section):

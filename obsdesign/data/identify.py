@@ -61,7 +61,9 @@ class Identification:
     m_std, sigma_std, Cf_std, offset_std : float
         Standard errors from the OLS covariance ``sigma_e^2 (X^T X)^-1``.
     sigma_pos, sigma_neg, Cf_pos, Cf_neg : float or None
-        Per-direction values (``asymmetric`` only), with ``*_std`` standard errors.
+        Per-direction values (``asymmetric`` only).
+    sigma_pos_std, sigma_neg_std, Cf_pos_std, Cf_neg_std : float or None
+        Their standard errors.
     nrmse_percent : float
         ``100 rms(residual) / rms(u)`` over the rows of the fit.
     condition_number : float
@@ -78,6 +80,8 @@ class Identification:
         Trace facts used by :meth:`to_config`: the input gain [N/unit], the largest |force|
         [N], the position noise RMS [m], the encoder step [m] (0: not quantized), and the
         number of motion reversals.
+    source : str
+        Where the trace came from (its file name), for tables.
     """
 
     model: str

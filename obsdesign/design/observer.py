@@ -86,6 +86,19 @@ class ObserverDesign(ResultDisplay):
     """Observer gains for one config, with the numeric observer matrices.
 
     Use :func:`design_observer` to build one.
+
+    Attributes
+    ----------
+    variant : {"lag", "static"}
+        The model variant the gains are derived for.
+    m, sigma, beta, Cf, s, kappa : float
+        Plant and friction values of the config (``beta`` None: static viscous friction).
+    rho : float
+        The gain design parameter.
+    L1, L2 : float
+        The observer gains (eq:3:3:3-4 for ``lag``, section 4 for ``static``).
+    dt : float
+        Controller sample time [s].
     """
 
     _title = "Observer design"
@@ -186,6 +199,17 @@ class ObserverArrays:
     ``g(k) = g0 + k g1`` (observer matrix, input vector and measurement gain of eq:3:1:2).
 
     Built by :meth:`ObserverDesign.affine`.
+
+    Attributes
+    ----------
+    design : ObserverDesign
+        The design the arrays come from.
+    A0, A1 : ndarray, shape (n, n)
+        Observer matrix at ``k = 0`` and its slope in ``k``.
+    b0, b1 : ndarray, shape (n,)
+        Input vector and its slope.
+    g0, g1 : ndarray, shape (n,)
+        Measurement gain and its slope.
     """
 
     design: ObserverDesign

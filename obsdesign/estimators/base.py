@@ -39,8 +39,10 @@ import scipy.linalg
 from numba import njit
 
 from .._validate import POSITIVE, as_float
+from ..params import Config
 
 __all__ = [
+    "check_config",
     "MAX_STATES",
     "DiscreteEstimator",
     "estimator_step",
@@ -52,6 +54,27 @@ __all__ = [
 
 #: Largest state dimension of the common form (the kernel's loop is written for it).
 MAX_STATES = 4
+
+
+def check_config(cfg) -> Config:
+    """``cfg`` if it is a :class:`~obsdesign.params.Config` (validated at its construction), else a TypeError.
+
+    Parameters
+    ----------
+    cfg : object
+        The design handed to an estimator's builder.
+
+    >>> import obsdesign as od
+    >>> check_config(od.load_preset("vcm")).name
+    'vcm'
+    >>> check_config({"rho": 4.0})
+    Traceback (most recent call last):
+    ...
+    TypeError: cfg: expected a Config, found dict
+    """
+    if not isinstance(cfg, Config):
+        raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
+    return cfg
 
 
 def check_positive(name: str, value, unit: str) -> float:

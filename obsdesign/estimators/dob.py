@@ -38,8 +38,8 @@ import control as ct
 import numpy as np
 
 from ..params import Config
-from .base import DiscreteEstimator, check_positive
-from .paper import _check_config, model_sigma, step_matrices
+from .base import DiscreteEstimator, check_config, check_positive
+from .paper import model_sigma, step_matrices
 
 __all__ = ["build_dob", "q_filter", "dob_continuous"]
 
@@ -105,7 +105,7 @@ def build_dob(cfg: Config, *, omega_q: float, sigma_model: float | None = None,
     ValueError
         ``omega_q`` not a finite number > 0.
     """
-    cfg = _check_config(cfg)
+    cfg = check_config(cfg)
     w = check_positive("omega_q", omega_q, "rad/s")
     m, sig = cfg.plant.m, model_sigma(cfg, sigma_model)
     A, b, g, L = _matrices(w, m, sig)

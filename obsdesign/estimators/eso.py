@@ -32,8 +32,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..params import Config
-from .base import DiscreteEstimator, check_positive, discretize_observer
-from .paper import _check_config, model_sigma
+from .base import DiscreteEstimator, check_config, check_positive, discretize_observer
+from .paper import model_sigma
 
 __all__ = ["build_eso", "eso_gains", "eso_continuous"]
 
@@ -96,7 +96,7 @@ def build_eso(cfg: Config, *, omega_o: float, sigma_model: float | None = None,
     ValueError
         ``omega_o`` not a finite number > 0.
     """
-    cfg = _check_config(cfg)
+    cfg = check_config(cfg)
     w = check_positive("omega_o", omega_o, "rad/s")
     m, sig = cfg.plant.m, model_sigma(cfg, sigma_model)
     A, b, c, l = eso_continuous(w, m, sig)

@@ -32,8 +32,8 @@ import control as ct
 import numpy as np
 
 from ..params import Config
-from .base import DiscreteEstimator, check_positive, foh_matrices
-from .paper import _check_config, model_sigma
+from .base import DiscreteEstimator, check_config, check_positive, foh_matrices
+from .paper import model_sigma
 
 __all__ = ["build_kalman", "kalman_model", "noise_level"]
 
@@ -53,7 +53,7 @@ def noise_level(cfg: Config) -> tuple[float, float]:
     >>> round(eta * 1e9, 2), B          # 1 um / sqrt(12)
     (288.68, 1000.0)
     """
-    s = _check_config(cfg).sensor
+    s = check_config(cfg).sensor
     return math.hypot(s.noise_rms, s.quantization / math.sqrt(12.0)), float(s.noise_bandwidth)
 
 
@@ -97,7 +97,7 @@ def build_kalman(cfg: Config, *, q: float, measurement_rms: float | None = None,
     ValueError
         ``q`` or the measurement RMS not a finite number > 0 (the filter needs ``R > 0``).
     """
-    cfg = _check_config(cfg)
+    cfg = check_config(cfg)
     q = check_positive("q", q, "N^2/s")
     eta = noise_level(cfg)[0] if measurement_rms is None else measurement_rms
     eta = check_positive("measurement_rms (sensor noise_rms or quantization)", eta, "m")

@@ -31,7 +31,7 @@ import numpy as np
 
 from ..design.observer import design_observer
 from ..params import Config
-from .base import DiscreteEstimator
+from .base import DiscreteEstimator, check_config
 
 
 def step_matrices(A, b, g, h):
@@ -69,12 +69,6 @@ def model_sigma(cfg: Config, sigma_model: float | None) -> float:
     return float(sigma_model)
 
 
-def _check_config(cfg) -> Config:
-    if not isinstance(cfg, Config):
-        raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
-    return cfg
-
-
 def paper_dominant_pole(cfg: Config) -> float:
     """Largest real part [1/s] of the paper observer's poles at ``k = 0`` (gross sliding).
 
@@ -89,7 +83,7 @@ def paper_dominant_pole(cfg: Config) -> float:
     >>> round(paper_dominant_pole(od.load_preset("table1")), 4)
     -2.4388
     """
-    d = design_observer(_check_config(cfg))
+    d = design_observer(check_config(cfg))
     return float(np.max(d.eigenvalues(0.0).real))
 
 
@@ -116,7 +110,7 @@ def build_paper(cfg: Config, *, stiffness: float = 0.0, sigma_model: float | Non
     ValueError
         Negative stiffness, or a ``sigma_model`` the variant does not use.
     """
-    cfg = _check_config(cfg)
+    cfg = check_config(cfg)
     if isinstance(stiffness, bool) or not isinstance(stiffness, (int, float)) or not (
         math.isfinite(stiffness) and stiffness >= 0.0
     ):

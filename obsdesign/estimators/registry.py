@@ -57,6 +57,8 @@ class EstimatorInfo(Entry):
     ----------
     name, code, doc : str, int, str
         The name, the kernel's integer code and one line of description.
+    parameters : tuple
+        Unused by estimators (their knob is ``knob``): empty.
     knob, knob_unit : str or None
         The design parameter :func:`build` takes (None: none) and its unit.
     knob_default : float or None

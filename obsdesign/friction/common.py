@@ -26,6 +26,9 @@ Examples
 0.25
 >>> round(stribeck_level(0.35, 0.525, 1e-3, 1e-3), 6)  # Cf + (Fs - Cf) / e
 0.414379
+>>> q = np.append(p, [0.525, 0.375, 1e-3])             # a Stribeck model: Fs, Fs_neg, vs
+>>> round(stribeck_magnitude(q, -1.0, 1e-3), 6)          # Cf_neg + (Fs_neg - Cf_neg) / e
+0.295985
 """
 
 from __future__ import annotations
@@ -36,12 +39,15 @@ from numba import njit
 
 __all__ = [
     "P_CF", "P_CF_NEG", "P_SIGMA", "P_SIGMA_NEG", "P_OFFSET", "P_MODEL",
-    "sign", "coulomb_level", "viscous", "stribeck_level",
+    "P_FS", "P_FS_NEG", "P_VS",
+    "sign", "coulomb_level", "viscous", "stribeck_level", "stribeck_magnitude",
 ]
 
 P_CF, P_CF_NEG, P_SIGMA, P_SIGMA_NEG, P_OFFSET = 0, 1, 2, 3, 4
 #: Index of the first model-specific parameter.
 P_MODEL = 5
+#: The Stribeck models (lugre, gms) start their own parameters with ``Fs, Fs_neg, vs``.
+P_FS, P_FS_NEG, P_VS = P_MODEL, P_MODEL + 1, P_MODEL + 2
 
 
 @njit(cache=True, error_model="numpy")
@@ -75,3 +81,12 @@ def stribeck_level(coulomb: float, static: float, vs: float, speed: float) -> fl
     """Stribeck magnitude ``Fc + (Fs - Fc) exp(-(speed/vs)^2)`` [N] for ``speed = |v|``."""
     r = speed / vs
     return coulomb + (static - coulomb) * math.exp(-r * r)
+
+
+@njit(cache=True, error_model="numpy")
+def stribeck_magnitude(p, direction: float, speed: float) -> float:
+    """Stribeck magnitude ``|s(v)|`` [N] (> 0) of a Stribeck model for a motion in ``direction``
+    at ``speed = |v|``: :func:`stribeck_level` of ``Cf, Fs, vs`` (``Cf_neg, Fs_neg`` for ``direction < 0``)."""
+    if direction < 0.0:
+        return stribeck_level(p[P_CF_NEG], p[P_FS_NEG], p[P_VS], speed)
+    return stribeck_level(p[P_CF], p[P_FS], p[P_VS], speed)

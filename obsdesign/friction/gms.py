@@ -58,13 +58,14 @@ import math
 
 from numba import njit
 
-from .common import P_CF, P_CF_NEG, P_MODEL, P_OFFSET, sign, stribeck_level, viscous
+from .common import P_FS, P_FS_NEG, P_MODEL, P_OFFSET, P_VS, sign, stribeck_magnitude, viscous
 
 __all__ = ["G_FS", "G_FS_NEG", "G_VS", "G_C", "G_SIGMA1", "G_N", "G_ELEMENTS",
-           "gms_n_params", "gms_n_state", "gms_level", "gms_init", "gms_force",
+           "gms_n_params", "gms_n_state", "gms_init", "gms_force",
            "gms_advance", "gms_stiffness", "gms_steady"]
 
-G_FS, G_FS_NEG, G_VS, G_C, G_SIGMA1, G_N = (P_MODEL + i for i in range(6))
+G_FS, G_FS_NEG, G_VS = P_FS, P_FS_NEG, P_VS
+G_C, G_SIGMA1, G_N = (P_MODEL + i for i in range(3, 6))
 #: Index of ``k_1``; ``alpha_1`` is at ``G_ELEMENTS + N``.
 G_ELEMENTS = P_MODEL + 6
 
@@ -79,14 +80,6 @@ def gms_n_params(n: int) -> int:
 def gms_n_state(p) -> int:
     """Length of the state array: ``2 + 2 N``."""
     return 2 + 2 * int(p[G_N])
-
-
-@njit(cache=True, error_model="numpy")
-def gms_level(p, direction: float, speed: float) -> float:
-    """Stribeck magnitude ``|s(v)|`` [N] for a motion in ``direction`` at ``speed``."""
-    if direction < 0.0:
-        return stribeck_level(p[P_CF_NEG], p[G_FS_NEG], p[G_VS], speed)
-    return stribeck_level(p[P_CF], p[G_FS], p[G_VS], speed)
 
 
 @njit(cache=True, error_model="numpy")
@@ -106,8 +99,8 @@ def gms_force(p, st, x: float, v: float) -> float:
     d = sign(dx)
     dv = sign(v)
     speed = abs(v)
-    level_d = gms_level(p, d, speed)
-    level_v = gms_level(p, dv, speed)
+    level_d = stribeck_magnitude(p, d, speed)
+    level_v = stribeck_magnitude(p, dv, speed)
     k_sum = 0.0
     for i in range(n):
         k_sum += p[G_ELEMENTS + i]
@@ -139,7 +132,7 @@ def gms_advance(p, st, x: float, v: float, h: float) -> None:
     dx = x - st[0]
     d = sign(dx)
     speed = abs(v)
-    level_d = gms_level(p, d, speed)
+    level_d = stribeck_magnitude(p, d, speed)
     for i in range(n):
         a = p[G_ELEMENTS + n + i]
         mode = st[2 + n + i]
@@ -172,7 +165,7 @@ def gms_stiffness(p, st, x: float, v: float) -> float:
     if d == 0.0:
         d = st[1]
     dx = x - st[0]
-    level = gms_level(p, d, abs(v))
+    level = stribeck_magnitude(p, d, abs(v))
     k_sum = 0.0
     for i in range(n):
         k = p[G_ELEMENTS + i]
@@ -192,4 +185,4 @@ def gms_steady(p, v: float) -> float:
     d = sign(v)
     if d == 0.0:
         return p[P_OFFSET]
-    return d * gms_level(p, d, abs(v)) + viscous(p, v) + p[P_OFFSET]
+    return d * stribeck_magnitude(p, d, abs(v)) + viscous(p, v) + p[P_OFFSET]

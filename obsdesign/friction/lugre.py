@@ -59,26 +59,18 @@ import math
 
 from numba import njit
 
-from .common import P_MODEL, coulomb_level, sign, stribeck_level, viscous, P_OFFSET, P_CF, P_CF_NEG
+from .common import P_FS, P_FS_NEG, P_MODEL, P_OFFSET, P_VS, sign, stribeck_magnitude, viscous
 
 __all__ = [
     "L_FS", "L_FS_NEG", "L_VS", "L_SIGMA0", "L_SIGMA1", "N_PARAMS", "N_STATE",
-    "lugre_g", "lugre_init", "lugre_force", "lugre_advance", "lugre_stiffness", "lugre_steady",
+    "lugre_init", "lugre_force", "lugre_advance", "lugre_stiffness", "lugre_steady",
 ]
 
-L_FS, L_FS_NEG, L_VS, L_SIGMA0, L_SIGMA1 = P_MODEL, P_MODEL + 1, P_MODEL + 2, P_MODEL + 3, P_MODEL + 4
+L_FS, L_FS_NEG, L_VS, L_SIGMA0, L_SIGMA1 = P_FS, P_FS_NEG, P_VS, P_MODEL + 3, P_MODEL + 4
 #: Length of the parameter array.
 N_PARAMS = P_MODEL + 5
 #: Length of the state array.
 N_STATE = 3
-
-
-@njit(cache=True, error_model="numpy")
-def lugre_g(p, direction: float, speed: float) -> float:
-    """Stribeck magnitude ``g`` [N] (> 0) for a motion in ``direction`` at ``speed = |v|``."""
-    if direction < 0.0:
-        return stribeck_level(p[P_CF_NEG], p[L_FS_NEG], p[L_VS], speed)
-    return stribeck_level(p[P_CF], p[L_FS], p[L_VS], speed)
 
 
 @njit(cache=True, error_model="numpy")
@@ -96,7 +88,7 @@ def _z_at(p, st, x: float, v: float) -> float:
     if dx == 0.0:
         return st[0]
     d = sign(dx)
-    g = lugre_g(p, d, abs(v))
+    g = stribeck_magnitude(p, d, abs(v))
     sigma0 = p[L_SIGMA0]
     z_ss = d * g / sigma0
     return z_ss + (st[0] - z_ss) * math.exp(-sigma0 * abs(dx) / g)
@@ -109,7 +101,7 @@ def lugre_force(p, st, x: float, v: float) -> float:
     sigma0 = p[L_SIGMA0]
     zdot = 0.0
     if v != 0.0:
-        zdot = v - sigma0 * abs(v) * z / lugre_g(p, sign(v), abs(v))
+        zdot = v - sigma0 * abs(v) * z / stribeck_magnitude(p, sign(v), abs(v))
     return sigma0 * z + p[L_SIGMA1] * zdot + viscous(p, v) + p[P_OFFSET]
 
 
@@ -138,7 +130,7 @@ def lugre_stiffness(p, st, x: float, v: float) -> float:
     if d == 0.0:
         return sigma0
     z = _z_at(p, st, x, v)
-    k = sigma0 * (1.0 - sigma0 * z * d / lugre_g(p, d, abs(v)))
+    k = sigma0 * (1.0 - sigma0 * z * d / stribeck_magnitude(p, d, abs(v)))
     return k if k > 0.0 else 0.0
 
 
@@ -148,4 +140,4 @@ def lugre_steady(p, v: float) -> float:
     d = sign(v)
     if d == 0.0:
         return p[P_OFFSET]
-    return d * lugre_g(p, d, abs(v)) + viscous(p, v) + p[P_OFFSET]
+    return d * stribeck_magnitude(p, d, abs(v)) + viscous(p, v) + p[P_OFFSET]

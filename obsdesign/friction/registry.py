@@ -82,7 +82,9 @@ class FrictionModelInfo(Entry):
         The named parameters, their units, defaults and closed ranges.
     """
 
-    _layout: Callable[[dict[str, Any]], list[float]]
+    #: The kernel array of the resolved parameters; None where the array is not the model's alone
+    #: (the paper plant's also holds ``[friction] kappa``: :func:`obsdesign.sim.simulate.plant_friction_arrays`).
+    _layout: Callable[[dict[str, Any]], list[float]] | None
     _n_state: Callable[[dict[str, Any]], int]
 
     def defaults(self) -> dict[str, Any]:
@@ -122,13 +124,18 @@ class FrictionModelInfo(Entry):
         Raises
         ------
         ValueError
-            Unknown name, non-finite or out-of-range value, inconsistent values.
+            Unknown name, non-finite or out-of-range value, inconsistent values; the ``paper``
+            model, whose array :func:`obsdesign.sim.simulate.plant_friction_arrays` builds from a config.
         TypeError
             A value of the wrong type (e.g. a string, a bool, a float for ``N``).
         """
         import numpy as np  # here, not at the top: the config and the command line read the registry
 
-        return np.array(self._layout(self.resolve(params)), dtype=np.float64)
+        values = self.resolve(params)
+        if self._layout is None:
+            raise ValueError(f"{self.name}: its kernel array also holds [friction] kappa; "
+                             f"build it from a Config with obsdesign.sim.simulate.plant_friction_arrays")
+        return np.array(self._layout(values), dtype=np.float64)
 
     def scalar_parameters(self) -> tuple[str, ...]:
         """Names of the parameters set by one number (not the per-element sequences)."""
@@ -214,10 +221,6 @@ def _stribeck(q: dict[str, Any]) -> list[float]:
     return [q["Fs"], q["Fs"] * q["Cf_neg"] / q["Cf"], q["vs"]]
 
 
-def _paper_layout(q: dict[str, Any]) -> list[float]:
-    return [q["Cf"], q["Cf"], q["sigma"], q["sigma"], 0.0, q["s"], q["beta"]]
-
-
 def _lugre_layout(q: dict[str, Any]) -> list[float]:
     return _header(q) + _stribeck(q) + [q["sigma0"], q["sigma1"]]
 
@@ -261,7 +264,7 @@ FRICTION_MODELS = Registry("friction model", [
             ParameterSpec("s", "1/m", "pre-sliding shape factor (z = s x)", 3000.0, 1.0, 1e7),
             ParameterSpec("beta", "s", "viscous lag time constant (0: static)", 0.001, 0.0, 1.0),
         ),
-        _layout=_paper_layout, _n_state=lambda q: 3,
+        _layout=None, _n_state=lambda q: 3,
     ),
     FrictionModelInfo(
         name="lugre", code=LUGRE,

@@ -36,7 +36,7 @@ import numpy as np
 from .scenarios import CHIRP_BAND_LABELS, Scenario, chirp_frequency
 from .step_metrics import step_metrics
 
-__all__ = ["loop_metrics", "METRIC_UNITS"]
+__all__ = ["loop_metrics", "METRIC_UNITS", "rms"]
 
 #: Unit of each metric for text output ("-": dimensionless; lists and dicts: of their items).
 METRIC_UNITS = {
@@ -46,9 +46,26 @@ METRIC_UNITS = {
 }
 
 
-def _rms(x: np.ndarray, finite: bool = False, scratch: np.ndarray | None = None) -> float | None:
-    """RMS of the finite values of ``x`` (``finite``: the caller knows they all are; ``scratch``:
-    a buffer at least as long as ``x`` for the squares, to spare an allocation per call)."""
+def rms(x: np.ndarray, *, finite: bool = False, scratch: np.ndarray | None = None) -> float | None:
+    """RMS of the finite values of ``x``; None where there is none.
+
+    Parameters
+    ----------
+    x : ndarray, shape (n,)
+        The samples (NaN and inf are left out).
+    finite : bool
+        The caller knows every value is finite (no mask is built).
+    scratch : ndarray, shape (>= n,), optional
+        A buffer for the squares (with ``finite``), to spare an allocation per call.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rms(np.array([3.0, -4.0, np.nan]))          # sqrt((9 + 16) / 2)
+    3.5355339059327378
+    >>> rms(np.array([np.nan])) is None
+    True
+    """
     if not finite:
         x = x[np.isfinite(x)]
         scratch = None
@@ -59,11 +76,11 @@ def _rms(x: np.ndarray, finite: bool = False, scratch: np.ndarray | None = None)
 
 
 def _rms_of_difference(a: np.ndarray, b: np.ndarray, finite: bool, scratch: np.ndarray) -> float | None:
-    """RMS of ``a - b`` (as :func:`_rms` of the difference), computed in ``scratch``."""
+    """RMS of ``a - b`` (as :func:`rms` of the difference), computed in ``scratch``."""
     if not finite:
-        return _rms(a - b)
+        return rms(a - b)
     diff = np.subtract(a, b, out=scratch[:a.size])
-    return _rms(diff, True, diff)
+    return rms(diff, finite=True, scratch=diff)
 
 
 def _first_at_or_above(sc: Scenario, frequency: float, n: int) -> int:
@@ -129,7 +146,7 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
     finite = n_written == len(e)
     scratch = np.empty(n_written)
     m: dict[str, Any] = {
-        "rms_error": _rms(e_valid, finite, scratch),
+        "rms_error": rms(e_valid, finite=finite, scratch=scratch),
         "max_error": float(max(np.max(e_valid), -np.min(e_valid))) if n_written else None,
         "settling_time": [],
         "steady_state_error": [],
@@ -162,5 +179,5 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
         m["rms_error_per_band"] = {}
         for label, lo, hi in CHIRP_BAND_LABELS:
             i0, i1 = (_first_at_or_above(sc, f, len(e)) for f in (lo, hi))
-            m["rms_error_per_band"][label] = _rms(e[i0:i1], finite, scratch)
+            m["rms_error_per_band"][label] = rms(e[i0:i1], finite=finite, scratch=scratch)
     return m

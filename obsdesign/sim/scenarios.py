@@ -54,7 +54,15 @@ CHIRP_BAND_LABELS = tuple((f"{lo:g}-{hi:g} Hz", lo, hi) for lo, hi in zip(CHIRP_
 
 @dataclass(frozen=True, kw_only=True)
 class Excitation:
-    """Open loop: band-limited white force of RMS ``force_rms`` [N] over ``[0, bandwidth]`` Hz."""
+    """Open loop: band-limited white force of RMS ``force_rms`` [N] over ``[0, bandwidth]`` Hz.
+
+    Attributes
+    ----------
+    force_rms : float
+        RMS of the force [N].
+    bandwidth : float
+        Its bandwidth [Hz].
+    """
 
     name: ClassVar[str] = "excitation"
     open_loop: ClassVar[bool] = True
@@ -69,7 +77,13 @@ class Excitation:
 
 @dataclass(frozen=True, kw_only=True)
 class ConstantForce:
-    """Open loop: a constant force ``force`` [N]."""
+    """Open loop: a constant force ``force`` [N].
+
+    Attributes
+    ----------
+    force : float
+        The force [N].
+    """
 
     name: ClassVar[str] = "constant"
     open_loop: ClassVar[bool] = True
@@ -82,7 +96,15 @@ class ConstantForce:
 
 @dataclass(frozen=True, kw_only=True)
 class Positioning:
-    """Closed loop: a step of ``step_size`` [m] at ``step_up`` [s], back to 0 at ``step_down`` [s]."""
+    """Closed loop: a step of ``step_size`` [m] at ``step_up`` [s], back to 0 at ``step_down`` [s].
+
+    Attributes
+    ----------
+    step_size : float
+        Step height [m].
+    step_up, step_down : float
+        Times of the step and of the return to 0 [s].
+    """
 
     name: ClassVar[str] = "positioning"
     open_loop: ClassVar[bool] = False
@@ -100,7 +122,15 @@ class Positioning:
 @dataclass(frozen=True, kw_only=True)
 class Chirp:
     """Closed loop: a linear up-chirp reference from ``f0`` to ``f1`` [Hz] over the run, with the
-    amplitude that makes its peak velocity ``peak_velocity`` [m/s]."""
+    amplitude that makes its peak velocity ``peak_velocity`` [m/s].
+
+    Attributes
+    ----------
+    f0, f1 : float
+        Start and end frequency [Hz].
+    peak_velocity : float
+        Peak velocity of the reference [m/s].
+    """
 
     name: ClassVar[str] = "tracking"
     open_loop: ClassVar[bool] = False

@@ -29,7 +29,21 @@ MAX_RUNS = 1_000_000
 
 @dataclass(frozen=True)
 class RunSpec:
-    """One run: its index, grid point, sample, seed and the parameter values to apply."""
+    """One run: its index, grid point, sample, seed and the parameter values to apply.
+
+    Attributes
+    ----------
+    run : int
+        Index of the run in the plan (its row).
+    grid_point : int
+        Index of its point of the design grid.
+    sample : int
+        Index of its uncertainty sample at that point.
+    seed : int
+        Seed of its noise and excitation.
+    params : dict
+        Parameter name (``section.field``) -> value, applied with :meth:`Config.override`.
+    """
 
     run: int
     grid_point: int

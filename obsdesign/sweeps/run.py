@@ -31,7 +31,7 @@ from ..sim.scenarios import CHIRP_BAND_LABELS, build_scenario, scenario_spec
 from ..sim.simulate import simulate
 from .folder import SweepLock, check_start, read_manifest
 from .plan import RunSpec, check_axes, make_plan
-from .pool import Executor as _Executor
+from .pool import Executor
 from .store import (FIXED_COLUMNS, TAIL_COLUMNS, checksum_line, checksums_text, csv_line, csv_text, read_rows,
                     typed_row)
 from .summary import best_value
@@ -257,7 +257,7 @@ def _execute(run_cfg, scenario, run_options, plan, columns, out, done, executor,
     t0 = time.perf_counter()
     todo = [spec for spec in plan if spec.run not in done]
     rows: dict[int, dict] = dict(done)
-    pool = _Executor(executor, workers)
+    pool = Executor(executor, workers)
     every = 0 if isinstance(progress, bool) else check_integer("progress", progress, minimum=1)
     bar = tqdm(total=len(plan), initial=len(done), desc="sweep", unit="run", disable=progress is not True,
                smoothing=0.05)

@@ -88,6 +88,43 @@ class Derivation:
 
     Built by :func:`derive`; see the module docstring for the procedure. All
     attribute names are a public contract.
+
+    Attributes
+    ----------
+    variant : {"lag", "static"}
+        The model variant.
+    symbols : dict
+        Name -> SymPy symbol (``m, sigma, beta, Cf, s, kappa, rho, k, L1, L2``, ...).
+    A, B, C : sympy.ImmutableMatrix
+        The model ``w' = A(k) w + B u``, ``y = C w`` (eq:3:1).
+    observability_matrix, observability_determinant, observable
+        ``[C; C A; C A^2]``, its determinant and whether it is nonzero for every ``k >= 0``.
+    A11, A12, A21, A22, B1, B2 : sympy.ImmutableMatrix
+        Blocks of the regular form (eq:3:1:1), the measured state first.
+    L : sympy.ImmutableMatrix
+        The observer gain ``(L1, L2)``.
+    observer_matrix, observer_input, observer_output_gain, back_transform : sympy.ImmutableMatrix
+        The reduced-order observer eq:3:1:2-3 and the map back to ``(v_hat, f_hat)`` (eq:3:2:1).
+    charpoly, a0, a1 : sympy.Expr
+        Its characteristic polynomial in ``lambda`` and the coefficients eq:3:2:3-4.
+    eigenvalues : tuple
+        Its eigenvalues (eq:3:3:1).
+    stiffness_rate : sympy.Expr
+        ``dk/dt`` along a pre-sliding transition (eq:3:2:7).
+    ignatyev_conditions : dict
+        Conditions (i), (ii) of Theorem 1.
+    stability_conditions : tuple
+        Proposition 1.
+    gain_rule : dict
+        ``L1, L2`` as solved from the design conditions of Proposition 2 (eq:3:3:3-4).
+    designed_eigenvalues : tuple
+        The eigenvalues with the gain rule (eq:3:3:7).
+    dominant_pole : sympy.Expr
+        The gross-sliding dominant pole (eq:3:3:2).
+    noise : NoiseTransfer
+        Noise transfer into the estimates (eq:3:4:1-4).
+    steps : tuple
+        The derivation step by step, for the printers.
     """
 
     variant: str
