@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from ._common import FINITE_ARG, POSITIVE_ARG, UsageError, add_config_flags, integer, load
+from ._common import FINITE_ARG, POSITIVE_ARG, UsageError, add_config_flags, check_output_dir, integer, load
 
 __all__ = ["add_commands", "parse_list", "summary_text"]
 
@@ -75,14 +75,22 @@ def summary_text(summary: list[dict], seeds: int) -> str:
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
+    check_output_dir("compare", "--out", args.out)
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"obsdesign compare: argument --out: expected a directory, found the file {args.out!r}")
     if not out.parent.is_dir():
         raise UsageError(f"obsdesign compare: argument --out: directory {str(out.parent)!r} does not exist")
     plants = parse_list("--plants", args.plants, _PLANTS)
     estimators = parse_list("--estimators", args.estimators, _ESTIMATORS)
     scenarios = parse_list("--scenarios", args.scenarios, _SCENARIOS)
+    from ..comparison import check_comparison_runs
+
+    try:
+        check_comparison_runs(len(plants) * len(estimators) * len(scenarios), args.seeds)
+    except ValueError as e:
+        raise UsageError(f"obsdesign compare: argument --{e}") from None
+    if args.data is None and any(v is not None for v in (args.position, args.input, args.time, args.sample_time)):
+        raise UsageError("obsdesign compare: the column flags (--position, --input, --time, --sample-time) need "
+                         "--data FILE")
     cfg = load(args)
     trace = None
     if args.data is not None:

@@ -26,10 +26,16 @@ def add_trace_flags(p: argparse.ArgumentParser, *, required: bool = True) -> Non
 def load_trace_args(args: argparse.Namespace, path: str):
     """The trace of ``path`` with the column flags of :func:`add_trace_flags`."""
     from ..data import load_trace
+    from ..data.trace import check_sample_time
 
     if args.time is None and args.sample_time is None:
         raise UsageError(f"obsdesign {args.command}: expected --time NAME or --sample-time DT for the time base "
                          f"of {path!r}, found neither")
+    if args.sample_time is not None:
+        try:
+            check_sample_time("--sample-time", args.sample_time, "the flag")
+        except ValueError as e:
+            raise UsageError(f"obsdesign {args.command}: argument {e}") from None
     return load_trace(path, position=args.position, input=args.input, time=args.time,
                       sample_time=args.sample_time, input_gain=args.input_gain)
 

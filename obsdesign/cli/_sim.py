@@ -12,7 +12,8 @@ from ..params import VARIANTS
 from ..sim.registry import CONTROLLERS, ESTIMATORS, PLANTS, SCHEDULES
 from ..sim.scenarios import DEFAULT_DURATION, SCENARIOS
 from ._common import (FINITE_ARG, NONNEGATIVE_ARG, POSITIVE_ARG, UsageError, add_config_flags, add_design_flags,
-                      check_output_file, check_runs, check_samples, emit, integer, load, print_warnings)
+                      check_output_dir, check_output_file, check_runs, check_samples, emit, integer, load,
+                      print_warnings)
 
 __all__ = ["add_commands", "parse_vary", "parse_uncertain"]
 
@@ -139,9 +140,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         raise UsageError(f"obsdesign sweep: argument --metric: expected one of {', '.join(metrics)}, "
                          f"found {args.metric!r}")
     runs = check_runs(vary, args.samples)
+    check_output_dir("sweep", "--out", args.out)
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"obsdesign sweep: argument --out: expected a directory, found the file {args.out!r}")
     if args.resume and not (out / "results.csv").exists():
         raise UsageError(f"obsdesign sweep: argument --resume: no results.csv in {args.out!r} to resume")
     cfg = load(args)

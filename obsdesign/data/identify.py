@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import html
 import math
+import warnings
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -78,6 +79,10 @@ class Identification:
         Trace facts used by :meth:`to_config`: the input gain [N/unit], the largest |force|
         [N], the position noise RMS [m], the encoder step [m] (0: not quantized), and the
         number of motion reversals.
+    warnings : tuple of str
+        Why the values are not physical, if they are not: a mass, viscous coefficient or Coulomb
+        level <= 0, each with its likely cause (the sign of the input gain, swapped columns, units).
+        Empty for a plausible identification.
     """
 
     model: str
@@ -111,6 +116,7 @@ class Identification:
     quantization: float = 0.0
     reversals: int = 0
     source: str = ""
+    warnings: tuple[str, ...] = ()
 
     _KEYS = ("m", "sigma", "Cf", "offset", "m_std", "sigma_std", "Cf_std", "offset_std", "nrmse_percent",
              "condition_number", "samples")
@@ -122,11 +128,15 @@ class Identification:
 
         Keys: ``m, sigma, Cf, offset, m_std, sigma_std, Cf_std, offset_std, nrmse_percent,
         condition_number, samples``; with ``asymmetric`` also ``sigma_pos, sigma_neg, Cf_pos,
-        Cf_neg``; always ``s, s_note, model, sample_time, filter_hz, decimation``.
+        Cf_neg``; always ``s, s_note, model, sample_time, filter_hz, decimation``; and ``warnings``
+        (a list of sentences) when the identification is not physical.
         """
         data = asdict(self)
         keys = self._KEYS + (self._ASYM if self.model == "asymmetric" else ()) + self._EXTRA
-        return {k: data[k] for k in keys}
+        out = {k: data[k] for k in keys}
+        if self.warnings:
+            out["warnings"] = list(self.warnings)
+        return out
 
     def friction(self, v: np.ndarray | float) -> np.ndarray:
         """Model friction force [N] along a velocity trace ``v`` [m/s], without the offset.
@@ -173,6 +183,7 @@ class Identification:
                  ("rows in the fit", str(self.samples)),
                  ("filter", f"Butterworth {FILTER_ORDER}th order {self.filter_hz:g} Hz, zero phase"),
                  ("decimation", f"{self.decimation} (sample time {self.sample_time:g} s)")]
+        rows += [("WARNING", w) for w in self.warnings]
         return rows
 
     def __str__(self) -> str:
@@ -203,6 +214,28 @@ def _ols(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarr
     cov = sigma2 * np.linalg.inv(X.T @ X)
     cond = float(np.linalg.cond(X / np.linalg.norm(X, axis=0)))
     return theta, cov, resid, cond
+
+
+def _implausible(result: dict, input_gain: float) -> tuple[str, ...]:
+    """Sentences naming each identified m, sigma, Cf (and per-direction level) <= 0 with its likely cause."""
+    names = {"m": ("mass", "kg"), "sigma": ("viscous coefficient", "N s/m"), "Cf": ("Coulomb level", "N"),
+             "sigma_pos": ("viscous coefficient for v > 0", "N s/m"),
+             "sigma_neg": ("viscous coefficient for v < 0", "N s/m"),
+             "Cf_pos": ("Coulomb level for v > 0", "N"), "Cf_neg": ("Coulomb level for v < 0", "N")}
+    bad = [k for k in names if result.get(k) is not None and not result[k] > 0]
+    if not bad:
+        return ()
+    if input_gain < 0:
+        cause = (f"the input gain is negative (input_gain = {input_gain:g}): check its sign; a force that opposes "
+                 "the logged input gives a negative mass")
+    elif result["m"] <= 0 and result["sigma"] <= 0 and result["Cf"] <= 0:
+        cause = ("every term is negative: the input acts against the position, so check the sign of the input "
+                 "gain (or of the position column)")
+    else:
+        cause = ("check that the position and input columns are not swapped, the sign of the input gain, and the "
+                 "units (position in m, time in s, input times the gain in N)")
+    found = ", ".join(f"{k} = {result[k]:.4g} {names[k][1]}" for k in bad)
+    return (f"identify: not physical: expected a positive {names[bad[0]][0]}, found {found}; {cause}",)
 
 
 def _quantization(position: np.ndarray) -> float:
@@ -237,6 +270,18 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     Returns
     -------
     Identification
+
+    Raises
+    ------
+    ValueError
+        A bad model, cut-off, decimation or window; a trace too short for them; an input that
+        is constant; a position that barely moves.
+
+    Warns
+    -----
+    UserWarning
+        If the identified m, sigma or Cf is <= 0 (also in :attr:`Identification.warnings`), naming the
+        likely cause: the sign of the input gain, swapped columns, units.
 
     Notes
     -----
@@ -285,6 +330,10 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     q = DEFAULT_DECIMATION if decimation is None else _check_int("decimation", decimation, 1)
     if isinstance(presliding_window, bool) or not isinstance(presliding_window, (int, float)) or not presliding_window > 0:
         raise ValueError(f"presliding_window: expected a finite number > 0 [m], found {presliding_window!r}")
+    force_range = float(np.ptp(trace.force))
+    if not force_range > 0.0:
+        raise ValueError(f"input: the record has constant input ({float(trace.force[0]):g} N in every sample of "
+                         f"{trace.source!r}); nothing to identify: the fit needs a force that varies")
     border = int(math.ceil(5.0 * fs / filter_hz))
     n_used = trace.samples - 2 * border
     if n_used < 20 * q:
@@ -335,7 +384,11 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                       sigma_pos=th[1], sigma_neg=th[2], Cf_pos=cf_pos, Cf_neg=cf_neg,
                       sigma_pos_std=sd[1], sigma_neg_std=sd[2], Cf_pos_std=cf_pos_std, Cf_neg_std=cf_neg_std)
     result = {k: float(v_) for k, v_ in result.items()}
-    nrmse = 100.0 * math.sqrt(float(np.mean(resid**2)) / float(np.mean(y**2)))
+    power = float(np.mean(y**2))
+    nrmse = 100.0 * math.sqrt(float(np.mean(resid**2)) / power) if power > 0 else math.inf
+    notes = _implausible(result, trace.input_gain)
+    for note in notes:
+        warnings.warn(note, stacklevel=2)
 
     quantum = _quantization(trace.position)
     noise = float(np.sqrt(np.mean((trace.position - x_f)[keep] ** 2)))
@@ -347,4 +400,4 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                           samples=int(y.size), s=s, s_note=note, sample_time=dt, filter_hz=float(filter_hz),
                           decimation=q, input_gain=trace.input_gain, force_peak=float(np.max(np.abs(trace.force))),
                           noise_rms=noise, quantization=quantum, reversals=int(_reversals(v, REVERSAL_THRESHOLD * float(np.max(np.abs(v)))).size),
-                          source=trace.source)
+                          source=trace.source, warnings=notes)
