@@ -36,7 +36,7 @@ from typing import Any, Mapping, NamedTuple
 from ._io import atomic_write
 from .compensation import CompensationSpec
 from ._format import toml_value
-from ._validate import FINITE, NONNEGATIVE, POSITIVE, Choice, FrozenMap, Range, Text
+from ._validate import FINITE, NONNEGATIVE, POSITIVE, SAMPLE_TIME, Choice, FrozenMap, Range, Text
 from .plant_spec import PlantFrictionSpec
 
 __all__ = [
@@ -56,7 +56,6 @@ __all__ = [
 ]
 
 VARIANTS = ("lag", "static")
-
 
 _POSITIVE, _NONNEGATIVE, _FINITE = POSITIVE, NONNEGATIVE, FINITE
 
@@ -155,10 +154,12 @@ class ObserverSpec:
     rho: float = _param(_POSITIVE, "-", "gain design parameter (stable for rho > 1)")
     omega_co: float = _param(_POSITIVE, "rad/s", "cutoff of the low-pass filter eq:3:4:5", 2 * math.pi * 40)
     variant: str = _param(Choice(VARIANTS), "-", "model variant the observer is derived from", "lag")
-    dt: float = _param(_POSITIVE, "s", "controller sample time", 1e-4)
+    dt: float = _param(_POSITIVE, "s", "controller sample time (1e-12 to 1 s)", 1e-4)
 
     def __post_init__(self) -> None:
         _validate_fields(self)
+        if not SAMPLE_TIME.contains(self.dt):  # one rule for dt: simulate, check, every export
+            raise ValueError(f"observer.dt: expected a sample time in [1e-12, 1] s, found {self.dt!r}")
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -51,7 +51,9 @@ def fx(tmp_path_factory):
     from scipy import sparse
 
     sio.savemat(d / "m_sparse.mat", {"t": t, "x": sparse.csc_matrix(x.reshape(-1, 1)), "u": u})
-    (d / "m_1e-9.toml").write_text("[plant]\nm = 1e-9\n", encoding="utf-8")
+    import obsdesign as od
+
+    od.load_preset("vcm").override(m=1e-9).save(d / "m_1e-9.toml")
     return d
 
 
@@ -61,8 +63,8 @@ CASES = [
     ("i8", [*ID, "--time", "t", "{fx}/tr_const_u.csv"], 2, "input: the record has constant input"),
     ("i76", [*ID, "--time", "t", "--asymmetric", "{fx}/tr_const_u.csv"], 2, "input: the record has constant input"),
     ("i10", [*ID, "--time", "t", "{fx}/tr_huge_x.csv"], 2, "position: expected |values| <= 1e+150"),
-    ("i11", [*ID, "--time", "t", "{fx}/tr_tiny_dt.csv"], 2, "time: expected a sample time in [1e-09, 1000] s, found 1e-303 s"),
-    ("i12", [*ID, "--time", "t", "{fx}/tr_huge_dt.csv"], 2, "time: expected a sample time in [1e-09, 1000] s, found 1e+297 s"),
+    ("i11", [*ID, "--time", "t", "{fx}/tr_tiny_dt.csv"], 2, "time: expected a sample time in [1e-12, 1] s, found 1e-303 s"),
+    ("i12", [*ID, "--time", "t", "{fx}/tr_huge_dt.csv"], 2, "time: expected a sample time in [1e-12, 1] s, found 1e+297 s"),
     ("i28", [*ID, "--time", "t", "{fx}/tr_dup_cols.csv"], 2, "found 'x' as columns 2 and 3"),
     ("i29", [*ID, "--time", "t", "{fx}/tr_dup_cols_space.csv"], 2, "found 'x' as columns 2 and 3"),
     ("i35", [*ID, "--time", "t", "{fx}/tr_comment.csv"], 2, "is a '#' comment, taken as the header row"),
@@ -84,6 +86,15 @@ CASES = [
     ("k15", ["compare", "--plants", "paper", "--estimators", "paper", "--scenarios", "positioning", "--seeds", "1",
              "--workers", "1", "--position", "x", "--out", "{tmp}/cmp"], 2, "need --data FILE"),
     ("k18", ["compare", "--out", ""], 2, "argument --out: expected a folder name, found ''"),
+    ("xe18", ["export", "--what", "controller", "--format", "c", "--dt", "1e300", "-o", "{tmp}/ex"], 2,
+     "observer.dt: expected a sample time in [1e-12, 1] s, found 1e+300"),
+    ("xe19", ["export", "--what", "controller", "--format", "c", "--dt", "1e-300", "-o", "{tmp}/ex"], 2,
+     "observer.dt: expected a sample time in [1e-12, 1] s, found 1e-300"),
+    ("xe20", ["simulate", "positioning", "--plant-config", "{fx}/m_1e-9.toml", "--json"], 2,
+     "argument --plant-config: '{fx}/m_1e-9.toml': substeps: the plant's fastest rate sigma/m = 2.11e+10 1/s"),
+    ("l3", ["loop", "--tau", "1e300"], 2, "the design overflows to non-finite numbers with --tau 1e+300"),
+    ("l4", ["loop", "--tau", "1e-300", "--json"], 2, "the design overflows to non-finite numbers with --tau 1e-300"),
+    ("l8", ["loop", "--phi", "1e300", "--json"], 2, "the design overflows to non-finite numbers with --phi 1e+300"),
     ("w40", ["sweep", "--scenario", "positioning", "--duration", "3.5", "--out", ""], 2,
      "argument --out: expected a folder name, found ''"),
 ]
@@ -96,7 +107,7 @@ def test_review_case(fx, tmp_path, capsys, monkeypatch, case, argv, status, frag
     assert main(argv) == status
     captured = capsys.readouterr()
     err = captured.err.strip().splitlines()
-    assert len(err) == 1 and fragment in err[0], (case, err)
+    assert len(err) == 1 and fragment.format(fx=fx) in err[0], (case, err)
     assert "Traceback" not in captured.err and "np.float64" not in err[0]
     assert captured.out == ""  # no result, no LAPACK text
     assert sorted(p.name for p in tmp_path.iterdir()) == []  # nothing written, anywhere
@@ -145,3 +156,11 @@ def test_mt42_memory_error_reading_a_mat_file_is_named(fx, capsys, monkeypatch):
     err = capsys.readouterr().err.strip().splitlines()
     assert err == ["obsdesign: error: path: not enough memory to read 'm_nonmono.mat' (a MATLAB file whose variables "
                    "decompress to more than the memory available)"]
+
+
+def test_v5_a_closed_stdout_is_one_line_and_exit_2(tmp_path):
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run(f"'{sys.executable}' -m obsdesign check --json >&-", shell=True, cwd=tmp_path, env=env,
+                          capture_output=False, stderr=subprocess.PIPE, text=True, timeout=300)
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == ["obsdesign: error: cannot write to standard output (closed)"]

@@ -48,15 +48,22 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     options = {field: getattr(args, flag) for flag, field in _SPEC_FLAGS[args.scenario].items()
                if getattr(args, flag) is not None}
     spec = type(scenario_spec(args.scenario))(**options)
+    substeps = 10  # prepare's default; raised below for a stiffer --plant-config
     if args.plant_config is not None:
         if plant != "physical":
             raise UsageError("obsdesign simulate: argument --plant-config: needs --plant physical, "
                              f"found --plant {plant}")
         from ..params import load_config
+        from ..sim.numerics import substeps_for
 
         plant = load_config(args.plant_config)
+        try:  # the simulated plant is this config's: its substeps rule, as for --config (review xe20)
+            substeps = substeps_for(plant, cfg.observer.dt, substeps)
+        except ValueError as e:
+            raise UsageError(f"obsdesign simulate: argument --plant-config: {args.plant_config!r}: {e}") from None
     loop = prepare(cfg, spec, controller=args.controller, stiffness=args.stiffness, plant=plant,
-                   estimator=args.estimator, duration=args.duration, seed=args.seed, settle_tol=args.settle_tol)
+                   estimator=args.estimator, duration=args.duration, seed=args.seed, settle_tol=args.settle_tol,
+                   substeps=substeps)
     clipped = saturation_warning(loop)
     print_warnings((*design_warnings(cfg), *([clipped] if clipped else [])))  # after prepare's refusals, before the run
     res = run(loop, keep_trace=bool(args.out or args.plot))

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from .._io import atomic_write
+from .._validate import SAMPLE_TIME
 
 __all__ = ["Trace", "load_trace", "MIN_SAMPLES", "JITTER_TOLERANCE", "MAX_MAGNITUDE", "SAMPLE_TIME_RANGE",
            "check_sample_time", "zero_phase_velocity"]
@@ -41,8 +42,9 @@ JITTER_TOLERANCE = 0.01
 REVERSAL_THRESHOLD = 0.01
 #: Largest admissible |value| of a column: its square (and a sum of 1e6 squares) stays finite.
 MAX_MAGNITUDE = 1e150
-#: Usable sample times [s]: 1 ns to 1000 s. Outside, the time column is in the wrong unit (or not a time).
-SAMPLE_TIME_RANGE = (1e-9, 1e3)
+#: Usable sample times [s], the rule of a controller's dt (:data:`obsdesign._validate.SAMPLE_TIME`):
+#: outside, the time column is in the wrong unit (or not a time).
+SAMPLE_TIME_RANGE = (SAMPLE_TIME.low, SAMPLE_TIME.high)
 _EXTENSIONS = (".csv", ".mat")
 
 
