@@ -6,7 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
-from ._common import FINITE_ARG, POSITIVE_ARG, UsageError, add_config_flags, check_output_dir, integer, load
+from ._common import (FINITE_ARG, INPUT_FILE, POSITIVE_ARG, UsageError, add_config_flags, check_output_dir, integer,
+                      load)
 
 __all__ = ["add_commands", "parse_list", "summary_text"]
 
@@ -139,7 +140,7 @@ def add_commands(sub) -> None:
     p.add_argument("--scenarios", default=",".join(_SCENARIOS), help=f"scenarios (default {','.join(_SCENARIOS)})")
     p.add_argument("--seeds", type=integer(1), default=2, help="seeds per case (default 2)")
     p.add_argument("--workers", type=integer(1), help="local processes (default: all cores)")
-    p.add_argument("--data", metavar="FILE", help="measured trace (.csv/.mat): adds offline rows, friction error "
+    p.add_argument("--data", metavar="FILE", type=INPUT_FILE, help="measured trace (.csv/.mat): adds offline rows, friction error "
                    "against the model identified from it (docs/comparison.md)")
     p.add_argument("--position", metavar="NAME", help="--data: displacement column [m]")
     p.add_argument("--input", metavar="NAME", help="--data: actuator input column")

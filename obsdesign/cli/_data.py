@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ..params import preset_names
 from ..sim.registry import SCHEDULES
-from ._common import FINITE_ARG, POSITIVE_ARG, UsageError, check_output_file, emit
+from ._common import FINITE_ARG, INPUT_FILE, POSITIVE_ARG, UsageError, check_output_file, emit
 
 __all__ = ["add_commands", "add_trace_flags", "load_trace_args"]
 
@@ -88,7 +88,7 @@ def _cmd_observe(args: argparse.Namespace) -> int:
 def add_commands(sub) -> None:
     """Add ``identify`` and ``observe`` to the subparsers ``sub``."""
     p = sub.add_parser("identify", help="identify mass, viscous and Coulomb friction and offset from a record")
-    p.add_argument("data", metavar="DATA", help="measured record (.csv with a header row, or .mat)")
+    p.add_argument("data", metavar="DATA", type=INPUT_FILE, help="measured record (.csv with a header row, or .mat)")
     add_trace_flags(p)
     p.add_argument("--asymmetric", action="store_true", help="separate viscous and Coulomb terms per direction")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -96,7 +96,7 @@ def add_commands(sub) -> None:
     p.set_defaults(run=_cmd_identify)
 
     p = sub.add_parser("observe", help="run the designed observer over a measured record")
-    p.add_argument("data", metavar="DATA", help="measured record (.csv with a header row, or .mat)")
+    p.add_argument("data", metavar="DATA", type=INPUT_FILE, help="measured record (.csv with a header row, or .mat)")
     group = p.add_mutually_exclusive_group(required=True)
     group.add_argument("--preset", choices=preset_names(), help="shipped preset")
     group.add_argument("--config", metavar="FILE", help="TOML config file (e.g. from 'obsdesign identify -o')")

@@ -11,9 +11,9 @@ from .._validate import parse_number
 from ..params import VARIANTS
 from ..sim.registry import CONTROLLERS, ESTIMATORS, PLANTS, SCHEDULES
 from ..sim.scenarios import DEFAULT_DURATION, SCENARIOS
-from ._common import (FINITE_ARG, NONNEGATIVE_ARG, POSITIVE_ARG, UsageError, add_config_flags, add_design_flags,
-                      check_output_dir, check_output_file, check_runs, check_samples, emit, integer, load,
-                      print_warnings)
+from ._common import (FINITE_ARG, INPUT_FILE, NONNEGATIVE_ARG, POSITIVE_ARG, UsageError, add_config_flags,
+                      add_design_flags, check_output_dir, check_output_file, check_runs, check_samples, emit, integer,
+                      load, nonempty, print_warnings)
 
 __all__ = ["add_commands", "parse_vary", "parse_uncertain"]
 
@@ -235,7 +235,7 @@ def add_commands(sub) -> None:
     p.add_argument("--plant", choices=PLANTS.names(),
                    help="physical (Coulomb with pre-sliding memory + viscous friction) or model (the LTV model "
                         "eq:3:1 of the variant); default: model for variant lag, physical for static")
-    p.add_argument("--plant-config", metavar="FILE",
+    p.add_argument("--plant-config", metavar="FILE", type=INPUT_FILE,
                    help="simulate the plant of this TOML config (mass, gain, load, friction, [plant_friction]); "
                         "observer and controller stay designed from --preset/--config")
     p.add_argument("--estimator", choices=ESTIMATORS.names(), default="paper",
@@ -266,7 +266,7 @@ def add_commands(sub) -> None:
     p.add_argument("--variant", choices=VARIANTS)
     p.add_argument("--seed", type=integer(0), default=0)
     p.add_argument("--out", required=True, metavar="DIR", help="folder for results.csv and the summary")
-    p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://127.0.0.1:8786")
+    p.add_argument("--scheduler", metavar="ADDRESS", type=nonempty("scheduler address"), help="Dask scheduler, e.g. tcp://127.0.0.1:8786")
     p.add_argument("--workers", type=integer(1), help="local processes (default: all cores)")
     again = p.add_mutually_exclusive_group()
     again.add_argument("--resume", action="store_true", help="finish an interrupted sweep in --out")
