@@ -116,11 +116,11 @@ CASES = [
 
 
 @pytest.mark.parametrize("case, argv, status, fragment", CASES, ids=[c[0] for c in CASES])
-def test_review_case(fx, tmp_path, capsys, monkeypatch, case, argv, status, fragment):
+def test_review_case(fx, tmp_path, capfd, monkeypatch, case, argv, status, fragment):
     monkeypatch.chdir(tmp_path)  # an empty path must not write into the current folder
     argv = [a.format(fx=fx, tmp=tmp_path) for a in argv]
     assert main(argv) == status
-    captured = capsys.readouterr()
+    captured = capfd.readouterr()  # file descriptors: LAPACK writes its own error text to fd 1
     err = captured.err.strip().splitlines()
     assert len(err) == 1 and fragment.format(fx=fx) in err[0], (case, err)
     assert "Traceback" not in captured.err and "np.float64" not in err[0]
@@ -158,6 +158,19 @@ def test_review_case_now_loads(fx, capsys, case, name, time):
     assert main([*ID, "--time", time, str(fx / name)]) == 0
     payload = json.loads(capsys.readouterr().out)
     assert payload["m"] == pytest.approx(0.5, rel=1e-3) and payload["Cf"] == pytest.approx(0.3, rel=1e-2)
+
+
+def test_a_record_that_cannot_separate_the_terms_is_named_and_lapack_stays_quiet(tmp_path, capfd):
+    """A constant-velocity ramp (no acceleration to see the mass): was 'Singular matrix' or LAPACK text on stdout."""
+    t = np.arange(5000) * 1e-3
+    np.savetxt(tmp_path / "ramp.csv", np.column_stack([t, 0.01 * t, np.sin(t)]), delimiter=",", header="t,x,u",
+               comments="", fmt="%.17g")
+    assert main([*ID, "--time", "t", str(tmp_path / "ramp.csv")]) == 2
+    captured = capfd.readouterr()
+    assert captured.out == ""
+    assert captured.err.strip().splitlines() == [
+        "obsdesign: error: trace: the regressors (acceleration, velocity, sign(v), offset) are linearly dependent "
+        "over the rows of the fit (rank 3 of 4): the record cannot separate these terms"]
 
 
 def test_mt42_memory_error_reading_a_mat_file_is_named(fx, capsys, monkeypatch):

@@ -205,14 +205,34 @@ def _check_int(name: str, value: object, low: int) -> int:
     return int(value)
 
 
-def _ols(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """Estimates, covariance ``sigma_e^2 (X^T X)^-1``, residual, scaled condition number."""
-    theta, *_ = np.linalg.lstsq(X, y, rcond=None)
+def _ols(X: np.ndarray, y: np.ndarray, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """Estimates, covariance ``sigma_e^2 (X^T X)^-1``, residual, scaled condition number.
+
+    The columns are scaled to a largest |value| of 1 before the solve, so LAPACK never sees an
+    overflowing product (and never prints its own error text); a regressor that is non-finite,
+    zero in every row or a combination of the others is refused naming it.
+    """
+    if not (np.all(np.isfinite(X)) and np.all(np.isfinite(y))):
+        bad = [n for n, col in zip(names, X.T) if not np.all(np.isfinite(col))] or ["the force"]
+        raise ValueError(f"trace: the regressor {', '.join(bad)} overflows to non-finite values (derivatives of the "
+                         "position over the sample time); check the units of position and time")
+    scale = np.max(np.abs(X), axis=0)
+    zero = [n for n, sc in zip(names, scale) if not sc > 0]
+    if zero:
+        raise ValueError(f"trace: expected every regressor to vary, found {', '.join(zero)} zero in every row of "
+                         "the fit: the record does not excite that term")
+    Xs = X / scale
+    y_scale = float(np.max(np.abs(y))) or 1.0
+    theta_s, _, rank, _ = np.linalg.lstsq(Xs, y / y_scale, rcond=None)
+    if rank < X.shape[1]:
+        raise ValueError(f"trace: the regressors ({', '.join(names)}) are linearly dependent over the rows of the "
+                         f"fit (rank {rank} of {X.shape[1]}): the record cannot separate these terms")
+    theta = theta_s * y_scale / scale
     resid = y - X @ theta
     dof = X.shape[0] - X.shape[1]
     sigma2 = float(resid @ resid) / dof
-    cov = sigma2 * np.linalg.inv(X.T @ X)
-    cond = float(np.linalg.cond(X / np.linalg.norm(X, axis=0)))
+    cov = sigma2 * np.linalg.inv(Xs.T @ Xs) / scale[:, None] / scale[None, :]  # no overflowing outer product
+    cond = float(np.linalg.cond(Xs / np.linalg.norm(Xs, axis=0)))
     return theta, cov, resid, cond
 
 
@@ -361,13 +381,13 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                          f"(the position barely changes)")
     y = y[moving]
     X = np.column_stack([cols[c][moving] for c in ("a", "v", "sign", "one")])
-    theta, cov, resid, cond = _ols(X, y)
+    theta, cov, resid, cond = _ols(X, y, ("acceleration", "velocity", "sign(v)", "offset"))
     std = np.sqrt(np.diag(cov))
     result = dict(m=theta[0], sigma=theta[1], Cf=theta[2], offset=theta[3], m_std=std[0], sigma_std=std[1],
                   Cf_std=std[2], offset_std=std[3])
     if model == "asymmetric":
         Xa = np.column_stack([cols[c][moving] for c in ("a", "v_pos", "v_neg", "pos", "neg")])
-        th, cov_a, resid, cond = _ols(Xa, y)
+        th, cov_a, resid, cond = _ols(Xa, y, ("acceleration", "v for v > 0", "v for v < 0", "v > 0", "v < 0"))
         sd = np.sqrt(np.diag(cov_a))
         # offset from the symmetric fit: a linear map r of y; levels: rows p of the pseudo-inverse
         r = np.linalg.pinv(X)[3]
