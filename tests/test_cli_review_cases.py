@@ -192,3 +192,14 @@ def test_v5_a_closed_stdout_is_one_line_and_exit_2(tmp_path):
                           capture_output=False, stderr=subprocess.PIPE, text=True, timeout=300)
     assert proc.returncode == 2
     assert proc.stderr.strip().splitlines() == ["obsdesign: error: cannot write to standard output (closed)"]
+
+
+def test_xe20_a_plant_config_sets_the_substeps_of_its_plant(tmp_path, capsys):
+    """m = 1e-4 kg needs about 106 substeps at dt = 1e-4 s: with the controller config's 10 the run blew up."""
+    import obsdesign as od
+
+    od.load_preset("vcm").override(m=1e-4).save(tmp_path / "light.toml")
+    assert main(["simulate", "positioning", "--plant-config", str(tmp_path / "light.toml"), "--json"]) == 0
+    metrics = json.loads(capsys.readouterr().out)
+    assert metrics["diverged"] is False and metrics["divergence"] is None
+    assert metrics["max_error"] < 2e-3  # the 1 mm step, tracked
