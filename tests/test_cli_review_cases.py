@@ -203,3 +203,13 @@ def test_xe20_a_plant_config_sets_the_substeps_of_its_plant(tmp_path, capsys):
     metrics = json.loads(capsys.readouterr().out)
     assert metrics["diverged"] is False and metrics["divergence"] is None
     assert metrics["max_error"] < 2e-3  # the 1 mm step, tracked
+
+
+def test_messages_never_show_numpy_reprs_and_memory_errors_keep_their_detail():
+    from obsdesign.cli._errors import describe
+
+    assert describe(ValueError(f"t: found {np.float64(3.998)!r} after {np.float64(3.999)!r} at {np.int64(7)!r}")) == (
+        "obsdesign: error: t: found 3.998 after 3.999 at 7")
+    assert describe(MemoryError("Unable to allocate 3.2 GiB for an array")) == (
+        "obsdesign: error: not enough memory for this request (Unable to allocate 3.2 GiB for an array); reduce its "
+        "size (duration/dt, grid, samples)")

@@ -35,7 +35,7 @@ from typing import Sequence
 from .. import __version__
 from . import _compare, _config, _data, _design, _loop, _output, _sim
 from ._common import Parser, UsageError
-from ._errors import BAD_INPUT, describe, exit_status
+from ._errors import BAD_INPUT, describe, exit_status, plain
 
 __all__ = ["main", "build_parser", "UsageError"]
 
@@ -109,7 +109,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _unique(caught) -> list[str]:
     seen: list[str] = []
     for w in caught:
-        text = str(w.message).strip().splitlines()[0] if str(w.message).strip() else w.category.__name__
+        text = plain(str(w.message).strip().splitlines()[0]) if str(w.message).strip() else w.category.__name__
         if text not in seen:
             seen.append(text)
     return seen
