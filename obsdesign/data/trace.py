@@ -359,7 +359,8 @@ def load_trace(path: str | os.PathLike, *, position: str, input: str, time: str 
     input_gain : float
         Conversion of the logged input to force [N/unit], e.g. the actuator gain
         35.15065188 N/V of the EMPS benchmark whose input is a voltage. Negative values
-        (a sign convention) are allowed; 0, NaN and infinity are refused.
+        (a sign convention) are allowed (an identification that comes out with a negative
+        mass then warns to check the sign); 0, NaN and infinity are refused.
 
     Returns
     -------
