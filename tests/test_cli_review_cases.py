@@ -107,6 +107,8 @@ CASES = [
      "argument --data: expected a file name, found ''"),
     ("empty-scheduler", ["sweep", "--scenario", "positioning", "--scheduler", "", "--out", "{tmp}/sw"], 2,
      "argument --scheduler: expected a scheduler address, found ''"),
+    ("workers", ["compare", "--workers", "1000000", "--out", "{tmp}/cmp"], 2,
+     "argument --workers: expected an integer from 1 to"),
     ("l3", ["loop", "--tau", "1e300"], 2, "the design overflows to non-finite numbers with --tau 1e+300"),
     ("l4", ["loop", "--tau", "1e-300", "--json"], 2, "the design overflows to non-finite numbers with --tau 1e-300"),
     ("l8", ["loop", "--phi", "1e300", "--json"], 2, "the design overflows to non-finite numbers with --phi 1e+300"),

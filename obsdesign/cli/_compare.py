@@ -7,7 +7,7 @@ import json
 from pathlib import Path
 
 from ._common import (FINITE_ARG, INPUT_FILE, POSITIVE_ARG, UsageError, add_config_flags, check_output_dir, integer,
-                      load)
+                      load, workers_arg)
 
 __all__ = ["add_commands", "parse_list", "summary_text"]
 
@@ -139,7 +139,7 @@ def add_commands(sub) -> None:
                    help=f"estimators (default {','.join(_ESTIMATORS)}); baselines tuned by the fair noise rule")
     p.add_argument("--scenarios", default=",".join(_SCENARIOS), help=f"scenarios (default {','.join(_SCENARIOS)})")
     p.add_argument("--seeds", type=integer(1), default=2, help="seeds per case (default 2)")
-    p.add_argument("--workers", type=integer(1), help="local processes (default: all cores)")
+    p.add_argument("--workers", type=workers_arg, help="local processes (default: all cores)")
     p.add_argument("--data", metavar="FILE", type=INPUT_FILE, help="measured trace (.csv/.mat): adds offline rows, friction error "
                    "against the model identified from it (docs/comparison.md)")
     p.add_argument("--position", metavar="NAME", help="--data: displacement column [m]")

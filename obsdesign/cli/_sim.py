@@ -13,7 +13,7 @@ from ..sim.registry import CONTROLLERS, ESTIMATORS, PLANTS, SCHEDULES
 from ..sim.scenarios import DEFAULT_DURATION, SCENARIOS
 from ._common import (FINITE_ARG, INPUT_FILE, NONNEGATIVE_ARG, POSITIVE_ARG, UsageError, add_config_flags,
                       add_design_flags, check_output_dir, check_output_file, check_runs, check_samples, emit, integer,
-                      load, nonempty, print_warnings)
+                      load, nonempty, print_warnings, workers_arg)
 
 __all__ = ["add_commands", "parse_vary", "parse_uncertain"]
 
@@ -267,7 +267,7 @@ def add_commands(sub) -> None:
     p.add_argument("--seed", type=integer(0), default=0)
     p.add_argument("--out", required=True, metavar="DIR", help="folder for results.csv and the summary")
     p.add_argument("--scheduler", metavar="ADDRESS", type=nonempty("scheduler address"), help="Dask scheduler, e.g. tcp://127.0.0.1:8786")
-    p.add_argument("--workers", type=integer(1), help="local processes (default: all cores)")
+    p.add_argument("--workers", type=workers_arg, help="local processes (default: all cores)")
     again = p.add_mutually_exclusive_group()
     again.add_argument("--resume", action="store_true", help="finish an interrupted sweep in --out")
     again.add_argument("--force", action="store_true", help="replace the results of another sweep in --out")
