@@ -37,7 +37,7 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 __all__ = [
-    "Range", "Choice", "Text", "Integer", "POSITIVE", "NONNEGATIVE", "FINITE",
+    "Range", "Choice", "Text", "Integer", "POSITIVE", "NONNEGATIVE", "FINITE", "SAMPLE_TIME",
     "check_choice", "check_integer", "parse_number", "as_float", "FrozenMap",
     "param_field", "validate_fields", "document_fields",
 ]
@@ -156,6 +156,10 @@ class Integer:
 POSITIVE = Range(low=0.0)
 NONNEGATIVE = Range(low=0.0, low_inclusive=True)
 FINITE = Range()
+#: Usable sample times [s], one rule for a controller's ``dt`` (simulate, check, every export) and a
+#: measured record's time base: below 1 ps the derivative 1/dt of an error overflows or the record is
+#: in the wrong unit; above 1 s the controller cannot hold a precision axis (and the unit is wrong).
+SAMPLE_TIME = Range(low=1e-12, high=1.0, low_inclusive=True, high_inclusive=True)
 
 
 def check_choice(name: str, value: Any, options) -> str:

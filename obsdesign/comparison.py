@@ -53,7 +53,7 @@ from .sim.step_metrics import step_metrics
 from .sweeps.pool import Executor
 
 __all__ = ["COLUMNS", "SCENARIOS", "TRANSIENT", "SETTLE_BAND", "JUDGED", "TIE", "ComparisonResult", "compare",
-           "compare_one", "summarize", "plant_config"]
+           "compare_one", "summarize", "check_comparison_runs", "plant_config"]
 
 #: Columns of ``compare.csv``, in order.
 COLUMNS = ("plant", "estimator", "scenario", "seed", "friction_rms_error", "velocity_rms_error", "settling_time",
@@ -246,6 +246,34 @@ def summarize(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return out
 
 
+def check_comparison_runs(cases: int, seeds: int) -> int:
+    """The runs of a comparison, ``cases x seeds``; ``ValueError`` above :data:`obsdesign.sweeps.plan.MAX_RUNS`.
+
+    Parameters
+    ----------
+    cases : int
+        Plants x estimators x scenarios.
+    seeds : int
+        Seeds per case.
+
+    Examples
+    --------
+    >>> check_comparison_runs(60, 2)
+    120
+    >>> check_comparison_runs(1, 10**12)
+    Traceback (most recent call last):
+    ...
+    ValueError: seeds: expected at most 1e+06 runs (plants x estimators x scenarios x seeds), found 1e+12 (1 cases x 1000000000000 seeds)
+    """
+    from .sweeps.plan import MAX_RUNS
+
+    runs = cases * seeds
+    if runs > MAX_RUNS:
+        raise ValueError(f"seeds: expected at most {MAX_RUNS:.0e} runs (plants x estimators x scenarios x seeds), "
+                         f"found {float(runs):.3g} ({cases} cases x {seeds} seeds)")
+    return runs
+
+
 def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATORS.names(),
             scenarios=tuple(SCENARIOS), seeds: int = 2, workers: int | None = None,
             executor=None) -> ComparisonResult:
@@ -276,7 +304,8 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
     Raises
     ------
     ValueError
-        An unknown plant, estimator or scenario name; ``seeds < 1``; a baseline the fair rule
+        An unknown plant, estimator or scenario name; ``seeds < 1``; more than
+        :data:`obsdesign.sweeps.plan.MAX_RUNS` runs (plants x estimators x scenarios x seeds); a baseline the fair rule
         cannot tune (e.g. no sensor noise and no quantization).
     """
     if not isinstance(cfg, Config):
@@ -285,6 +314,7 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
     estimators = tuple(ESTIMATORS.check(e, kind="estimators") for e in estimators)
     scenarios = tuple(check_choice("scenarios", s, tuple(SCENARIOS)) for s in scenarios)
     seeds = check_integer("seeds", seeds, minimum=1)
+    check_comparison_runs(len(plants) * len(estimators) * len(scenarios), seeds)
     t0 = time.perf_counter()
     tuned: dict[str, Any] = {}
     eta, band = noise_level(cfg)

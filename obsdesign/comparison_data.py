@@ -25,16 +25,12 @@ from .estimators import friction_noise_rms, noise_level, reference_noise_rms
 from .friction.presliding import coulomb_along
 from .sampled.choices import ESTIMATORS
 from .sampled.controller import sampled_controller
+from .sim.metrics import rms
 
 __all__ = ["compare_data", "TRANSIENT_SAMPLES_S"]
 
 #: Start-up interval [s] left out of the errors.
 TRANSIENT_SAMPLES_S = 1.0
-
-
-def _rms(a: np.ndarray) -> float | None:
-    a = a[np.isfinite(a)]
-    return float(np.sqrt(np.mean(a * a))) if a.size else None
 
 
 def compare_data(trace: Trace, *, estimators=tuple(ESTIMATORS), cutoff_hz: float | None = None) -> list[dict[str, Any]]:
@@ -85,8 +81,8 @@ def compare_data(trace: Trace, *, estimators=tuple(ESTIMATORS), cutoff_hz: float
                        status="failed: " + f"{type(e).__name__}: {e}".splitlines()[0])
             rows.append(row)
             continue
-        row["friction_rms_error"] = _rms((f_hat - f_ref)[keep])
-        row["velocity_rms_error"] = _rms((v_hat - v_ref)[keep])
+        row["friction_rms_error"] = rms((f_hat - f_ref)[keep])
+        row["velocity_rms_error"] = rms((v_hat - v_ref)[keep])
         row["friction_noise_rms"] = noise
         ok = all(math.isfinite(v) for v in (row["friction_rms_error"] or math.nan, row["velocity_rms_error"] or math.nan))
         row["status"] = "ok" if ok else "diverged"

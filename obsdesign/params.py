@@ -36,7 +36,7 @@ from typing import Any, Mapping, NamedTuple
 from ._io import atomic_write
 from .compensation import CompensationSpec
 from ._format import toml_value
-from ._validate import (FINITE, NONNEGATIVE, POSITIVE, Choice, FrozenMap, Integer, Range, Text, document_fields,
+from ._validate import (FINITE, NONNEGATIVE, POSITIVE, SAMPLE_TIME, Choice, FrozenMap, Integer, Range, Text, document_fields,
                         param_field, validate_fields)
 from .plant_spec import PlantFrictionSpec
 
@@ -129,10 +129,12 @@ class ObserverSpec:
     rho: float = param_field(POSITIVE, "-", "gain design parameter (stable for rho > 1)")
     omega_co: float = param_field(POSITIVE, "rad/s", "cutoff of the low-pass filter eq:3:4:5", 2 * math.pi * 40)
     variant: str = param_field(Choice(VARIANTS), "-", "model variant the observer is derived from", "lag")
-    dt: float = param_field(POSITIVE, "s", "controller sample time", 1e-4)
+    dt: float = param_field(POSITIVE, "s", "controller sample time (1e-12 to 1 s)", 1e-4)
 
     def __post_init__(self) -> None:
         validate_fields(self)
+        if not SAMPLE_TIME.contains(self.dt):  # one rule for dt: simulate, check, every export
+            raise ValueError(f"observer.dt: expected a sample time in [1e-12, 1] s, found {self.dt!r}")
 
 
 @document_fields

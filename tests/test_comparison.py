@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import base64
 import csv
 import json
 
@@ -103,7 +104,8 @@ def test_cli_writes_the_table_and_the_report_reads_it(tmp_path, capsys):
     assert len(rows) == 4 and {r["status"] for r in rows} == {"ok"}
     assert payload["summary"][0]["best"] in ("paper", "dob")
     section = comparison_section(out)
-    assert len(section["rows"]) == 4 and "<svg" in section["svg"]
+    assert len(section["rows"]) == 4 and section["svg_src"].startswith("data:image/svg+xml;base64,")
+    assert b"<svg" in base64.b64decode(section["svg_src"].split(",", 1)[1])
 
 
 @pytest.mark.parametrize("argv, message", [

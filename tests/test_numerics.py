@@ -53,6 +53,18 @@ def test_forced_unstable_step_is_labelled_numerical_and_a_bad_design_physical():
     assert bad.metrics["diverged"] is True and bad.metrics["divergence"] == "physical"
 
 
+def test_a_measurement_out_of_scale_is_labelled_measurement_without_overflow_warnings():
+    """Review 2026-12-01 xe8: --noise-rms 1e300 was 'physical' (the plant stayed at 2.5e-7 m) with an overflow warning."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # an overflow in the RMS values would fail here
+        res = od.simulate(od.load_preset("vcm").override(noise_rms=1e300), "positioning", duration=3.5,
+                          keep_trace=False)
+    assert res.metrics["diverged"] is True and res.metrics["divergence"] == "measurement"
+    assert res.metrics["rms_error"] < 1e-3  # the plant itself stayed put
+
+
 @pytest.mark.parametrize(
     "override, match",
     [

@@ -307,22 +307,86 @@ def _visit(driver, path, server, wait=2.0):
     return driver.execute_script("return document.documentElement.getAttribute('data-pwned');"), list(server.paths)
 
 
+def _hostile_folders(tmp_path, svgs):
+    """A sweep folder and a compare folder whose figures are the hostile SVGs (valid otherwise)."""
+    from obsdesign.comparison import COLUMNS
+    from obsdesign.sweeps.summary import make_summary
+
+    sweep_dir, compare_dir = tmp_path / "sweep", tmp_path / "compare"
+    sweep_dir.mkdir()
+    compare_dir.mkdir()
+    summary = make_summary([{"status": "ok", "rho": 2.0, "rms_error": 1e-5}], ["rho"], metric="rms_error",
+                           resumed_runs=0, wall_s=1.0)
+    (sweep_dir / "summary.json").write_text(json.dumps(summary), encoding="utf-8")
+    (sweep_dir / "summary_map.svg").write_text("".join(svgs), encoding="utf-8")
+    (sweep_dir / "summary_distributions.svg").write_text(svgs[-1], encoding="utf-8")
+    row = dict(zip(COLUMNS, ["paper", "paper", "positioning", "1"] + ["1e-3"] * (len(COLUMNS) - 5) + ["ok"]))
+    (compare_dir / "compare.csv").write_text(",".join(COLUMNS) + "\n" + ",".join(row.values()) + "\n",
+                                             encoding="utf-8")
+    (compare_dir / "summary.json").write_text(json.dumps({"seeds": 1, "summary": []}), encoding="utf-8")
+    (compare_dir / "compare.svg").write_text("".join(svgs), encoding="utf-8")
+    return sweep_dir, compare_dir
+
+
+@pytest.fixture(scope="module")
+def hostile_report(tmp_path_factory):
+    """The report of hostile sweep and compare folders (payloads aimed at an address that is never served)."""
+    from obsdesign.report.html import render_report
+
+    tmp_path = tmp_path_factory.mktemp("hostile")
+    svgs = _hostile_svgs("http://127.0.0.1:9")
+    sweep_dir, compare_dir = _hostile_folders(tmp_path, svgs)
+    return svgs, render_report(od.load_preset("vcm"), sweep_dir=sweep_dir, compare_dir=compare_dir)
+
+
+def test_rendered_report_holds_no_markup_from_the_folders(hostile_report):
+    """Review 2026-12-01 rep-meta-raw, rep-meta-fo, rep-script-uc, rep-breakout: --compare inlined compare.svg."""
+    svgs, html = hostile_report
+    for svg in svgs:
+        assert svg not in html
+    tags = [t.lower() for t in re.findall(r"<\s*(script|meta|base|form|iframe|object|embed|link)\b", html, re.I)]
+    assert tags == ["meta", "meta", "script"]  # charset, the policy, the explorer: nothing else, in any case
+    assert html.lower().count("http-equiv") == 1 and "refresh" not in html.lower()
+    assert "127.0.0.1:9" not in html  # every payload is inside a base64 data: address
+    images = re.findall(r'<img src="([^"]*)"', html)
+    assert len(images) == 3 and all(src.startswith("data:image/svg+xml;base64,") for src in images)
+    assert base64.b64decode(images[2].split(",", 1)[1]).decode("utf-8") == "".join(svgs)  # compare.svg, as is
+    policy = re.search(r'http-equiv="Content-Security-Policy" content="([^"]*)"', html).group(1)
+    for directive in ("default-src 'none'", "base-uri 'none'", "form-action 'none'", "img-src data:"):
+        assert directive in policy
+
+
+@pytest.mark.parametrize("extra, element", [
+    ("<SCRIPT>x()</SCRIPT>", "script"),
+    ("</figure><ScRiPt>x()</ScRiPt><svg>", "script"),
+    ('<meta http-equiv="refresh" content="0;url=http://127.0.0.1:9/x">', "meta"),
+    ("< META http-equiv=refresh content=0>", "meta"),
+    ('<base href="http://127.0.0.1:9/">', "base"),
+    ('<form action="http://127.0.0.1:9/"><input name=q></form>', "form"),
+])
+def test_page_guard_refuses_an_extra_element_by_name(extra, element):
+    from obsdesign.cli._errors import exit_status
+    from obsdesign.report.html import _CSP_MARK, ReportContentError, _with_csp
+
+    page = (f'<html><head><meta charset="utf-8"><meta http-equiv="Content-Security-Policy" content="{_CSP_MARK}">'
+            f'</head><body><h2 id="comparison">x</h2><figure>{extra}</figure><script>var a = 1;</script></body></html>')
+    assert "sha256-" in _with_csp(page.replace(extra, ""))
+    with pytest.raises(ReportContentError, match=f"extra <{element}> element .* in section 'comparison'") as info:
+        _with_csp(page)
+    assert exit_status(info.value) == 2
+
+
+@pytest.mark.parametrize("folder_kind", ["sweep", "compare"])
 @pytest.mark.skipif(not (CHROMIUM and DRIVER), reason="headless Chromium not installed")
-def test_report_with_hostile_sweep_figures_runs_and_fetches_nothing(tmp_path):
+def test_report_with_hostile_folder_figures_runs_and_fetches_nothing(tmp_path, folder_kind):
     pytest.importorskip("selenium")
     from obsdesign.report.html import render_report
-    from obsdesign.sweeps.summary import make_summary
 
     with _Recorder() as server:
         svgs = _hostile_svgs(server.base)
-        sweep_dir = tmp_path / "sweep"
-        sweep_dir.mkdir()
-        summary = make_summary([{"status": "ok", "rho": 2.0, "rms_error": 1e-5}], ["rho"], metric="rms_error",
-                               resumed_runs=0, wall_s=1.0)
-        (sweep_dir / "summary.json").write_text(json.dumps(summary), encoding="utf-8")
-        (sweep_dir / "summary_map.svg").write_text("".join(svgs), encoding="utf-8")
-        (sweep_dir / "summary_distributions.svg").write_text(svgs[1], encoding="utf-8")
-        html = render_report(od.load_preset("vcm"), sweep_dir=sweep_dir)
+        sweep_dir, compare_dir = _hostile_folders(tmp_path, svgs)
+        folders = {"sweep_dir": sweep_dir} if folder_kind == "sweep" else {"compare_dir": compare_dir}
+        html = render_report(od.load_preset("vcm"), **folders)
         for svg in svgs:
             assert svg not in html
         report = tmp_path / "report.html"
@@ -330,7 +394,7 @@ def test_report_with_hostile_sweep_figures_runs_and_fetches_nothing(tmp_path):
         # Defense in depth: the same report with the payloads pasted raw into its body (as if an
         # escaping bug let them through) is held by the Content-Security-Policy alone. A policy
         # cannot stop a navigation (<meta http-equiv="refresh">), so that payload is left out here;
-        # only the base64 embedding keeps it inert.
+        # only the base64 embedding (and the page guard) keeps it out.
         raw = tmp_path / "raw.html"
         pasted = "".join(svg for svg in svgs if "refresh" not in svg)
         raw.write_text(html.replace("</body>", pasted + f'<img src="{server.base}/raw">'
@@ -344,6 +408,7 @@ def test_report_with_hostile_sweep_figures_runs_and_fetches_nothing(tmp_path):
             assert _visit(driver, control, server) == ("control", ["/control"])
             server.paths.clear()
             assert _visit(driver, report, server) == (None, [])
+            assert driver.current_url == report.as_uri()  # no meta refresh navigated away
             assert driver.execute_script("return document.getElementById('verdict').textContent") == "stable"
             assert _visit(driver, raw, server) == (None, [])
             assert driver.execute_script("return document.getElementById('verdict').textContent") == "stable"
@@ -365,3 +430,35 @@ def test_report_refuses_a_sweep_folder_with_a_figure_that_is_not_svg(tmp_path):
         (folder / name).write_text(text, encoding="utf-8")
         with pytest.raises(ValueError, match=str(folder / name).replace("\\", "\\\\")):
             _sweep_section(folder)
+
+
+@pytest.mark.parametrize("kind, name, content", [
+    ("sweep", "summary.json", b"[" * 100_000 + b"]" * 100_000),  # fs-deep: was a RecursionError (exit 3)
+    ("compare", "summary.json", b"[" * 100_000 + b"]" * 100_000),
+    ("compare", "compare.svg", b"<html>no figure</html>"),  # fs-c-nosvg: was 'substring not found'
+    ("compare", "compare.svg", b"\xff\xfe<svg>"[:2] + b"x" * 5000),  # fs-c-latin
+    ("compare", "compare.csv", b"plant,\xff\n"),  # fs-c-csvbin: was a bare UnicodeDecodeError
+    ("compare", "summary.json", b"{'summary': []}"),  # fs-c-json: was a bare JSONDecodeError
+    ("compare", "compare.csv", b"root:x:0:0:root:/root:/bin/bash\ndaemon:x:1:1::/:/bin/sh\n"),  # fs-c-passwd
+])
+def test_report_folder_errors_name_their_file(tmp_path, kind, name, content):
+    from obsdesign.report.comparison_section import comparison_section
+    from obsdesign.report.html import _sweep_section
+
+    sweep_dir, compare_dir = _hostile_folders(tmp_path, ['<svg xmlns="http://www.w3.org/2000/svg"></svg>'])
+    folder = sweep_dir if kind == "sweep" else compare_dir
+    (folder / name).write_bytes(content)
+    read = _sweep_section if kind == "sweep" else comparison_section
+    with pytest.raises(ValueError, match=f"^{kind}: '{re.escape(str(folder / name))}'"):
+        read(folder)
+
+
+def test_report_cli_refuses_a_deeply_nested_summary_in_one_line(tmp_path, capsys):
+    from obsdesign.cli import main
+
+    sweep_dir, _ = _hostile_folders(tmp_path, ['<svg xmlns="http://www.w3.org/2000/svg"></svg>'])
+    (sweep_dir / "summary.json").write_bytes(b"[" * 100_000 + b"]" * 100_000)
+    assert main(["report", "--quiet", "--sweep", str(sweep_dir), "-o", str(tmp_path / "r.html")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"obsdesign: error: sweep: {str(sweep_dir / 'summary.json')!r} is not valid UTF-8 JSON (nested too deeply)"]
+    assert not (tmp_path / "r.html").exists()

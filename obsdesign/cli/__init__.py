@@ -24,6 +24,7 @@ Examples
 from __future__ import annotations
 
 import argparse
+import errno
 import io
 import os
 import sys
@@ -34,7 +35,7 @@ from typing import Sequence
 from .. import __version__
 from . import _compare, _config, _data, _design, _loop, _output, _sim
 from ._common import Parser, UsageError
-from ._errors import BAD_INPUT, describe, exit_status
+from ._errors import BAD_INPUT, describe, exit_status, plain
 
 __all__ = ["main", "build_parser", "UsageError"]
 
@@ -108,7 +109,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _unique(caught) -> list[str]:
     seen: list[str] = []
     for w in caught:
-        text = str(w.message).strip().splitlines()[0] if str(w.message).strip() else w.category.__name__
+        text = plain(str(w.message).strip().splitlines()[0]) if str(w.message).strip() else w.category.__name__
         if text not in seen:
             seen.append(text)
     return seen
@@ -119,24 +120,37 @@ class OutputError(OSError):
 
 
 class _Output:
-    """Standard output that tags its write errors as :class:`OutputError`."""
+    """Standard output that tags its write errors as :class:`OutputError`.
+
+    A closed standard output (``>&-``: Python sets ``sys.stdout`` to None) raises the same error
+    on the first write, so a command that prints ends with one line and exit status 2.
+    """
 
     def __init__(self, stream):
         self._stream = stream
 
     def write(self, text):
+        if self._stream is None:
+            raise OutputError(errno.EBADF, "closed")
         try:
             return self._stream.write(text)
         except OSError as e:
             raise OutputError(e.errno, e.strerror) from e
 
     def flush(self):
+        if self._stream is None:
+            return
         try:
             self._stream.flush()
         except OSError as e:
             raise OutputError(e.errno, e.strerror) from e
 
+    def isatty(self):
+        return self._stream is not None and self._stream.isatty()
+
     def __getattr__(self, name):
+        if self._stream is None:
+            raise OutputError(errno.EBADF, "closed")
         return getattr(self._stream, name)
 
 

@@ -14,8 +14,8 @@ from .._validate import FINITE, NONNEGATIVE, POSITIVE, Range, parse_number
 from ..params import VARIANTS, load_config, load_preset, preset_names
 
 __all__ = ["print_warnings", "UsageError", "Parser", "number", "POSITIVE_ARG", "NONNEGATIVE_ARG", "FINITE_ARG", "PHASE_ARG",
-           "integer", "add_config_flags", "add_design_flags", "load", "emit", "check_output_file", "check_output_dir",
-           "check_samples", "MAX_SAMPLES", "check_runs", "finite_design", "warn_unstable"]
+           "integer", "workers_arg", "nonempty", "INPUT_FILE", "INPUT_DIR", "add_config_flags", "add_design_flags",
+           "load", "emit", "check_output_file", "check_output_dir", "check_samples", "MAX_SAMPLES", "check_runs", "finite_design", "warn_unstable"]
 
 #: Most samples one ``simulate`` run may hold (about 13 GB of trace arrays at 16 doubles per sample).
 MAX_SAMPLES = 10**8
@@ -68,6 +68,49 @@ def integer(minimum: int):
         return value
 
     return parse
+
+
+def nonempty(kind: str):
+    """An argparse type: a path or address that is not empty (the one rule for empty paths of every command).
+
+    Parameters
+    ----------
+    kind : str
+        What the text names, for the message (``"file name"``, ``"folder name"``).
+
+    Examples
+    --------
+    >>> nonempty("folder name")(" ")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: expected a folder name, found ' '
+    """
+
+    def parse(text: str) -> str:
+        if not text.strip():
+            raise argparse.ArgumentTypeError(f"expected a {kind}, found {text!r}")
+        return text
+
+    return parse
+
+
+INPUT_FILE, INPUT_DIR = nonempty("file name"), nonempty("folder name")
+
+
+def workers_arg(text: str) -> int:
+    """An argparse type: local worker processes, from 1 to 4 per core of this machine (bounded before any work).
+
+    Examples
+    --------
+    >>> workers_arg("1")
+    1
+    """
+    limit = 4 * max(1, os.cpu_count() or 1)
+    value = integer(1)(text)
+    if value > limit:
+        raise argparse.ArgumentTypeError(f"expected an integer from 1 to {limit} (4 per core of this machine), "
+                                         f"found {text!r}")
+    return value
 
 
 def add_config_flags(p: argparse.ArgumentParser, *, default_preset: str) -> None:

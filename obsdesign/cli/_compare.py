@@ -8,7 +8,8 @@ from pathlib import Path
 
 from ..estimators.registry import ESTIMATORS
 from ..friction.registry import FRICTION_MODELS
-from ._common import FINITE_ARG, POSITIVE_ARG, UsageError, add_config_flags, integer, load
+from ._common import (FINITE_ARG, INPUT_FILE, POSITIVE_ARG, UsageError, add_config_flags, check_output_dir, integer,
+                      load, workers_arg)
 
 __all__ = ["add_commands", "parse_list", "summary_text"]
 
@@ -80,9 +81,8 @@ def summary_text(summary: list[dict], seeds: int) -> str:
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
+    check_output_dir("compare", "--out", args.out)
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"obsdesign compare: argument --out: expected a directory, found the file {args.out!r}")
     if not out.parent.is_dir():
         raise UsageError(f"obsdesign compare: argument --out: directory {str(out.parent)!r} does not exist")
     plants = parse_list("--plants", args.plants, FRICTION_MODELS.names())
@@ -90,6 +90,15 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     scenarios = _scenarios()
     if args.scenarios is not None:
         scenarios = parse_list("--scenarios", args.scenarios, scenarios)
+    from ..comparison import check_comparison_runs
+
+    try:
+        check_comparison_runs(len(plants) * len(estimators) * len(scenarios), args.seeds)
+    except ValueError as e:
+        raise UsageError(f"obsdesign compare: argument --{e}") from None
+    if args.data is None and any(v is not None for v in (args.position, args.input, args.time, args.sample_time)):
+        raise UsageError("obsdesign compare: the column flags (--position, --input, --time, --sample-time) need "
+                         "--data FILE")
     cfg = load(args)
     trace = None
     if args.data is not None:
@@ -139,8 +148,8 @@ def add_commands(sub) -> None:
     p.add_argument("--scenarios", help="scenarios of obsdesign.comparison.SCENARIOS, comma-separated "
                    "(default: all of them; docs/comparison.md)")
     p.add_argument("--seeds", type=integer(1), default=2, help="seeds per case (default 2)")
-    p.add_argument("--workers", type=integer(1), help="local processes (default: all cores)")
-    p.add_argument("--data", metavar="FILE", help="measured trace (.csv/.mat): adds offline rows, friction error "
+    p.add_argument("--workers", type=workers_arg, help="local processes (default: all cores)")
+    p.add_argument("--data", metavar="FILE", type=INPUT_FILE, help="measured trace (.csv/.mat): adds offline rows, friction error "
                    "against the model identified from it (docs/comparison.md)")
     p.add_argument("--position", metavar="NAME", help="--data: displacement column [m]")
     p.add_argument("--input", metavar="NAME", help="--data: actuator input column")

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ..params import preset_names
 from ..sampled.choices import SCHEDULES
-from ._common import FINITE_ARG, POSITIVE_ARG, UsageError, check_output_file, emit
+from ._common import FINITE_ARG, INPUT_FILE, POSITIVE_ARG, UsageError, check_output_file, emit
 
 __all__ = ["add_commands", "add_trace_flags", "load_trace_args"]
 
@@ -26,10 +26,16 @@ def add_trace_flags(p: argparse.ArgumentParser, *, required: bool = True) -> Non
 def load_trace_args(args: argparse.Namespace, path: str):
     """The trace of ``path`` with the column flags of :func:`add_trace_flags`."""
     from ..data import load_trace
+    from ..data.trace import check_sample_time
 
     if args.time is None and args.sample_time is None:
         raise UsageError(f"obsdesign {args.command}: expected --time NAME or --sample-time DT for the time base "
                          f"of {path!r}, found neither")
+    if args.sample_time is not None:
+        try:
+            check_sample_time("--sample-time", args.sample_time, "the flag")
+        except ValueError as e:
+            raise UsageError(f"obsdesign {args.command}: argument {e}") from None
     return load_trace(path, position=args.position, input=args.input, time=args.time,
                       sample_time=args.sample_time, input_gain=args.input_gain)
 
@@ -82,7 +88,7 @@ def _cmd_observe(args: argparse.Namespace) -> int:
 def add_commands(sub) -> None:
     """Add ``identify`` and ``observe`` to the subparsers ``sub``."""
     p = sub.add_parser("identify", help="identify mass, viscous and Coulomb friction and offset from a record")
-    p.add_argument("data", metavar="DATA", help="measured record (.csv with a header row, or .mat)")
+    p.add_argument("data", metavar="DATA", type=INPUT_FILE, help="measured record (.csv with a header row, or .mat)")
     add_trace_flags(p)
     p.add_argument("--asymmetric", action="store_true", help="separate viscous and Coulomb terms per direction")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -90,7 +96,7 @@ def add_commands(sub) -> None:
     p.set_defaults(run=_cmd_identify)
 
     p = sub.add_parser("observe", help="run the designed observer over a measured record")
-    p.add_argument("data", metavar="DATA", help="measured record (.csv with a header row, or .mat)")
+    p.add_argument("data", metavar="DATA", type=INPUT_FILE, help="measured record (.csv with a header row, or .mat)")
     group = p.add_mutually_exclusive_group(required=True)
     group.add_argument("--preset", choices=preset_names(), help="shipped preset")
     group.add_argument("--config", metavar="FILE", help="TOML config file (e.g. from 'obsdesign identify -o')")

@@ -25,8 +25,9 @@ Examples
 from __future__ import annotations
 
 import os
+import re
 
-__all__ = ["OK", "CHECK_FAILED", "BAD_INPUT", "INTERNAL", "INTERRUPTED", "exit_status", "describe"]
+__all__ = ["OK", "CHECK_FAILED", "BAD_INPUT", "INTERNAL", "INTERRUPTED", "exit_status", "describe", "plain"]
 
 OK, CHECK_FAILED, BAD_INPUT, INTERNAL, INTERRUPTED = 0, 1, 2, 3, 130
 _BAD_INPUT = (ValueError, TypeError, OSError, MemoryError, OverflowError, UnicodeError)
@@ -49,8 +50,23 @@ def exit_status(error: BaseException) -> int:
     return BAD_INPUT if isinstance(error, _BAD_INPUT) or _is_template_error(error) else INTERNAL
 
 
+#: A NumPy scalar's repr (``np.float64(3.998)``): a message shows the plain number.
+_NUMPY_REPR = re.compile(r"\bnp\.(?:float|int|uint|complex|bool|str)\w*\(([^()]*)\)")
+
+
+def plain(text: str) -> str:
+    """``text`` with every NumPy scalar repr replaced by its plain value.
+
+    Examples
+    --------
+    >>> plain("found np.float64(3.998) after np.float64(3.999), np.int64(7) rows, np.True_")
+    'found 3.998 after 3.999, 7 rows, True'
+    """
+    return re.sub(r"\bnp\.(True|False)_\b", r"\1", _NUMPY_REPR.sub(r"\1", text))
+
+
 def _first_line(text: str, limit: int = 500) -> str:
-    line = (str(text).strip().splitlines() or [""])[0]
+    line = plain((str(text).strip().splitlines() or [""])[0])
     return line if len(line) <= limit else line[:limit] + "..."
 
 
@@ -63,7 +79,9 @@ def describe(error: BaseException) -> str:
         The exception that ended the command.
     """
     if isinstance(error, MemoryError):
-        return "obsdesign: error: not enough memory for this request; reduce its size (duration/dt, grid, samples)"
+        detail = _first_line(str(error))
+        return ("obsdesign: error: not enough memory for this request" + (f" ({detail})" if detail else "")
+                + "; reduce its size (duration/dt, grid, samples)")
     if isinstance(error, OSError):
         reason = error.strerror or _first_line(str(error)) or type(error).__name__
         if error.errno is not None and not error.strerror:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import argparse
 
-from ._common import POSITIVE_ARG, add_config_flags, check_output_file, emit, integer, load
+from ._common import POSITIVE_ARG, add_config_flags, check_output_file, emit, finite_design, integer, load
 
 __all__ = ["add_commands"]
 
@@ -20,7 +20,9 @@ def _cmd_loop(args: argparse.Namespace) -> int:
     check_output_file("loop", "--plot", args.plot, (".svg", ".png"))
     from ..design.loop import loop_analysis
 
-    analysis = loop_analysis(load(args), phi=args.phi, tau=args.tau, delay_samples=args.delay)
+    cfg = load(args)
+    with finite_design(args, ("phi", "tau")):  # review l3, l4, l8: name the flag, as check and pid do
+        analysis = loop_analysis(cfg, phi=args.phi, tau=args.tau, delay_samples=args.delay)
     if args.plot:
         from ..design.loop import loop_figure
         from ..report.figures import save_figure

@@ -8,8 +8,8 @@ from pathlib import Path
 from ..export import FORMATS as EXPORT_FORMATS
 from ..export import WHAT as EXPORT_WHAT
 from ..params import VARIANTS
-from ._common import (POSITIVE_ARG, UsageError, add_config_flags, check_output_dir, check_output_file, load,
-                      warn_unstable, print_warnings)
+from ._common import (INPUT_DIR, INPUT_FILE, POSITIVE_ARG, UsageError, add_config_flags, check_output_dir,
+                      check_output_file, load, warn_unstable, print_warnings)
 from ._data import add_trace_flags, load_trace_args
 
 __all__ = ["add_commands"]
@@ -73,9 +73,9 @@ def add_commands(sub) -> None:
     p = sub.add_parser("report", help="self-contained HTML design report")
     add_config_flags(p, default_preset="vcm")
     p.add_argument("-o", "--output", default="report.html", metavar="FILE", help="output file (default report.html)")
-    p.add_argument("--sweep", metavar="DIR", help="add the summary of an 'obsdesign sweep' folder")
-    p.add_argument("--compare", metavar="DIR", help="add the results of an 'obsdesign compare' folder")
+    p.add_argument("--sweep", metavar="DIR", type=INPUT_DIR, help="add the summary of an 'obsdesign sweep' folder")
+    p.add_argument("--compare", metavar="DIR", type=INPUT_DIR, help="add the results of an 'obsdesign compare' folder")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.add_argument("--data", metavar="FILE", help="add 'Validation on measured data' for a record (.csv or .mat)")
+    p.add_argument("--data", metavar="FILE", type=INPUT_FILE, help="add 'Validation on measured data' for a record (.csv or .mat)")
     add_trace_flags(p, required=False)
     p.set_defaults(run=_cmd_report)

@@ -11,8 +11,9 @@ from .._validate import parse_number
 from ..params import VARIANTS
 from ..sampled.choices import CONTROLLERS, ESTIMATORS, PLANTS, SCHEDULES
 from ..sim.scenarios import DEFAULT_DURATION, SCENARIOS
-from ._common import (FINITE_ARG, NONNEGATIVE_ARG, POSITIVE_ARG, UsageError, add_config_flags, add_design_flags,
-                      check_output_file, check_runs, check_samples, emit, integer, load, print_warnings)
+from ._common import (FINITE_ARG, INPUT_FILE, NONNEGATIVE_ARG, POSITIVE_ARG, UsageError, add_config_flags,
+                      add_design_flags, check_output_dir, check_output_file, check_runs, check_samples, emit, integer,
+                      load, nonempty, print_warnings, workers_arg)
 
 __all__ = ["add_commands", "parse_vary", "parse_uncertain"]
 
@@ -46,15 +47,22 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     options = {field: getattr(args, flag) for flag, field in _SPEC_FLAGS[args.scenario].items()
                if getattr(args, flag) is not None}
     spec = type(scenario_spec(args.scenario))(**options)
+    substeps = 10  # prepare's default; raised below for a stiffer --plant-config
     if args.plant_config is not None:
         if plant != "physical":
             raise UsageError("obsdesign simulate: argument --plant-config: needs --plant physical, "
                              f"found --plant {plant}")
         from ..params import load_config
+        from ..sim.numerics import substeps_for
 
         plant = load_config(args.plant_config)
+        try:  # the simulated plant is this config's: its substeps rule, as for --config (review xe20)
+            substeps = substeps_for(plant, cfg.observer.dt, substeps)
+        except ValueError as e:
+            raise UsageError(f"obsdesign simulate: argument --plant-config: {args.plant_config!r}: {e}") from None
     loop = prepare(cfg, spec, controller=args.controller, stiffness=args.stiffness, plant=plant,
-                   estimator=args.estimator, duration=args.duration, seed=args.seed, settle_tol=args.settle_tol)
+                   estimator=args.estimator, duration=args.duration, seed=args.seed, settle_tol=args.settle_tol,
+                   substeps=substeps)
     clipped = saturation_warning(loop)
     print_warnings((*design_warnings(cfg), *([clipped] if clipped else [])))  # after prepare's refusals, before the run
     res = run(loop, keep_trace=bool(args.out or args.plot))
@@ -138,9 +146,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         raise UsageError(f"obsdesign sweep: argument --metric: expected one of {', '.join(metrics)}, "
                          f"found {args.metric!r}")
     runs = check_runs(vary, args.samples)
+    check_output_dir("sweep", "--out", args.out)
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"obsdesign sweep: argument --out: expected a directory, found the file {args.out!r}")
     if args.resume and not (out / "results.csv").exists():
         raise UsageError(f"obsdesign sweep: argument --resume: no results.csv in {args.out!r} to resume")
     cfg = load(args)
@@ -227,7 +234,7 @@ def add_commands(sub) -> None:
     p.add_argument("--plant", choices=PLANTS.names(),
                    help="physical (Coulomb with pre-sliding memory + viscous friction) or model (the LTV model "
                         "eq:3:1 of the variant); default: model for variant lag, physical for static")
-    p.add_argument("--plant-config", metavar="FILE",
+    p.add_argument("--plant-config", metavar="FILE", type=INPUT_FILE,
                    help="simulate the plant of this TOML config (mass, gain, load, friction, [plant_friction]); "
                         "observer and controller stay designed from --preset/--config")
     p.add_argument("--estimator", choices=ESTIMATORS.names(), default="paper",
@@ -258,8 +265,8 @@ def add_commands(sub) -> None:
     p.add_argument("--variant", choices=VARIANTS)
     p.add_argument("--seed", type=integer(0), default=0)
     p.add_argument("--out", required=True, metavar="DIR", help="folder for results.csv and the summary")
-    p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://127.0.0.1:8786")
-    p.add_argument("--workers", type=integer(1), help="local processes (default: all cores)")
+    p.add_argument("--scheduler", metavar="ADDRESS", type=nonempty("scheduler address"), help="Dask scheduler, e.g. tcp://127.0.0.1:8786")
+    p.add_argument("--workers", type=workers_arg, help="local processes (default: all cores)")
     again = p.add_mutually_exclusive_group()
     again.add_argument("--resume", action="store_true", help="finish an interrupted sweep in --out")
     again.add_argument("--force", action="store_true", help="replace the results of another sweep in --out")

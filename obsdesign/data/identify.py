@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import html
 import math
+import warnings
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -82,6 +83,10 @@ class Identification:
         number of motion reversals.
     source : str
         Where the trace came from (its file name), for tables.
+    warnings : tuple of str
+        Why the values are not physical, if they are not: a mass, viscous coefficient or Coulomb
+        level <= 0, each with its likely cause (the sign of the input gain, swapped columns, units).
+        Empty for a plausible identification.
     """
 
     model: str
@@ -115,6 +120,7 @@ class Identification:
     quantization: float = 0.0
     reversals: int = 0
     source: str = ""
+    warnings: tuple[str, ...] = ()
 
     _KEYS = ("m", "sigma", "Cf", "offset", "m_std", "sigma_std", "Cf_std", "offset_std", "nrmse_percent",
              "condition_number", "samples")
@@ -126,11 +132,15 @@ class Identification:
 
         Keys: ``m, sigma, Cf, offset, m_std, sigma_std, Cf_std, offset_std, nrmse_percent,
         condition_number, samples``; with ``asymmetric`` also ``sigma_pos, sigma_neg, Cf_pos,
-        Cf_neg``; always ``s, s_note, model, sample_time, filter_hz, decimation``.
+        Cf_neg``; always ``s, s_note, model, sample_time, filter_hz, decimation``; and ``warnings``
+        (a list of sentences) when the identification is not physical.
         """
         data = asdict(self)
         keys = self._KEYS + (self._ASYM if self.model == "asymmetric" else ()) + self._EXTRA
-        return {k: data[k] for k in keys}
+        out = {k: data[k] for k in keys}
+        if self.warnings:
+            out["warnings"] = list(self.warnings)
+        return out
 
     def friction(self, v: np.ndarray | float) -> np.ndarray:
         """Model friction force [N] along a velocity trace ``v`` [m/s], without the offset.
@@ -177,6 +187,7 @@ class Identification:
                  ("rows in the fit", str(self.samples)),
                  ("filter", f"Butterworth {FILTER_ORDER}th order {self.filter_hz:g} Hz, zero phase"),
                  ("decimation", f"{self.decimation} (sample time {self.sample_time:g} s)")]
+        rows += [("WARNING", w) for w in self.warnings]
         return rows
 
     def __str__(self) -> str:
@@ -198,15 +209,57 @@ def _check_int(name: str, value: object, low: int) -> int:
     return int(value)
 
 
-def _ols(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """Estimates, covariance ``sigma_e^2 (X^T X)^-1``, residual, scaled condition number."""
-    theta, *_ = np.linalg.lstsq(X, y, rcond=None)
+def _ols(X: np.ndarray, y: np.ndarray, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """Estimates, covariance ``sigma_e^2 (X^T X)^-1``, residual, scaled condition number.
+
+    The columns are scaled to a largest |value| of 1 before the solve, so LAPACK never sees an
+    overflowing product (and never prints its own error text); a regressor that is non-finite,
+    zero in every row or a combination of the others is refused naming it.
+    """
+    if not (np.all(np.isfinite(X)) and np.all(np.isfinite(y))):
+        bad = [n for n, col in zip(names, X.T) if not np.all(np.isfinite(col))] or ["the force"]
+        raise ValueError(f"trace: the regressor {', '.join(bad)} overflows to non-finite values (derivatives of the "
+                         "position over the sample time); check the units of position and time")
+    scale = np.max(np.abs(X), axis=0)
+    zero = [n for n, sc in zip(names, scale) if not sc > 0]
+    if zero:
+        raise ValueError(f"trace: expected every regressor to vary, found {', '.join(zero)} zero in every row of "
+                         "the fit: the record does not excite that term")
+    Xs = X / scale
+    y_scale = float(np.max(np.abs(y))) or 1.0
+    theta_s, _, rank, _ = np.linalg.lstsq(Xs, y / y_scale, rcond=None)
+    if rank < X.shape[1]:
+        raise ValueError(f"trace: the regressors ({', '.join(names)}) are linearly dependent over the rows of the "
+                         f"fit (rank {rank} of {X.shape[1]}): the record cannot separate these terms")
+    theta = theta_s * y_scale / scale
     resid = y - X @ theta
     dof = X.shape[0] - X.shape[1]
     sigma2 = float(resid @ resid) / dof
-    cov = sigma2 * np.linalg.inv(X.T @ X)
-    cond = float(np.linalg.cond(X / np.linalg.norm(X, axis=0)))
+    cov = sigma2 * np.linalg.inv(Xs.T @ Xs) / scale[:, None] / scale[None, :]  # no overflowing outer product
+    cond = float(np.linalg.cond(Xs / np.linalg.norm(Xs, axis=0)))
     return theta, cov, resid, cond
+
+
+def _implausible(result: dict, input_gain: float) -> tuple[str, ...]:
+    """Sentences naming each identified m, sigma, Cf (and per-direction level) <= 0 with its likely cause."""
+    names = {"m": ("mass", "kg"), "sigma": ("viscous coefficient", "N s/m"), "Cf": ("Coulomb level", "N"),
+             "sigma_pos": ("viscous coefficient for v > 0", "N s/m"),
+             "sigma_neg": ("viscous coefficient for v < 0", "N s/m"),
+             "Cf_pos": ("Coulomb level for v > 0", "N"), "Cf_neg": ("Coulomb level for v < 0", "N")}
+    bad = [k for k in names if result.get(k) is not None and not result[k] > 0]
+    if not bad:
+        return ()
+    if input_gain < 0:
+        cause = (f"the input gain is negative (input_gain = {input_gain:g}): check its sign; a force that opposes "
+                 "the logged input gives a negative mass")
+    elif result["m"] <= 0 and result["sigma"] <= 0 and result["Cf"] <= 0:
+        cause = ("every term is negative: the input acts against the position, so check the sign of the input "
+                 "gain (or of the position column)")
+    else:
+        cause = ("check that the position and input columns are not swapped, the sign of the input gain, and the "
+                 "units (position in m, time in s, input times the gain in N)")
+    found = ", ".join(f"{k} = {result[k]:.4g} {names[k][1]}" for k in bad)
+    return (f"identify: not physical: expected a positive {names[bad[0]][0]}, found {found}; {cause}",)
 
 
 def _quantization(position: np.ndarray) -> float:
@@ -241,6 +294,18 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     Returns
     -------
     Identification
+
+    Raises
+    ------
+    ValueError
+        A bad model, cut-off, decimation or window; a trace too short for them; an input that
+        is constant; a position that barely moves.
+
+    Warns
+    -----
+    UserWarning
+        If the identified m, sigma or Cf is <= 0 (also in :attr:`Identification.warnings`), naming the
+        likely cause: the sign of the input gain, swapped columns, units.
 
     Notes
     -----
@@ -289,6 +354,10 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     q = DEFAULT_DECIMATION if decimation is None else _check_int("decimation", decimation, 1)
     if isinstance(presliding_window, bool) or not isinstance(presliding_window, (int, float)) or not presliding_window > 0:
         raise ValueError(f"presliding_window: expected a finite number > 0 [m], found {presliding_window!r}")
+    force_range = float(np.ptp(trace.force))
+    if not force_range > 0.0:
+        raise ValueError(f"input: the record has constant input ({float(trace.force[0]):g} N in every sample of "
+                         f"{trace.source!r}); nothing to identify: the fit needs a force that varies")
     border = int(math.ceil(5.0 * fs / filter_hz))
     n_used = trace.samples - 2 * border
     if n_used < 20 * q:
@@ -316,13 +385,13 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                          f"(the position barely changes)")
     y = y[moving]
     X = np.column_stack([cols[c][moving] for c in ("a", "v", "sign", "one")])
-    theta, cov, resid, cond = _ols(X, y)
+    theta, cov, resid, cond = _ols(X, y, ("acceleration", "velocity", "sign(v)", "offset"))
     std = np.sqrt(np.diag(cov))
     result = dict(m=theta[0], sigma=theta[1], Cf=theta[2], offset=theta[3], m_std=std[0], sigma_std=std[1],
                   Cf_std=std[2], offset_std=std[3])
     if model == "asymmetric":
         Xa = np.column_stack([cols[c][moving] for c in ("a", "v_pos", "v_neg", "pos", "neg")])
-        th, cov_a, resid, cond = _ols(Xa, y)
+        th, cov_a, resid, cond = _ols(Xa, y, ("acceleration", "v for v > 0", "v for v < 0", "v > 0", "v < 0"))
         sd = np.sqrt(np.diag(cov_a))
         # offset from the symmetric fit: a linear map r of y; levels: rows p of the pseudo-inverse
         r = np.linalg.pinv(X)[3]
@@ -339,7 +408,11 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                       sigma_pos=th[1], sigma_neg=th[2], Cf_pos=cf_pos, Cf_neg=cf_neg,
                       sigma_pos_std=sd[1], sigma_neg_std=sd[2], Cf_pos_std=cf_pos_std, Cf_neg_std=cf_neg_std)
     result = {k: float(v_) for k, v_ in result.items()}
-    nrmse = 100.0 * math.sqrt(float(np.mean(resid**2)) / float(np.mean(y**2)))
+    power = float(np.mean(y**2))
+    nrmse = 100.0 * math.sqrt(float(np.mean(resid**2)) / power) if power > 0 else math.inf
+    notes = _implausible(result, trace.input_gain)
+    for note in notes:
+        warnings.warn(note, stacklevel=2)
 
     quantum = _quantization(trace.position)
     noise = float(np.sqrt(np.mean((trace.position - x_f)[keep] ** 2)))
@@ -351,4 +424,4 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                           samples=int(y.size), s=s, s_note=note, sample_time=dt, filter_hz=float(filter_hz),
                           decimation=q, input_gain=trace.input_gain, force_peak=float(np.max(np.abs(trace.force))),
                           noise_rms=noise, quantization=quantum, reversals=int(_reversals(v, REVERSAL_THRESHOLD * float(np.max(np.abs(v)))).size),
-                          source=trace.source)
+                          source=trace.source, warnings=notes)

@@ -19,6 +19,7 @@ Examples
 
 from __future__ import annotations
 
+import csv
 import io
 import math
 import os
@@ -28,8 +29,10 @@ from pathlib import Path
 import numpy as np
 
 from .._io import atomic_write
+from .._validate import SAMPLE_TIME
 
-__all__ = ["Trace", "load_trace", "MIN_SAMPLES", "JITTER_TOLERANCE", "zero_phase_velocity"]
+__all__ = ["Trace", "load_trace", "MIN_SAMPLES", "JITTER_TOLERANCE", "MAX_MAGNITUDE", "SAMPLE_TIME_RANGE",
+           "check_sample_time", "zero_phase_velocity"]
 
 #: Fewest samples a trace may hold (the identification filters and decimates).
 MIN_SAMPLES = 100
@@ -37,6 +40,11 @@ MIN_SAMPLES = 100
 JITTER_TOLERANCE = 0.01
 #: Velocity threshold of :attr:`Trace.reversals`, relative to the largest |velocity|.
 REVERSAL_THRESHOLD = 0.01
+#: Largest admissible |value| of a column: its square (and a sum of 1e6 squares) stays finite.
+MAX_MAGNITUDE = 1e150
+#: Usable sample times [s], the rule of a controller's dt (:data:`obsdesign._validate.SAMPLE_TIME`):
+#: outside, the time column is in the wrong unit (or not a time).
+SAMPLE_TIME_RANGE = (SAMPLE_TIME.low, SAMPLE_TIME.high)
 _EXTENSIONS = (".csv", ".mat")
 
 
@@ -70,7 +78,13 @@ def _check_positive(param: str, value: object) -> float:
 
 
 def _check_column(param: str, label: str, values: object) -> np.ndarray:
-    """A finite 1-D float column of at least :data:`MIN_SAMPLES` samples."""
+    """A finite 1-D float column of at least :data:`MIN_SAMPLES` samples, |values| <= :data:`MAX_MAGNITUDE`."""
+    if type(values).__module__.startswith("scipy.sparse") and hasattr(values, "toarray"):
+        shape = getattr(values, "shape", ())
+        if len(shape) > 1 and sum(d > 1 for d in shape) > 1:
+            raise ValueError(f"{param}: expected a vector (n x 1 or 1 x n), found {label}, a sparse matrix of shape "
+                             f"{' x '.join(map(str, shape))}")
+        values = values.toarray()  # a sparse vector (MATLAB's sparse()): its samples are the dense values
     arr = np.asarray(values)
     if arr.dtype.kind not in "biuf":
         raise TypeError(f"{param}: expected a numeric column, found {label} of dtype {arr.dtype}")
@@ -86,6 +100,10 @@ def _check_column(param: str, label: str, values: object) -> np.ndarray:
         raise ValueError(f"{param}: expected finite values, found {float(arr[bad[0]])!r} in {label} at index {bad[0]}")
     if arr.size < MIN_SAMPLES:
         raise ValueError(f"{param}: expected at least {MIN_SAMPLES} samples, found {arr.size} in {label}")
+    big = np.flatnonzero(np.abs(arr) > MAX_MAGNITUDE) if param not in ("t", "time") else ()  # time: its step
+    if len(big):
+        raise ValueError(f"{param}: expected |values| <= {MAX_MAGNITUDE:g} (larger ones overflow when squared), "
+                         f"found {float(arr[big[0]]):g} in {label} at index {big[0]}; check the unit")
     return arr
 
 
@@ -95,15 +113,34 @@ def _check_time(t: np.ndarray, label: str) -> float:
     bad = np.flatnonzero(steps <= 0.0)
     if bad.size:
         i = bad[0] + 1
-        raise ValueError(f"time: expected strictly increasing values, found {t[i]!r} after {t[i - 1]!r} "
-                         f"in {label} at index {i}")
+        raise ValueError(f"time: expected strictly increasing values, found {float(t[i])!r} after "
+                         f"{float(t[i - 1])!r} in {label} at index {i}")
     median = float(np.median(steps))
     jitter = np.abs(steps - median) / median
     worst = int(np.argmax(jitter))
     if jitter[worst] > JITTER_TOLERANCE:
         raise ValueError(f"time: expected uniform sampling (jitter <= {100 * JITTER_TOLERANCE:g} % of the step "
                          f"{median:.6g} s), found {100 * jitter[worst]:.3g} % in {label} at index {worst + 1}")
-    return float((t[-1] - t[0]) / (t.size - 1))
+    return check_sample_time("time", float((t[-1] - t[0]) / (t.size - 1)), f"the mean step of {label}")
+
+
+def check_sample_time(param: str, step: float, label: str) -> float:
+    """``step`` if it lies in :data:`SAMPLE_TIME_RANGE`, else ``ValueError`` naming ``param`` and ``label``.
+
+    Parameters
+    ----------
+    param : str
+        The parameter for the message (``time``, ``sample_time``).
+    step : float
+        The sample time [s].
+    label : str
+        Where it came from, for the message.
+    """
+    low, high = SAMPLE_TIME_RANGE
+    if not low <= step <= high:
+        raise ValueError(f"{param}: expected a sample time in [{low:g}, {high:g}] s, found {step:.6g} s "
+                         f"({label}); check the time unit (s, not ms or us) or the column")
+    return step
 
 
 def zero_phase_velocity(position: np.ndarray, sample_time: float, cutoff_hz: float | None = None) -> np.ndarray:
@@ -182,7 +219,7 @@ class Trace:
         if len(set(lengths.values())) > 1:
             raise ValueError(f"force: expected columns of equal length, found {lengths}")
         _check_time(cols["t"], "t")
-        step = _check_positive("sample_time", self.sample_time)
+        step = check_sample_time("sample_time", _check_positive("sample_time", self.sample_time), "sample_time")
         for name, arr in cols.items():
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
@@ -256,18 +293,27 @@ def _read_csv(path: Path) -> dict[str, np.ndarray]:
     if not lines or not lines[0].strip():
         raise ValueError(f"path: expected a CSV file with a header row of column names, found an empty first line "
                          f"in {path.name!r}")
-    header = [h.strip().strip('"').strip("'") for h in lines[0].split(",")]
+    header = [h.strip().strip('"').strip("'").strip() for h in next(csv.reader([lines[0]], skipinitialspace=True))]
+    hint = (f" (the first line {lines[0][:60]!r} is a '#' comment, taken as the header row: remove the comment "
+            "lines above the header)") if lines[0].lstrip().startswith("#") else ""
+    seen: dict[str, int] = {}
+    for i, name in enumerate(header):
+        if name in seen:
+            raise ValueError(f"path: expected distinct column names in {path.name!r}, found {name!r} as columns "
+                             f"{seen[name] + 1} and {i + 1} (names are compared after stripping spaces and quotes)"
+                             f"{hint}")
+        seen[name] = i
     body = "\n".join(line for line in lines[1:] if line.strip())
     try:
         data = np.loadtxt(io.StringIO(body), delimiter=",", ndmin=2, dtype=float)
     except ValueError as e:
         raise ValueError(f"path: expected numeric CSV rows below the header, found unreadable data in "
-                         f"{path.name!r} ({e})") from e
+                         f"{path.name!r} ({e}){hint}") from e
     if data.size == 0:
         data = np.empty((0, len(header)))
     if data.shape[1] != len(header):
         raise ValueError(f"path: expected {len(header)} values per row (one per header name), found "
-                         f"{data.shape[1]} in {path.name!r}")
+                         f"{data.shape[1]} in {path.name!r}{hint}")
     return {name: data[:, i] for i, name in enumerate(header)}
 
 
@@ -276,6 +322,9 @@ def _read_mat(path: Path) -> dict[str, np.ndarray]:
 
     try:
         raw = sio.loadmat(str(path))
+    except MemoryError:
+        raise ValueError(f"path: not enough memory to read {path.name!r} (a MATLAB file whose variables "
+                         "decompress to more than the memory available)") from None
     except Exception as e:  # scipy raises several types for a file that is not MATLAB
         raise ValueError(f"path: expected a MATLAB .mat file (v5 or older), found one scipy cannot read: "
                          f"{path.name!r} ({e})") from e
@@ -310,7 +359,8 @@ def load_trace(path: str | os.PathLike, *, position: str, input: str, time: str 
     input_gain : float
         Conversion of the logged input to force [N/unit], e.g. the actuator gain
         35.15065188 N/V of the EMPS benchmark whose input is a voltage. Negative values
-        (a sign convention) are allowed; 0, NaN and infinity are refused.
+        (a sign convention) are allowed (an identification that comes out with a negative
+        mass then warns to check the sign); 0, NaN and infinity are refused.
 
     Returns
     -------
@@ -320,8 +370,11 @@ def load_trace(path: str | os.PathLike, *, position: str, input: str, time: str 
     ------
     ValueError
         Wrong extension, missing file, unreadable or non-UTF-8 CSV, a missing column
-        (the message lists the available names), a scalar where a column is expected,
-        non-finite values (column and first bad index), fewer than 100 samples, time not
+        (the message lists the available names), two columns of the same name (after stripping
+        spaces and quotes), the same column (or the same data) for two of position, input and time,
+        a scalar where a column is expected, non-finite values (column and first bad index),
+        |values| above :data:`MAX_MAGNITUDE`, a sample time outside :data:`SAMPLE_TIME_RANGE`,
+        not enough memory to read a ``.mat`` file, fewer than 100 samples, time not
         strictly increasing, non-uniform sampling (jitter over 1 % of the step), a time
         column inconsistent with ``sample_time``, an input gain of 0 or non-finite.
     TypeError
@@ -353,8 +406,12 @@ def load_trace(path: str | os.PathLike, *, position: str, input: str, time: str 
     position = _check_name("position", position)
     input = _check_name("input", input)
     time = _check_name("time", time, optional=True)
+    for param, other, name in (("input", "position", input), ("time", "position", time), ("time", "input", time)):
+        if name is not None and name == {"position": position, "input": input}[other]:
+            raise ValueError(f"{param}: expected a column other than the {other} column, found {name!r} for both")
     gain = _check_gain(input_gain)
-    step = None if sample_time is None else _check_positive("sample_time", sample_time)
+    step = None if sample_time is None else check_sample_time(
+        "sample_time", _check_positive("sample_time", sample_time), "sample_time")
     if time is None and step is None:
         raise ValueError("time, sample_time: expected a time column name or a sample time [s], found neither")
     if not p.is_file():
@@ -368,11 +425,19 @@ def load_trace(path: str | os.PathLike, *, position: str, input: str, time: str 
     u = _check_column("input", u_label, u_raw)
     if u.size != x.size:
         raise ValueError(f"input: expected {x.size} samples like {x_label}, found {u.size} in {u_label}")
+    if np.array_equal(x, u):
+        raise ValueError(f"input: expected the actuator input, found in {u_label} the same data as in {x_label}")
+    if float(np.max(np.abs(u))) * abs(gain) > MAX_MAGNITUDE:
+        raise ValueError(f"input_gain: expected |input_gain x input| <= {MAX_MAGNITUDE:g} N, found "
+                         f"{float(np.max(np.abs(u))) * abs(gain):g} N (input_gain = {gain:g}, {u_label})")
     if time is not None:
         t_raw, t_label = _pick("time", time, table, kind)
         t = _check_column("time", t_label, t_raw)
         if t.size != x.size:
             raise ValueError(f"time: expected {x.size} samples like {x_label}, found {t.size} in {t_label}")
+        for other, label in ((x, x_label), (u, u_label)):
+            if np.array_equal(t, other):
+                raise ValueError(f"time: expected the time base, found in {t_label} the same data as in {label}")
         t_step = _check_time(t, t_label)
         if step is not None and abs(t_step - step) > JITTER_TOLERANCE * step:
             raise ValueError(f"time, sample_time: expected agreement within {100 * JITTER_TOLERANCE:g} %, found "

@@ -6,15 +6,13 @@ this module draws them and reads such a folder back for :func:`obsdesign.report.
 
 from __future__ import annotations
 
-import csv
-import json
 import math
-import re
 from pathlib import Path
 
 import numpy as np
 
 from .figures import plt
+from .folder_files import read_csv_rows, read_json, svg_data_url
 
 __all__ = ["comparison_figure", "comparison_section", "FILES"]
 
@@ -79,22 +77,27 @@ def comparison_section(folder) -> dict | None:
     Raises
     ------
     ValueError
-        If the folder lacks one of :data:`FILES` or the figure is not one obsdesign wrote.
+        If the folder lacks one of :data:`FILES`, or one of them is not what ``obsdesign compare`` writes
+        (the message names the file).
+
+    Notes
+    -----
+    The figure is never inlined: it is returned as a ``data:image/svg+xml;base64,`` address
+    (``svg_src``) for an ``<img>`` element, where an SVG runs no script, loads nothing and cannot
+    navigate the page.
     """
     if folder is None:
         return None
+    from ..comparison import COLUMNS
+
     folder = Path(folder)
     if not all((folder / n).is_file() for n in FILES):
         raise ValueError(f"compare: expected a folder written by 'obsdesign compare' (with {', '.join(FILES)}), "
                          f"found {str(folder)!r}")
-    with open(folder / "compare.csv", newline="", encoding="utf-8") as fh:
-        rows = list(csv.DictReader(fh))
-    summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+    rows = read_csv_rows(folder / "compare.csv", "compare", COLUMNS)
+    summary = read_json(folder / "summary.json", "compare")
     if not isinstance(summary, dict) or not isinstance(summary.get("summary"), list):
-        raise ValueError(f"compare: {str(folder / 'summary.json')!r} is not a summary written by obsdesign compare")
-    text = (folder / "compare.svg").read_text(encoding="utf-8")
-    text = re.sub(r"<metadata>.*?</metadata>", "", text[text.index("<svg"):], flags=re.S)
-    if re.search(r"<script|\bon\w+=|(?:href|src)=\"(?!#)", text):
-        raise ValueError(f"compare: {str(folder / 'compare.svg')!r} is not a figure written by obsdesign")
-    return {"rows": rows, "summary": summary["summary"], "seeds": summary.get("seeds"), "svg": text,
-            "folder": str(folder)}
+        raise ValueError(f"compare: {str(folder / 'summary.json')!r} is not a summary written by obsdesign compare "
+                         "(expected an object with a 'summary' list)")
+    return {"rows": rows, "summary": summary["summary"], "seeds": summary.get("seeds"),
+            "svg_src": svg_data_url(folder / "compare.svg", "compare"), "folder": str(folder)}

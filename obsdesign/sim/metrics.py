@@ -16,8 +16,10 @@ key                        meaning
 ``diverged``               the run stopped early because a state left its bounds
 ``divergence``             ``None`` (no divergence), ``'numerical'`` (the plant's explicit step
                            ``dt / n_sub`` broke the rule of :mod:`obsdesign.sim.numerics`, so
-                           the integrator, not the design, blew up) or ``'physical'`` (the
-                           step was stable: the loop itself diverged)
+                           the integrator, not the design, blew up), ``'measurement'`` (the
+                           measured displacement left the bounds while the plant stayed within
+                           them: the sensor noise or quantization is out of scale) or
+                           ``'physical'`` (the step was stable: the loop itself diverged)
 ``sim_wall_s``             wall time of the kernel [s]
 ``rms_error_per_band``     tracking only: RMS of ``e`` per chirp-frequency band [m]
 =========================  =====================================================================
@@ -71,8 +73,13 @@ def rms(x: np.ndarray, *, finite: bool = False, scratch: np.ndarray | None = Non
         scratch = None
     if not x.size:
         return None
-    squares = np.multiply(x, x, out=None if scratch is None else scratch[:x.size])
-    return float(np.sqrt(np.mean(squares)))
+    with np.errstate(over="ignore"):
+        squares = np.multiply(x, x, out=None if scratch is None else scratch[:x.size])
+        mean = float(np.mean(squares))
+    if not np.isfinite(mean):  # values near 1e154 and above: their squares overflow, so scale first
+        peak = float(np.max(np.abs(x)))
+        return peak * float(np.sqrt(np.mean(np.square(x / peak))))
+    return float(np.sqrt(mean))
 
 
 def _rms_of_difference(a: np.ndarray, b: np.ndarray, finite: bool, scratch: np.ndarray) -> float | None:
@@ -117,6 +124,19 @@ def _step_response(m: dict, sc: Scenario, x: np.ndarray, idx: np.ndarray, start:
     m["rise_time"].append(sm["rise_time"])
 
 
+def _divergence(out: dict[str, np.ndarray], n_written: int, step_stable: bool) -> str:
+    """The label of a diverged run: 'numerical', 'measurement' or 'physical' (see the module docstring)."""
+    from .kernel import DIVERGED_F, DIVERGED_X
+
+    if not step_stable:
+        return "numerical"
+    last = n_written - 1
+    if last >= 0 and abs(out["x"][last]) < DIVERGED_X and abs(out["v"][last]) < DIVERGED_F \
+            and not float(np.max(np.abs(out["x_meas"][:n_written]))) < DIVERGED_X:
+        return "measurement"
+    return "physical"
+
+
 def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_written: int, settle_tol: float,
                  wall: float, *, step_stable: bool = True) -> dict[str, Any]:
     """The metrics of a run from the kernel's outputs (see the module docstring).
@@ -155,7 +175,7 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
         "observer_rms_error_v": _rms_of_difference(out["v_hat"][valid], out["v"][valid], finite, scratch),
         "observer_rms_error_f": _rms_of_difference(out["f_hat"][valid], out["f"][valid], finite, scratch),
         "diverged": not finite,
-        "divergence": None if finite else ("physical" if step_stable else "numerical"),
+        "divergence": None if finite else _divergence(out, n_written, step_stable),
         "sim_wall_s": wall,
     }
     for start, end in sc.holds:

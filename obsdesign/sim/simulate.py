@@ -211,7 +211,7 @@ def prepare(
     if plant == "model" and cfg.observer.variant == "lag" and cfg.friction.beta is None:
         raise ValueError("plant: the 'model' plant of variant 'lag' needs friction.beta")
     dt = cfg.observer.dt
-    substeps = substeps_for(cfg, dt, substeps, plant=plant)
+    substeps = substeps_for(plant_cfg, dt, substeps, plant=plant)  # the simulated plant's own time constants
     noise_seed, signal_seed = np.random.SeedSequence(seed).spawn(2)
     sc = build_scenario(spec, dt=dt, duration=duration, seed=signal_seed)
     sensor = cfg.sensor
