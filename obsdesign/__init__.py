@@ -66,7 +66,7 @@ def __getattr__(name: str):
         globals()[name] = value
         return value
     if name in ("design", "sim", "report", "symbolic", "params", "cli", "export", "friction", "studies", "sweeps",
-                "data", "estimators"):
+                "data", "estimators", "datasets"):
         return importlib.import_module(f".{name}", __name__)
     raise AttributeError(f"module 'obsdesign' has no attribute {name!r}")
 
