@@ -33,10 +33,10 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Mapping, NamedTuple
 
-from ._io import atomic_write
-from .compensation import CompensationSpec
 from ._format import toml_value
+from ._io import atomic_write
 from ._validate import FINITE, NONNEGATIVE, POSITIVE, Choice, FrozenMap, Range, Text
+from .compensation import CompensationSpec
 from .plant_spec import PlantFrictionSpec
 
 __all__ = [

@@ -12,15 +12,30 @@ import scipy.linalg
 import scipy.signal
 
 import obsdesign as od
+from obsdesign.design.discretize import step_matrices
 from obsdesign.estimators import (
-    ESTIMATORS, build, build_dob, dob_continuous, build_eso, build_kalman, build_paper, eso_gains, friction_noise_rms,
-    estimator_step, noise_level, paper_dominant_pole, q_filter, reference_estimator, reference_noise_rms, run_offline, tune,
+    ESTIMATORS,
+    build,
+    build_dob,
+    build_eso,
+    build_kalman,
+    build_paper,
+    dob_continuous,
+    eso_gains,
+    estimator_step,
+    friction_noise_rms,
+    noise_level,
+    paper_dominant_pole,
+    q_filter,
+    reference_estimator,
+    reference_noise_rms,
+    run_offline,
+    tune,
     with_lowpass,
 )
 from obsdesign.estimators.eso import eso_continuous
 from obsdesign.estimators.kalman import kalman_model
 from obsdesign.sim import band_limited_noise
-from obsdesign.design.discretize import step_matrices
 
 PRESETS = {"table1-static": lambda: od.load_preset("table1").override(variant="static"),
            "vcm": lambda: od.load_preset("vcm")}

@@ -59,7 +59,7 @@ import math
 
 from numba import njit
 
-from .common import P_MODEL, sign, stribeck_level, viscous, P_OFFSET, P_CF, P_CF_NEG
+from .common import P_CF, P_CF_NEG, P_MODEL, P_OFFSET, sign, stribeck_level, viscous
 
 __all__ = [
     "L_FS", "L_FS_NEG", "L_VS", "L_SIGMA0", "L_SIGMA1", "N_PARAMS", "N_STATE",
