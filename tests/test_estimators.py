@@ -126,7 +126,7 @@ def test_a_sixth_linear_estimator_is_its_module_plus_one_entry(request, monkeypa
 @pytest.mark.parametrize("omega_o, sigma", [(30.0, 21.1), (400.0, 21.1), (50.0, 0.0)])
 def test_eso_poles_continuous_and_discrete(omega_o, sigma):
     m, dt = 0.538, 1e-4
-    A, b, c, l = eso_continuous(omega_o, m, sigma)
+    A, b, c, l = eso_continuous(omega_o, m, sigma)  # noqa: E741 (the gain vector l of eso_continuous)
     err = ct.ss(A - np.outer(l, c), np.zeros((3, 1)), np.eye(3), 0.0)
     # A triple eigenvalue is perturbed by ~eps^(1/3) relative: compare the roots loosely and
     # the characteristic polynomial tightly.
