@@ -32,3 +32,20 @@ screenshot: $(STAMP)
 
 clean:
 	rm -rf $(VENV) build *.egg-info
+
+# Lint (not part of `make test` yet): ruff with the [tool.ruff] rules of pyproject.toml, from the
+# same .venv with the `lint` extra installed beside the test tools.
+.PHONY: lint wheel-smoke
+LINT_STAMP := $(VENV)/.installed-lint
+
+$(LINT_STAMP): pyproject.toml | $(PY)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[test,distributed,lint]'
+	touch $(LINT_STAMP)
+
+lint: $(LINT_STAMP)
+	$(VENV)/bin/ruff check .
+
+# Build the sdist and wheel, check them, install the wheel outside the repository and run it there.
+wheel-smoke:
+	.ci/wheel-smoke.sh

@@ -6,10 +6,10 @@ excitation rho 0.98 diverges in every seed and rho 1.02 in none. Reports, withou
 whether the paper's "diverges after 4.3 s" appears under the 5 Hz random excitation.
 """
 
-from _common import parse_out, report, require
-
 from obsdesign import studies as paper
 from obsdesign.report.study_figures import convergence_figure
+
+from _common import parse_out, report, require
 
 if __name__ == "__main__":
     out = parse_out(__doc__)

@@ -4,10 +4,10 @@ Asserts: the observer compensation settles faster after both steps and tracks wi
 RMS error in every chirp-frequency band. Reports the steady-state error per hold.
 """
 
-from _common import parse_out, report, require
-
 from obsdesign import studies as paper
 from obsdesign.report.study_figures import experiments_figure
+
+from _common import parse_out, report, require
 
 if __name__ == "__main__":
     out = parse_out(__doc__)

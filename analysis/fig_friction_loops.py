@@ -3,10 +3,10 @@
 Asserts: the filtered estimate stays within 10 % of Cf (RMS) of the plant's Coulomb friction.
 """
 
-from _common import parse_out, report, require
-
 from obsdesign import studies as paper
 from obsdesign.report.study_figures import friction_loops_figure
+
+from _common import parse_out, report, require
 
 if __name__ == "__main__":
     out = parse_out(__doc__)

@@ -4,14 +4,14 @@ Asserts: the simulated RMS of the noise in the raw and filtered estimates matche
 prediction (obsdesign noise) within 5 % and 15 % for Table 1 and the VCM.
 """
 
+import control as ct
 import matplotlib.pyplot as plt
 import numpy as np
 
-from _common import parse_out, report, require
-
-import control as ct
 import obsdesign as od
 from obsdesign import studies as paper
+
+from _common import parse_out, report, require
 
 if __name__ == "__main__":
     out = parse_out(__doc__)

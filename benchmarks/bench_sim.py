@@ -30,8 +30,8 @@ import numpy as np
 
 import obsdesign as od
 from obsdesign.design import discretize
-from obsdesign.friction import presliding as friction
 from obsdesign.estimators import base as estimator_base
+from obsdesign.friction import presliding as friction
 from obsdesign.sampled import kernel as sampled_kernel
 from obsdesign.sim import kernel
 

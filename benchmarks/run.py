@@ -16,9 +16,9 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 import bench_certificate  # noqa: E402
-import bench_data  # noqa: E402
 import bench_cli  # noqa: E402
 import bench_compare  # noqa: E402
+import bench_data  # noqa: E402
 import bench_derive  # noqa: E402
 import bench_sim  # noqa: E402
 import bench_sweep  # noqa: E402

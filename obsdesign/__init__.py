@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import importlib
 
+from ._version import __version__ as __version__
 from .params import Config as Config
 from .params import FrictionParams as FrictionParams
 from .params import ObserverSpec as ObserverSpec
@@ -22,8 +23,6 @@ from .params import SensorSpec as SensorSpec
 from .params import load_config as load_config
 from .params import load_preset as load_preset
 from .params import preset_names as preset_names
-
-__version__ = "0.1.0"
 
 #: Public names provided by subpackages that are imported lazily.
 _LAZY = {
@@ -67,7 +66,7 @@ def __getattr__(name: str):
         globals()[name] = value
         return value
     if name in ("design", "sim", "report", "symbolic", "params", "cli", "export", "friction", "studies", "sweeps",
-                "data", "estimators"):
+                "data", "estimators", "datasets"):
         return importlib.import_module(f".{name}", __name__)
     raise AttributeError(f"module 'obsdesign' has no attribute {name!r}")
 

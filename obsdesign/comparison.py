@@ -42,9 +42,9 @@ import numpy as np
 from ._display import ResultDisplay
 from ._validate import check_choice, check_integer
 from .estimators import DiscreteEstimator, friction_noise_rms, noise_level, reference_noise_rms, tune
-from .params import Config
 from .estimators.registry import ESTIMATORS
 from .friction.registry import FRICTION_MODELS
+from .params import Config
 from .plant_spec import PlantFrictionSpec
 from .sim.scenarios import Chirp, Excitation, Positioning
 from .sim.simulate import simulate

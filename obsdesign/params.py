@@ -33,11 +33,11 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Mapping, NamedTuple
 
-from ._io import atomic_write
-from .compensation import CompensationSpec
 from ._format import toml_value
-from ._validate import (FINITE, NONNEGATIVE, POSITIVE, SAMPLE_TIME, Choice, FrozenMap, Integer, Range, Text, document_fields,
-                        param_field, validate_fields)
+from ._io import atomic_write
+from ._validate import (FINITE, NONNEGATIVE, POSITIVE, SAMPLE_TIME, Choice, FrozenMap, Integer, Range, Text,
+                        document_fields, param_field, validate_fields)
+from .compensation import CompensationSpec
 from .plant_spec import PlantFrictionSpec
 
 __all__ = ["PlantParams", "FrictionParams", "SensorSpec", "ObserverSpec", "PIDSpec", "CompensationSpec", "Config",

@@ -17,8 +17,8 @@ import sympy as sp
 from .design.noise import noise_analysis
 from .design.observer import check_stability
 from .design.pid import pid_from_config
-from .params import Config, load_preset
 from .friction.presliding import coulomb_along
+from .params import Config, load_preset
 from .sim.scenarios import ConstantForce, Excitation
 from .sim.simulate import simulate
 

@@ -12,16 +12,31 @@ import scipy.linalg
 import scipy.signal
 
 import obsdesign as od
+from obsdesign.design.discretize import step_matrices
 from obsdesign.estimators import (
-    ESTIMATORS, build, build_dob, dob_continuous, build_eso, build_kalman, build_paper, eso_gains, friction_noise_rms,
-    estimator_step, noise_level, paper_dominant_pole, q_filter, reference_estimator, reference_noise_rms, run_offline, tune,
+    ESTIMATORS,
+    build,
+    build_dob,
+    build_eso,
+    build_kalman,
+    build_paper,
+    dob_continuous,
+    eso_gains,
+    estimator_step,
+    friction_noise_rms,
+    noise_level,
+    paper_dominant_pole,
+    q_filter,
+    reference_estimator,
+    reference_noise_rms,
+    run_offline,
+    tune,
     with_lowpass,
 )
 from obsdesign.estimators.eso import eso_continuous
 from obsdesign.estimators.kalman import kalman_model
 from obsdesign.estimators.tuning import estimate_noise_rms
 from obsdesign.sim import band_limited_noise
-from obsdesign.design.discretize import step_matrices
 
 PRESETS = {"table1-static": lambda: od.load_preset("table1").override(variant="static"),
            "vcm": lambda: od.load_preset("vcm")}
@@ -112,7 +127,7 @@ def test_a_sixth_linear_estimator_is_its_module_plus_one_entry(request, monkeypa
 @pytest.mark.parametrize("omega_o, sigma", [(30.0, 21.1), (400.0, 21.1), (50.0, 0.0)])
 def test_eso_poles_continuous_and_discrete(omega_o, sigma):
     m, dt = 0.538, 1e-4
-    A, b, c, l = eso_continuous(omega_o, m, sigma)
+    A, b, c, l = eso_continuous(omega_o, m, sigma)  # noqa: E741 (the gain vector l of eso_continuous)
     err = ct.ss(A - np.outer(l, c), np.zeros((3, 1)), np.eye(3), 0.0)
     # A triple eigenvalue is perturbed by ~eps^(1/3) relative: compare the roots loosely and
     # the characteristic polynomial tightly.

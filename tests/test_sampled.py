@@ -22,8 +22,13 @@ import obsdesign as od
 from obsdesign.data import Trace, observe
 from obsdesign.sampled import kernel as sk
 from obsdesign.sampled.choices import ESTIMATORS, SCHEDULES
-from obsdesign.sampled.controller import (ControllerArgs, EstimatorArgs, ObserverArgs, SampledController,
-                                          sampled_controller)
+from obsdesign.sampled.controller import (
+    ControllerArgs,
+    EstimatorArgs,
+    ObserverArgs,
+    SampledController,
+    sampled_controller,
+)
 from obsdesign.sim import kernel as simk
 
 ROOT = Path(od.__file__).parent

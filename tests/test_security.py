@@ -4,14 +4,12 @@ Each generated artifact is run by its real tool (CPython import, gcc -Werror, no
 headless Chromium) with config names and sweep figures built to break out of their context.
 """
 
-import base64
 import dataclasses
 import importlib.util
 import json
 import re
 import shutil
 import subprocess
-import sys
 
 import pytest
 from hypothesis import given, settings
@@ -231,7 +229,7 @@ def _hostile_svgs(base: str) -> list[str]:
         f'<svg xmlns="http://www.w3.org/2000/svg"><script>{run("e6")}</script></svg>',
         f'<svg xmlns="http://www.w3.org/2000/svg"><SCRIPT>{run("e8")}</SCRIPT></svg>',
         f'<svg xmlns="http://www.w3.org/2000/svg" onload ="{run("e9")}"><rect width="9" height="9"/></svg>',
-        f"<svg xmlns=\"http://www.w3.org/2000/svg\" xmlns:xlink=\"http://www.w3.org/1999/xlink\">"
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" xmlns:xlink=\"http://www.w3.org/1999/xlink\">"
         "<a href='javascript:document.documentElement.dataset.pwned=\"e10\"'>"
         "<rect width='99' height='99'/></a></svg>",
         f'<svg xmlns="http://www.w3.org/2000/svg"><foreignObject width="9" height="9">'

@@ -8,10 +8,9 @@ import pytest
 import scipy.linalg
 
 import obsdesign as od
-from obsdesign.sim import kernel
 from obsdesign.design.discretize import coefficient_matrices, step_matrices
 from obsdesign.friction.presliding import coulomb, coulomb_normalized, presliding_shape, stiffness, track_reversal
-from obsdesign.sim import COLUMNS
+from obsdesign.sim import COLUMNS, kernel
 
 TABLE1 = od.load_preset("table1")
 VCM = od.load_preset("vcm")

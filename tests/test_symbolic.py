@@ -106,8 +106,8 @@ def test_observable_for_every_stiffness(variant):
     # Independent check: numeric rank 3 at the two ends of the stiffness range.
     num = {m: 0.538, sigma: 21.1, beta: 1e-3}
     for kk in (0.0, 8000.0):
-        O = np.array(d.observability_matrix.subs(num).subs(k, kk), dtype=float)
-        assert np.linalg.matrix_rank(O) == 3
+        observability = np.array(d.observability_matrix.subs(num).subs(k, kk), dtype=float)
+        assert np.linalg.matrix_rank(observability) == 3
 
 
 @pytest.mark.parametrize("variant", VARIANTS)
@@ -152,7 +152,10 @@ def test_stiffness_rate_sign_differs_from_eq_3_2_7():
     # Independent: finite difference of k(z) = -s Cf D ln z along z = s x(t), x = v t.
     vals = {s: 3000.0, Cf: 0.35, D: 1.0}
     v, t, h = 1e-4, 0.5e-3, 1e-9
-    kfun = lambda tt: -vals[s] * vals[Cf] * np.log(vals[s] * v * tt)
+
+    def kfun(tt):
+        return -vals[s] * vals[Cf] * np.log(vals[s] * v * tt)
+
     fd = (kfun(t + h) - kfun(t - h)) / (2 * h)
     ours = float(d.stiffness_rate.subs(vals).subs({xdot: v, z: vals[s] * v * t}))
     assert ours == pytest.approx(fd, rel=1e-5) and ours < 0

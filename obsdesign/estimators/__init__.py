@@ -19,7 +19,6 @@ Examples
 
 from .._lazy import lazy_names
 
-
 __all__ = [
     "MAX_STATES", "DiscreteEstimator", "discretize_observer", "estimator_output", "estimator_step",
     "foh_matrices", "run_offline", "build_dob", "dob_continuous", "q_filter", "build_eso", "eso_gains", "build_kalman",

@@ -99,7 +99,7 @@ def build_eso(cfg: Config, *, omega_o: float, sigma_model: float | None = None,
     cfg = check_config(cfg)
     w = check_positive("omega_o", omega_o, "rad/s")
     m, sig = cfg.plant.m, model_sigma(cfg, sigma_model)
-    A, b, c, l = eso_continuous(w, m, sig)
+    A, b, c, l = eso_continuous(w, m, sig)  # noqa: E741 (the gain vector l of the docstring)
     Phi, gu, g0, g1 = discretize_observer(A - np.outer(l, c), b, l, cfg.observer.dt)
     return DiscreteEstimator(
         name="eso", dt=cfg.observer.dt, Phi=Phi, gu=gu, g0=g0, g1=g1,

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from .._lazy import lazy_names
 
-
 __all__ = [
     "PAPER", "LUGRE", "DAHL", "GMS", "FRICTION_MODELS", "FrictionModelInfo", "ParameterSpec",
     "friction_code", "friction_n_state", "friction_init", "friction_force", "friction_advance",

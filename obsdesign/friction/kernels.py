@@ -19,6 +19,7 @@ Examples
 >>> from obsdesign.friction.registry import FRICTION_MODELS
 >>> info = FRICTION_MODELS["dahl"]
 >>> p = info.pack({})
+>>> import numpy as np
 >>> st = np.zeros(friction_n_state(info.code, p))
 >>> friction_init(info.code, p, st, 0.0)
 >>> friction_force(info.code, p, st, 0.0, 0.0)
@@ -33,7 +34,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 
 from .common import viscous

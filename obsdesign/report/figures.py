@@ -15,9 +15,9 @@ import io
 import os
 from pathlib import Path
 
-from .._io import atomic_path
-
 import matplotlib  # noqa: E402
+
+from .._io import atomic_path
 
 matplotlib.use("Agg")
 matplotlib.rcParams["svg.hashsalt"] = "obsdesign"  # the same figure gives the same SVG, byte for byte

@@ -7,7 +7,6 @@
 
 from .._lazy import lazy_names
 
-
 __all__ = ["SweepResult", "sweep", "SUMMARY_KEYS", "make_summary"]
 
 #: Public name -> module it comes from; loaded on first use (obsdesign._lazy).

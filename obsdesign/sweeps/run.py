@@ -12,7 +12,6 @@ Examples
 
 from __future__ import annotations
 
-import concurrent.futures
 import json
 import os
 import sys

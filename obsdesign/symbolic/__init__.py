@@ -2,7 +2,6 @@
 
 from .._lazy import lazy_names
 
-
 __all__ = ["Derivation", "NoiseTransfer", "derive", "regular_form", "model_matrices"]
 
 #: Public name -> module it comes from; loaded on first use (obsdesign._lazy).
