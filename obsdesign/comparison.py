@@ -46,9 +46,9 @@ from .estimators.registry import ESTIMATORS
 from .friction.registry import FRICTION_MODELS
 from .params import Config
 from .plant_spec import PlantFrictionSpec
+from .sim.metrics import rms
 from .sim.scenarios import Chirp, Excitation, Positioning
 from .sim.simulate import simulate
-from .sim.metrics import rms
 from .sim.step_metrics import step_metrics
 from .sweeps.pool import Executor
 

@@ -238,7 +238,6 @@ def test_band_limited_rms_stays_accurate_far_beyond_the_corners():
     """Review n5: a noise band of 1e12 Hz (12 decades beyond the filter) was 19 % low with a SciPy
     IntegrationWarning; against a dense log-grid trapezoid of |G|^2, independent of quad."""
     import math
-    import warnings
 
     cfg = od.load_preset("vcm")
     with warnings.catch_warnings():

@@ -76,6 +76,7 @@ def test_discrete_pid_is_the_kernels_recursion(make):
     """The real numba kernel (controller_sample, controller 'pid') on a random error sequence against
     python-control's forced response of C(z): the command of every sample."""
     import control as ct
+
     from obsdesign.sampled import sampled_controller
     from obsdesign.sampled.kernel import CONTROLLER_STATE, OBSERVER_STATE, controller_sample
 

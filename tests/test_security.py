@@ -4,6 +4,7 @@ Each generated artifact is run by its real tool (CPython import, gcc -Werror, no
 headless Chromium) with config names and sweep figures built to break out of their context.
 """
 
+import base64
 import dataclasses
 import importlib.util
 import json

@@ -31,8 +31,7 @@ from ..sim.simulate import simulate
 from .folder import SweepLock, check_start, read_manifest
 from .plan import RunSpec, check_axes, make_plan
 from .pool import Executor
-from .store import (FIXED_COLUMNS, TAIL_COLUMNS, checksum_line, checksums_text, csv_line, csv_text, read_rows,
-                    typed_row)
+from .store import FIXED_COLUMNS, TAIL_COLUMNS, checksum_line, checksums_text, csv_line, csv_text, read_rows, typed_row
 from .summary import best_value
 
 __all__ = ["sweep", "SweepResult", "run_one", "metric_columns", "band_column"]
