@@ -42,7 +42,7 @@ import numpy as np
 from ._display import ResultDisplay
 from ._validate import check_choice, check_integer
 from .estimators import DiscreteEstimator, friction_noise_rms, noise_level, reference_noise_rms, tune
-from .estimators.registry import ESTIMATORS
+from .estimators.registry import ESTIMATORS, RULES
 from .friction.registry import FRICTION_MODELS
 from .params import Config
 from .plant_spec import PlantFrictionSpec
@@ -162,12 +162,15 @@ class ComparisonResult(ResultDisplay):
         Seeds per case.
     wall_s : float
         Wall time [s].
+    rule : str
+        The tuning rule of the baselines (:data:`obsdesign.estimators.RULES`).
     """
 
     rows: list
     config: Config
     seeds: int
     wall_s: float
+    rule: str = "noise"
 
     _title = "Comparison with standard estimators"
 
@@ -276,7 +279,7 @@ def check_comparison_runs(cases: int, seeds: int) -> int:
 
 def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATORS.names(),
             scenarios=tuple(SCENARIOS), seeds: int = 2, workers: int | None = None,
-            executor=None) -> ComparisonResult:
+            executor=None, rule: str = "noise") -> ComparisonResult:
     """Run every estimator on every plant friction model and scenario.
 
     Parameters
@@ -296,6 +299,10 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
         Processes of the pool (default all cores; 1 runs here).
     executor : optional
         A ``concurrent.futures.Executor`` or ``dask.distributed.Client`` (as :func:`obsdesign.sweep`).
+    rule : str
+        How the baselines are tuned against the paper's observer, a name of
+        :data:`obsdesign.estimators.RULES`: ``noise`` (equal friction-noise RMS, the default) or
+        ``rate`` (equal slowest error pole). The paper's observer keeps its design either way.
 
     Returns
     -------
@@ -314,6 +321,7 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
     estimators = tuple(ESTIMATORS.check(e, kind="estimators") for e in estimators)
     scenarios = tuple(check_choice("scenarios", s, tuple(SCENARIOS)) for s in scenarios)
     seeds = check_integer("seeds", seeds, minimum=1)
+    rule = check_choice("rule", rule, RULES)
     check_comparison_runs(len(plants) * len(estimators) * len(scenarios), seeds)
     t0 = time.perf_counter()
     tuned: dict[str, Any] = {}
@@ -324,7 +332,7 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
             tuned[name] = name
             noise[name] = reference_noise_rms(cfg) if eta > 0 else 0.0
         else:
-            tuned[name] = tune(name, cfg)
+            tuned[name] = tune(name, cfg, rule=rule)
             noise[name] = friction_noise_rms(tuned[name], eta, band)
     tasks = [(cfg, plant_config(cfg, p), tuned[e], s, seed, noise[e])
              for p in plants for e in estimators for s in scenarios for seed in range(seeds)]
@@ -339,7 +347,7 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
         raise
     pool.close()
     rows = [done[i] for i in range(len(tasks))]
-    return ComparisonResult(rows=rows, config=cfg, seeds=seeds, wall_s=time.perf_counter() - t0)
+    return ComparisonResult(rows=rows, config=cfg, seeds=seeds, wall_s=time.perf_counter() - t0, rule=rule)
 
 
 def _run_batch(batch: list[tuple]) -> list[tuple[int, dict]]:

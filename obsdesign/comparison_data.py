@@ -21,7 +21,7 @@ import numpy as np
 
 from .data import Trace, identify, observe
 from .data.trace import zero_phase_velocity
-from .estimators import friction_noise_rms, noise_level, reference_noise_rms
+from .estimators import friction_noise_rms, noise_level, reference_noise_rms, tune
 from .friction.presliding import coulomb_along
 from .sampled.choices import ESTIMATORS
 from .sampled.controller import sampled_controller
@@ -33,7 +33,8 @@ __all__ = ["compare_data", "TRANSIENT_SAMPLES_S"]
 TRANSIENT_SAMPLES_S = 1.0
 
 
-def compare_data(trace: Trace, *, estimators=tuple(ESTIMATORS), cutoff_hz: float | None = None) -> list[dict[str, Any]]:
+def compare_data(trace: Trace, *, estimators=tuple(ESTIMATORS), cutoff_hz: float | None = None,
+                 rule: str = "noise") -> list[dict[str, Any]]:
     """One row per estimator on a measured trace (``plant = 'data:<source>'``, ``scenario = 'data'``).
 
     Parameters
@@ -44,6 +45,9 @@ def compare_data(trace: Trace, *, estimators=tuple(ESTIMATORS), cutoff_hz: float
         Names of :data:`obsdesign.sampled.choices.ESTIMATORS`.
     cutoff_hz : float, optional
         Cut-off of the zero-phase velocity of the reference (default that of the identification).
+    rule : str
+        Tuning rule of the baselines (:data:`obsdesign.estimators.RULES`), as in
+        :func:`obsdesign.comparison.compare`.
 
     Returns
     -------
@@ -67,7 +71,7 @@ def compare_data(trace: Trace, *, estimators=tuple(ESTIMATORS), cutoff_hz: float
         row: dict[str, Any] = {"plant": f"data:{trace.source}", "estimator": name, "scenario": "data", "seed": 0,
                                "settling_time": None, "overshoot": None, "tracking_rms_error": None}
         try:
-            ctrl = sampled_controller(cfg, estimator=name)
+            ctrl = sampled_controller(cfg, estimator=tune(name, cfg, rule=rule) if ESTIMATORS[name].baseline else name)
             result = observe(ctrl, trace)
             # the compensation signal, as in the closed loop: the paper entries' low-pass output,
             # a baseline's own estimate

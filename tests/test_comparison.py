@@ -156,3 +156,40 @@ def test_cli_data_needs_column_names(tmp_path, capsys):
     assert main(["compare", "--data", str(_synthetic_trace(tmp_path)), "--out", str(tmp_path / "cmp")]) == 2
     assert "needs --position NAME and --input NAME" in capsys.readouterr().err
     assert not (tmp_path / "cmp").exists()
+
+
+@pytest.mark.slow
+def test_rule_rate_tunes_the_baselines_to_the_papers_slowest_pole(tmp_path):
+    """``compare(rule='rate')``: the ESO's triple pole sits at the paper observer's dominant pole
+    (-sqrt(kappa/m)(rho - 1) for the vcm design, in closed form), its noise column is that tuning's, and
+    the CLI records the rule in summary.json."""
+    import json
+    import math
+    import subprocess
+    import sys
+
+    from obsdesign.comparison import compare
+    from obsdesign.estimators import friction_noise_rms, noise_level, tune
+
+    cfg = od.load_preset("vcm")
+    dominant = math.sqrt(cfg.friction.kappa / cfg.plant.m) * (cfg.observer.rho - 1.0)
+    rate = tune("eso", cfg, rule="rate")
+    assert rate.params["omega_o"] == pytest.approx(dominant, rel=1e-9)
+    res = compare(cfg, plants=("paper",), estimators=("eso",), scenarios=("positioning",), seeds=1, workers=1,
+                  rule="rate")
+    eta, band = noise_level(cfg)
+    assert res.rule == "rate"
+    assert res.rows[0]["friction_noise_rms"] == pytest.approx(friction_noise_rms(rate, eta, band), rel=1e-12)
+    assert res.rows[0]["friction_noise_rms"] != pytest.approx(friction_noise_rms(tune("eso", cfg), eta, band),
+                                                              rel=1e-3)
+    with pytest.raises(ValueError, match="rule: expected one of noise, rate, found 'fast'"):
+        compare(cfg, plants=("paper",), estimators=("eso",), scenarios=("positioning",), seeds=1, rule="fast")
+    out = tmp_path / "cmp"
+    run = subprocess.run([sys.executable, "-m", "obsdesign", "compare", "--plants", "paper", "--estimators", "eso",
+                          "--scenarios", "positioning", "--seeds", "1", "--workers", "1", "--rule", "rate", "--out",
+                          str(out)], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert json.loads((out / "summary.json").read_text())["rule"] == "rate"
+    bad = subprocess.run([sys.executable, "-m", "obsdesign", "compare", "--rule", "min", "--out", str(out)],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) <= 2 and "--rule" in bad.stderr

@@ -6,12 +6,16 @@ import argparse
 import json
 from pathlib import Path
 
-from ..estimators.registry import ESTIMATORS
+from ..estimators.registry import ESTIMATORS, RULES
 from ..friction.registry import FRICTION_MODELS
 from ._common import (FINITE_ARG, INPUT_FILE, POSITIVE_ARG, UsageError, add_config_flags, check_output_dir, integer,
                       load, workers_arg)
 
 __all__ = ["add_commands", "parse_list", "summary_text"]
+
+
+#: The --rule names (issue 18's contract) -> the tuning rules of obsdesign.estimators.RULES.
+RULE_FLAGS = dict(zip(("equal-noise", "rate"), RULES))
 
 
 def _scenarios() -> tuple[str, ...]:
@@ -116,18 +120,19 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     from ..report.figures import save_figure
     from ..sweeps.store import csv_text
 
+    rule = RULE_FLAGS[args.rule]
     res = compare(cfg, plants=plants, estimators=estimators, scenarios=scenarios, seeds=args.seeds,
-                  workers=args.workers)
+                  workers=args.workers, rule=rule)
     rows = list(res.rows)
     if trace is not None:
         from ..comparison_data import compare_data
 
-        rows += compare_data(trace, estimators=estimators)
+        rows += compare_data(trace, estimators=estimators, rule=rule)
     summary = summarize(rows)
     out.mkdir(exist_ok=True)
     atomic_write(out / "compare.csv", csv_text(list(COLUMNS), rows))
     payload = {"config": cfg.name, "seeds": res.seeds, "runs": len(rows), "wall_s": res.wall_s,
-               "summary": summary}
+               "rule": args.rule, "summary": summary}
     atomic_write(out / "summary.json", json.dumps(jsonable(payload), indent=1, allow_nan=False))
     save_figure(comparison_figure(rows), out / "compare.svg")
     if args.json:
@@ -148,6 +153,9 @@ def add_commands(sub) -> None:
     p.add_argument("--scenarios", help="scenarios of obsdesign.comparison.SCENARIOS, comma-separated "
                    "(default: all of them; docs/comparison.md)")
     p.add_argument("--seeds", type=integer(1), default=2, help="seeds per case (default 2)")
+    p.add_argument("--rule", choices=tuple(RULE_FLAGS), default="equal-noise",
+                   help="how the baselines are tuned against the paper's observer: equal friction-noise RMS "
+                        "(default) or equal slowest error pole")
     p.add_argument("--workers", type=workers_arg, help="local processes (default: all cores)")
     p.add_argument("--data", metavar="FILE", type=INPUT_FILE, help="measured trace (.csv/.mat): adds offline rows, friction error "
                    "against the model identified from it (docs/comparison.md)")
