@@ -40,7 +40,7 @@ CASES = {
     "pid-only": (VCM, dict(scenario="tracking", controller="pid")),
     "saturated": (VCM.override(u_max=0.5), dict(scenario=od.sim.Positioning(step_down=1.2), controller="pid+observer")),
     "noisy-lag": (od.load_preset("table1").override(noise_rms=2e-7),
-                  # the exported controller runs the schedule without reversal hysteresis
+                  # simulated and exported with the schedule without reversal hysteresis
                   dict(scenario="tracking", controller="pid+observer", stiffness="estimated-raw")),
 }
 
@@ -152,7 +152,7 @@ def test_exported_controller_reproduces_the_simulator(language, case, tmp_path):
         pytest.skip(f"{language}: toolchain not installed")
     name, cfg, controller, res = case
     n = len(res.t)
-    files = controller_files(cfg, language, controller=controller)
+    files = controller_files(cfg, language, controller=controller, schedule=res.stiffness_schedule)
     command = run(files, res.x_ref[:n], res.x_meas[:n], tmp_path)
     assert command.shape == (n,)
     assert _max_rel(command, cfg, res.u) <= 1e-9
