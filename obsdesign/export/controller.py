@@ -52,7 +52,7 @@ True
 >>> controller_constants(table1, schedule="true")
 Traceback (most recent call last):
 ...
-ValueError: schedule: 'true' (the simulated plant's stiffness) cannot run on an axis; expected one of estimated, estimated-raw, constant, found 'true'
+ValueError: schedule: 'true' (the simulated plant's stiffness) cannot run on an axis; expected one of estimated, constant, estimated-raw, found 'true'
 """
 
 from __future__ import annotations
@@ -75,7 +75,7 @@ LANGUAGES = ("c", "python", "octave", "js")
 CONTROLLERS = ("pid", "pid+observer")
 #: The stiffness schedules the generated code runs (the simulator's, less ``true``, which needs the
 #: simulated plant), each with its value of the generated constant ``SCHEDULE``.
-SCHEDULE_CODES = {"estimated": 0, "estimated-raw": 1, "constant": 2}
+SCHEDULE_CODES = {"estimated": 0, "constant": 1, "estimated-raw": 2}
 #: ``SCHEDULE`` of ``paper-k0``: the stiffness is 0 whatever the schedule.
 SCHEDULE_ZERO = 3
 #: The estimators run as the paper's observer with the low-pass; every other registered estimator
@@ -139,7 +139,7 @@ def controller_constants(cfg: Config, *, controller: str = "pid+observer",
         The controller.
     compensation : CompensationSpec, optional
         The compensation knobs (default: the config's ``[compensation]`` section).
-    schedule : {'estimated', 'estimated-raw', 'constant'}
+    schedule : {'estimated', 'constant', 'estimated-raw'}
         Stiffness schedule of the ``paper`` observer (the simulator's ``stiffness``; ``true`` is
         refused: it needs the simulated plant). ``estimated`` with ``sensor.noise_rms = 0`` has no
         hysteresis and runs as ``estimated-raw``, as in the simulator.
@@ -298,7 +298,7 @@ def controller_files(cfg: Config, language: str, *, controller: str = "pid+obser
     compensation : CompensationSpec, optional
         Knobs of the compensation law (``pid+observer`` only; default: the config's
         ``[compensation]`` section, as the simulator reads it).
-    schedule : {'estimated', 'estimated-raw', 'constant'}
+    schedule : {'estimated', 'constant', 'estimated-raw'}
         The observer's stiffness schedule, as the simulator's ``stiffness`` (``estimated``: with the
         reversal hysteresis of :data:`REVERSAL_NOISE_FACTOR` x ``sensor.noise_rms``); ``true`` is
         refused (it needs the simulated plant). Without effect for ``paper-k0`` and the baselines.
