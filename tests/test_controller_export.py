@@ -51,6 +51,11 @@ CASES = {
 }
 
 
+#: Every schedule of 'paper', then every other estimator (their schedule has no effect).
+PARITY = ([("paper", name) for name in SCHEDULES.names() if name != "true"]
+          + [(name, "estimated") for name in ESTIMATORS.names() if name != "paper"])
+
+
 @pytest.fixture(scope="module", params=list(CASES))
 def case(request):
     cfg, kw = CASES[request.param]
@@ -173,8 +178,11 @@ def test_octave_persistent_wrapper_equals_the_state_in_out_step(tmp_path):
     assert _max_rel(a, VCM, res.u) <= 1e-9
 
 
-def test_octave_files_are_well_formed():
-    files = controller_files(VCM, "octave")
+@pytest.mark.parametrize("estimator, schedule", [("paper", "estimated")] + PARITY[1:],
+                         ids=lambda v: v)
+def test_octave_files_are_well_formed(estimator, schedule):
+    cfg = VCM if (estimator, schedule) == ("paper", "estimated") else od.load_preset("table1")
+    files = controller_files(cfg, "octave", estimator=estimator, schedule=schedule)
     for name, text in files.items():
         assert text.startswith(f"function ") and re.match(rf"function .*\b{name[:-2]}\(", text)
         assert "%#codegen" in text
@@ -182,7 +190,7 @@ def test_octave_files_are_well_formed():
         opens = len(re.findall(r"^\s*(function|if|for|while)\b", text, flags=re.M))
         assert opens == len(re.findall(r"^\s*end\s*$", text, flags=re.M))
     assert "persistent state" in files["obsdesign_controller.m"]
-    consts = controller_constants(VCM)
+    consts = controller_constants(cfg, estimator=estimator, schedule=schedule)
     step = files["obsdesign_controller_step.m"]
     for key, value in consts.items():
         assert f"\n{key} = {value!r};\n" in step
@@ -273,8 +281,6 @@ NOISY = {
     "tracking": (od.load_preset("table1").override(quantization=1e-7), "tracking", 0.5),  # lag, noise 1 um
     "positioning": (VCM.override(noise_rms=1e-6), od.sim.Positioning(step_up=0.05, step_down=0.4), 0.7),  # static
 }
-PARITY = ([("paper", name) for name in SCHEDULES.names() if name != "true"]
-          + [(name, "estimated") for name in ESTIMATORS.names() if name != "paper"])
 PARITY_KNOBS = {"default": CompensationSpec(), "knobs": CompensationSpec(gain=0.7, viscous=True, deadzone=1e-4)}
 
 
@@ -394,9 +400,11 @@ def test_hostile_names_are_sanitized_everywhere(name, tmp_path):
 
 
 @pytest.mark.skipif(not HAS_GCC or shutil.which("nm") is None, reason="gcc/nm not installed")
-def test_c_object_has_no_data_symbols_and_no_allocation(tmp_path):
-    files = controller_files(VCM, "c")
-    assert "malloc" not in files["obsdesign_controller.c"] and "static double od_" in files["obsdesign_controller.c"]
+@pytest.mark.parametrize("estimator", ["paper", "kalman"])
+def test_c_object_has_no_data_symbols_and_no_allocation(estimator, tmp_path):
+    files = controller_files(VCM, "c", estimator=estimator)
+    assert "malloc" not in files["obsdesign_controller.c"]
+    assert ("static double od_" in files["obsdesign_controller.c"]) == (estimator == "paper")  # baselines: no core
     assert "typedef struct obsdesign_controller {" in files["obsdesign_controller.h"]
     for name, text in files.items():
         (tmp_path / name).write_text(text)
