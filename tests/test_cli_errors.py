@@ -271,3 +271,20 @@ def test_export_says_when_its_schedule_differs_from_the_simulators(capsys, tmp_p
     assert code == 0 and len(err) == 1 and "estimated-raw" in err[0] and "1e-06 m" in err[0]
     code, _, err = run(capsys, "export", "--format", "python", "--preset", "vcm", "-o", str(tmp_path / "b"))
     assert code == 0 and err == []
+
+
+def test_the_controller_export_has_the_simulators_schedule_and_no_warning(capsys, tmp_path):
+    """--what controller exports the default 'estimated' schedule with its hysteresis: no warning; --stiffness and
+    --estimator choose as in simulate ('true' cannot be deployed), and apply to --what controller only."""
+    code, out, err = run(capsys, "export", "--what", "controller", "--format", "c", "--preset", "table1",
+                         "--estimator", "dob", "-o", str(tmp_path / "a"))
+    assert code == 0 and err == [] and "OD_E_PHI_1_1" in (tmp_path / "a" / "obsdesign_controller.c").read_text()
+    code, _, err = run(capsys, "export", "--what", "controller", "--format", "js", "--preset", "table1",
+                       "--stiffness", "constant", "-o", str(tmp_path / "b"))
+    assert code == 0 and err == [] and "SCHEDULE: 1.0," in (tmp_path / "b" / "obsdesign_controller.mjs").read_text()
+    code, _, err = run(capsys, "export", "--what", "controller", "--format", "c", "--stiffness", "true", "-o",
+                       str(tmp_path / "c"))
+    assert code == 2 and len(err) == 1 and "--stiffness" in err[0] and "'true'" in err[0]
+    code, _, err = run(capsys, "export", "--format", "c", "--estimator", "eso", "-o", str(tmp_path / "d"))
+    assert code == 2 and err == ["obsdesign export: argument --estimator: applies to --what controller only, "
+                                 "found 'eso'"]

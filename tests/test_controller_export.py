@@ -15,17 +15,23 @@ import math
 import re
 import shutil
 import subprocess
+import sys
 
 import numpy as np
 import pytest
 
 import obsdesign as od
 from obsdesign.export.controller import (
+    PAPER_ESTIMATORS,
+    REVERSAL_NOISE_FACTOR,
+    SCHEDULE_CODES,
+    SCHEDULE_ZERO,
     CompensationSpec,
     controller_constants,
     controller_files,
     sanitize_comment,
 )
+from obsdesign.sampled.choices import ESTIMATORS, SCHEDULES
 from obsdesign.design.discretize import coefficients
 from obsdesign.friction.presliding import stiffness, track_reversal
 
@@ -40,9 +46,14 @@ CASES = {
     "pid-only": (VCM, dict(scenario="tracking", controller="pid")),
     "saturated": (VCM.override(u_max=0.5), dict(scenario=od.sim.Positioning(step_down=1.2), controller="pid+observer")),
     "noisy-lag": (od.load_preset("table1").override(noise_rms=2e-7),
-                  # the exported controller runs the schedule without reversal hysteresis
+                  # simulated and exported with the schedule without reversal hysteresis
                   dict(scenario="tracking", controller="pid+observer", stiffness="estimated-raw")),
 }
+
+
+#: Every schedule of 'paper', then every other estimator (their schedule has no effect).
+PARITY = ([("paper", name) for name in SCHEDULES.names() if name != "true"]
+          + [(name, "estimated") for name in ESTIMATORS.names() if name != "paper"])
 
 
 @pytest.fixture(scope="module", params=list(CASES))
@@ -152,7 +163,7 @@ def test_exported_controller_reproduces_the_simulator(language, case, tmp_path):
         pytest.skip(f"{language}: toolchain not installed")
     name, cfg, controller, res = case
     n = len(res.t)
-    files = controller_files(cfg, language, controller=controller)
+    files = controller_files(cfg, language, controller=controller, schedule=res.stiffness_schedule)
     command = run(files, res.x_ref[:n], res.x_meas[:n], tmp_path)
     assert command.shape == (n,)
     assert _max_rel(command, cfg, res.u) <= 1e-9
@@ -167,8 +178,11 @@ def test_octave_persistent_wrapper_equals_the_state_in_out_step(tmp_path):
     assert _max_rel(a, VCM, res.u) <= 1e-9
 
 
-def test_octave_files_are_well_formed():
-    files = controller_files(VCM, "octave")
+@pytest.mark.parametrize("estimator, schedule", [("paper", "estimated")] + PARITY[1:],
+                         ids=lambda v: v)
+def test_octave_files_are_well_formed(estimator, schedule):
+    cfg = VCM if (estimator, schedule) == ("paper", "estimated") else od.load_preset("table1")
+    files = controller_files(cfg, "octave", estimator=estimator, schedule=schedule)
     for name, text in files.items():
         assert text.startswith(f"function ") and re.match(rf"function .*\b{name[:-2]}\(", text)
         assert "%#codegen" in text
@@ -176,7 +190,7 @@ def test_octave_files_are_well_formed():
         opens = len(re.findall(r"^\s*(function|if|for|while)\b", text, flags=re.M))
         assert opens == len(re.findall(r"^\s*end\s*$", text, flags=re.M))
     assert "persistent state" in files["obsdesign_controller.m"]
-    consts = controller_constants(VCM)
+    consts = controller_constants(cfg, estimator=estimator, schedule=schedule)
     step = files["obsdesign_controller_step.m"]
     for key, value in consts.items():
         assert f"\n{key} = {value!r};\n" in step
@@ -261,6 +275,100 @@ def test_compensation_knobs_follow_the_law(language, comp, knob_inputs, tmp_path
 
 
 # ---------------------------------------------------------------------------------------------
+# Parity contract: every schedule and every estimator, under sensor noise and quantization.
+# (benchmarks/parity.py runs the same over 60 s tracking and the whole positioning scenario.)
+NOISY = {
+    "tracking": (od.load_preset("table1").override(quantization=1e-7), "tracking", 0.5),  # lag, noise 1 um
+    "positioning": (VCM.override(noise_rms=1e-6), od.sim.Positioning(step_up=0.05, step_down=0.4), 0.7),  # static
+}
+PARITY_KNOBS = {"default": CompensationSpec(), "knobs": CompensationSpec(gain=0.7, viscous=True, deadzone=1e-4)}
+
+
+def _noisy_run(scenario_name, estimator, schedule, knobs):
+    cfg, scenario, duration = NOISY[scenario_name]
+    comp = PARITY_KNOBS[knobs]
+    cfg = cfg.override(gain=comp.gain, viscous=comp.viscous, deadzone=comp.deadzone)
+    res = od.simulate(cfg, scenario, controller="pid+observer", stiffness=schedule, estimator=estimator,
+                      duration=duration)
+    assert not res.metrics["diverged"]
+    return cfg, res
+
+
+@pytest.fixture(scope="module", params=[(s, e, sc, k) for s in NOISY for e, sc in PARITY for k in PARITY_KNOBS],
+                ids=lambda p: "-".join(p))
+def noisy_case(request):
+    scenario_name, estimator, schedule, knobs = request.param
+    cfg, res = _noisy_run(scenario_name, estimator, schedule, knobs)
+    return cfg, estimator, schedule, res
+
+
+@pytest.mark.parametrize("language", list(RUNNERS))
+def test_every_schedule_and_estimator_reproduces_the_simulator_under_noise(language, noisy_case, tmp_path):
+    run, available = RUNNERS[language]
+    if not available:
+        pytest.skip(f"{language}: toolchain not installed")
+    cfg, estimator, schedule, res = noisy_case
+    files = controller_files(cfg, language, schedule=schedule, estimator=estimator)
+    command = run(files, res.x_ref, res.x_meas, tmp_path)
+    assert command.shape == res.u.shape
+    assert _max_rel(command, cfg, res.u) <= 1e-9
+
+
+@pytest.mark.parametrize("scenario_name", list(NOISY))
+def test_the_parity_cases_exercise_the_hysteresis_and_the_knobs(scenario_name):
+    """The noisy runs are not vacuous: the hysteresis changes the simulated command, and so do the knobs."""
+    _, hyst = _noisy_run(scenario_name, "paper", "estimated", "default")
+    _, raw = _noisy_run(scenario_name, "paper", "estimated-raw", "default")
+    _, knobs = _noisy_run(scenario_name, "paper", "estimated", "knobs")
+    assert np.max(np.abs(hyst.u - raw.u)) > 1e-3 * np.max(np.abs(hyst.u))
+    assert np.max(np.abs(hyst.u - knobs.u)) > 1e-3 * np.max(np.abs(hyst.u))
+    assert np.any(hyst.stiffness != raw.stiffness)
+
+
+def test_the_python_export_reproduces_the_simulated_estimates_and_schedule(tmp_path):
+    """Beyond ``u``: v_hat, f_hat, the compensated estimate and the stiffness of every sample."""
+    for estimator, schedule in (("paper", "estimated"), ("dob", "estimated")):
+        cfg, res = _noisy_run("positioning", estimator, schedule, "default")
+        text = controller_files(cfg, "python", schedule=schedule, estimator=estimator)["obsdesign_controller.py"]
+        namespace: dict = {}
+        exec(compile(text, "obsdesign_controller.py", "exec"), namespace)
+        ctrl = namespace["Controller"]()
+        got = []
+        for r, x in zip(res.x_ref, res.x_meas):
+            ctrl.step(float(r), float(x))
+            got.append((ctrl.v_hat, ctrl.f_hat, ctrl.f_hat_filtered, ctrl.stiffness))
+        got = np.array(got)
+        for col, name in enumerate(("v_hat", "f_hat", "f_hat_filtered", "stiffness")):
+            np.testing.assert_array_equal(got[:, col], getattr(res, name), err_msg=f"{estimator}: {name}")
+
+
+def test_the_export_and_the_simulator_share_the_choices_and_the_threshold():
+    from obsdesign.sim.simulate import REVERSAL_NOISE_FACTOR as SIM_FACTOR
+
+    assert REVERSAL_NOISE_FACTOR == SIM_FACTOR
+    assert tuple(SCHEDULE_CODES) == tuple(name for name in SCHEDULES.names() if name != "true")
+    assert set(PAPER_ESTIMATORS) < set(ESTIMATORS.names())
+    assert len(set(SCHEDULE_CODES.values()) | {SCHEDULE_ZERO}) == len(SCHEDULE_CODES) + 1
+    table1 = od.load_preset("table1")
+    c = controller_constants(table1)
+    assert c["SCHEDULE"] == SCHEDULE_CODES["estimated"] and c["REVERSAL_THRESHOLD"] == 4.0 * 1e-6
+    assert controller_constants(VCM)["SCHEDULE"] == SCHEDULE_CODES["estimated-raw"]  # no noise: no hysteresis
+    assert controller_constants(table1, estimator="paper-k0", schedule="constant")["SCHEDULE"] == SCHEDULE_ZERO
+    eso = controller_constants(table1, estimator="eso")
+    assert eso["E_NZ"] == 3.0 and "L1" not in eso and "E_PHI_2_2" in eso
+
+
+def test_a_paper_export_does_not_load_the_estimators():
+    """The baselines' module (python-control tuning) is imported only when a baseline is exported."""
+    code = ("import sys, obsdesign as od; from obsdesign.export.controller import controller_files; "
+            "controller_files(od.load_preset('table1'), 'c', estimator='paper-k0'); "
+            "assert 'obsdesign.estimators' not in sys.modules; "
+            "controller_files(od.load_preset('table1'), 'c', estimator='kalman'); "
+            "assert 'obsdesign.estimators' in sys.modules")
+    subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
+
+
+# ---------------------------------------------------------------------------------------------
 # Hostile config names, C hygiene, errors
 HOSTILE = ['"""; import os; os.system("x") #', "*/ int evil; /*", "a\\\nb", "nul\x00name", "two\nlines\r\nx",
            "sep\u2028para\u2029", "</script><!--", "${x} `y` % %s ]]", "x" * 500]
@@ -292,9 +400,11 @@ def test_hostile_names_are_sanitized_everywhere(name, tmp_path):
 
 
 @pytest.mark.skipif(not HAS_GCC or shutil.which("nm") is None, reason="gcc/nm not installed")
-def test_c_object_has_no_data_symbols_and_no_allocation(tmp_path):
-    files = controller_files(VCM, "c")
-    assert "malloc" not in files["obsdesign_controller.c"] and "static double od_" in files["obsdesign_controller.c"]
+@pytest.mark.parametrize("estimator", ["paper", "kalman"])
+def test_c_object_has_no_data_symbols_and_no_allocation(estimator, tmp_path):
+    files = controller_files(VCM, "c", estimator=estimator)
+    assert "malloc" not in files["obsdesign_controller.c"]
+    assert ("static double od_" in files["obsdesign_controller.c"]) == (estimator == "paper")  # baselines: no core
     assert "typedef struct obsdesign_controller {" in files["obsdesign_controller.h"]
     for name, text in files.items():
         (tmp_path / name).write_text(text)
@@ -325,6 +435,14 @@ def test_pid_export_does_not_compensate():
     ((VCM, "c"), {"controller": "pid", "compensation": CompensationSpec(gain=0.5)}, ValueError,
      "compensation: only the controller 'pid\\+observer'"),
     (("vcm", "c"), {}, TypeError, "cfg: expected a Config"),
+    ((VCM, "c"), {"schedule": "true"}, ValueError,
+     "schedule: 'true' \\(the simulated plant's stiffness\\) cannot run on an axis; expected one of estimated, "
+     "constant, estimated-raw, found 'true'"),
+    ((VCM, "c"), {"schedule": "raw"}, ValueError, "schedule: expected one of estimated, constant, estimated-raw, "
+     "found 'raw'"),
+    ((VCM, "c"), {"estimator": "luenberger"}, ValueError,
+     "estimator: expected one of paper, paper-k0, eso, kalman, dob, found 'luenberger'"),
+    ((VCM, "c"), {"estimator": None}, ValueError, "estimator: expected one of .*found None"),
 ])
 def test_controller_files_errors(args, kwargs, exc, match):
     with pytest.raises(exc, match=match):

@@ -8,8 +8,9 @@ from pathlib import Path
 from ..export import FORMATS as EXPORT_FORMATS
 from ..export import WHAT as EXPORT_WHAT
 from ..params import VARIANTS
+from ..sampled.choices import ESTIMATORS, SCHEDULES
 from ._common import (INPUT_DIR, INPUT_FILE, POSITIVE_ARG, UsageError, add_config_flags, check_output_dir,
-                      check_output_file, load, warn_unstable, print_warnings)
+                      check_output_file, load, print_warnings, warn_unstable)
 from ._data import add_trace_flags, load_trace_args
 
 __all__ = ["add_commands"]
@@ -22,14 +23,17 @@ def _cmd_export(args: argparse.Namespace) -> int:
     if args.what == "controller" and args.format == "latex":
         raise UsageError("obsdesign export: argument --format: the controller is exported as one of "
                          "python, c, octave, js, found 'latex'")
+    for flag, value in (("--stiffness", args.stiffness), ("--estimator", args.estimator)):
+        if value is not None and args.what != "controller":
+            raise UsageError(f"obsdesign export: argument {flag}: applies to --what controller only, found {value!r}")
     cfg = load(args)
     paths = export(cfg, args.format, args.output, variant=args.variant, rho=args.rho, dt=args.dt,
-                   what=args.what, controller=args.controller)
+                   what=args.what, controller=args.controller, schedule=args.stiffness, estimator=args.estimator)
     warn_unstable(cfg, "the exported observer diverges")
-    if cfg.sensor.noise_rms > 0 and args.format != "latex":
-        print_warnings([f"the exported stiffness schedule reverses at sign changes of v_hat (the simulator's "
-                        f"'estimated-raw'); with sensor.noise_rms = {cfg.sensor.noise_rms:g} m the simulator's "
-                        "default 'estimated' adds a reversal hysteresis the export does not have yet"])
+    if cfg.sensor.noise_rms > 0 and args.what == "observer" and args.format != "latex":
+        print_warnings([f"the exported observer's stiffness schedule reverses at sign changes of v_hat (the "
+                        f"simulator's 'estimated-raw'); with sensor.noise_rms = {cfg.sensor.noise_rms:g} m the "
+                        "simulator's default 'estimated' adds a reversal hysteresis: '--what controller' exports it"])
     for path in paths:
         print(path)
     return 0
@@ -63,6 +67,12 @@ def add_commands(sub) -> None:
                         "simulator, step(x_ref, x_meas) -> command [V]")
     p.add_argument("--controller", choices=("pid+observer", "pid"), default="pid+observer",
                    help="with --what controller: the simulator's controller to generate (default pid+observer)")
+    p.add_argument("--stiffness", choices=[name for name in SCHEDULES.names() if name != "true"],
+                   help="with --what controller: the observer's stiffness schedule, as in simulate (default "
+                        "estimated, with the reversal hysteresis; 'true' needs the simulated plant)")
+    p.add_argument("--estimator", choices=ESTIMATORS.names(),
+                   help="with --what controller: the estimator, as in simulate (default paper; the baselines "
+                        "tuned by the fair noise rule)")
     add_config_flags(p, default_preset="vcm")
     p.add_argument("--variant", choices=VARIANTS, help="override the config's model variant")
     p.add_argument("--rho", type=POSITIVE_ARG, help="gain parameter rho (> 0)")

@@ -1,20 +1,29 @@
-"""Export the whole sampled controller (observer, low-pass, PID, compensation) as code.
+"""Export the whole sampled controller (estimator, schedule, low-pass, PID, compensation) as code.
 
 One call of the generated ``step(x_ref, x_meas)`` per sample does what
-:func:`obsdesign.sim.kernel.run_loop` does in steps 2 to 5 of its sample, in its order:
+:func:`obsdesign.sampled.kernel.controller_sample` does from the measurement to the command, in its order:
 
-1. observer: at the first sample its state is set from the first measurement; after
-   that the exact recursion advances it with the net force ``u`` of the previous sample
-   (held) and the previous and new measurements; ``v_hat``, ``f_hat`` by eq:3:1:3;
-2. low-pass eq:3:4:5 of ``f_hat`` (the simulator's FOH state-space recursion; it starts
-   at zero and is first advanced at the second sample);
-3. ``estimated`` stiffness schedule for the coming interval (branch from the measurement
-   and the sign of ``v_hat``); the recursion is recomputed only when the stiffness changed;
+1. estimator. ``paper``/``paper-k0``: at the first sample the observer's state is set from
+   the first measurement; after that the exact recursion advances it with the net force ``u``
+   of the previous sample (held) and the previous and new measurements; ``v_hat``, ``f_hat``
+   by eq:3:1:3. A linear baseline (``eso``, ``kalman``, ``dob``, tuned by
+   :func:`obsdesign.estimators.tune` as the simulator tunes it) runs its common discrete form
+   ``z = Phi z + gu u + g0 x_prev + g1 x_meas``, ``(v_hat, f_hat) = Cz z + d x_meas``
+   (:func:`obsdesign.estimators.estimator_step`), started at ``z = init (x_meas, 0, 0)``;
+2. ``paper``/``paper-k0``: low-pass eq:3:4:5 of ``f_hat`` (the simulator's FOH state-space
+   recursion; it starts at zero and is first advanced at the second sample); a baseline
+   compensates with its ``f_hat`` unfiltered;
+3. ``paper``: the stiffness schedule for the coming interval (``estimated``: a new
+   pre-sliding branch once the measurement has come back from its extreme by more than the
+   reversal threshold :data:`REVERSAL_NOISE_FACTOR` x ``sensor.noise_rms``, or at every sign
+   change of ``v_hat`` when that is 0; ``estimated-raw``: at every sign change of ``v_hat``;
+   ``constant``: ``kappa``); ``paper-k0``: ``k = 0``. The recursion is recomputed only when
+   the stiffness changed;
 4. parallel PID on ``e = x_ref - x_meas``: first-order filtered derivative (``e_prev = e``
    at the first sample), integral by conditional integration (kept only when the
    unsaturated command is within the limit), compensation ``comp / K`` (``pid+observer``),
    load feed-forward ``G / K``, saturation at ``u_max``; the net force ``K command - G``
-   is kept for the next observer step.
+   is kept for the next estimator step.
 
 The returned command [V] is after saturation and includes the feed-forward, so the
 simulator's ``u`` column is ``K * command - G``.
@@ -37,13 +46,18 @@ Examples
 >>> consts = controller_constants(od.load_preset("vcm").override(gain=0.5, deadzone=1e-4))
 >>> consts["COMP_GAIN"], consts["COMP_DEADZONE"]
 (0.5, 0.0001)
+>>> table1 = od.load_preset("table1")  # sensor.noise_rms = 1e-6 m
+>>> controller_constants(table1)["REVERSAL_THRESHOLD"] == REVERSAL_NOISE_FACTOR * 1e-6
+True
+>>> controller_constants(table1, schedule="true")
+Traceback (most recent call last):
+...
+ValueError: schedule: 'true' (the simulated plant's stiffness) cannot run on an axis; expected one of estimated, constant, estimated-raw, found 'true'
 """
 
 from __future__ import annotations
 
 import math
-import re
-from dataclasses import dataclass
 
 from ..design.pid import pid_gains
 from ..params import CompensationSpec, Config
@@ -55,10 +69,21 @@ from .literals import NAME_MAX as _NAME_MAX
 from .literals import comment_text
 
 __all__ = ["CompensationSpec", "controller_files", "controller_constants", "sanitize_comment", "LANGUAGES",
-           "CONTROLLERS"]
+           "CONTROLLERS", "SCHEDULE_CODES", "SCHEDULE_ZERO", "PAPER_ESTIMATORS", "REVERSAL_NOISE_FACTOR"]
 
 LANGUAGES = ("c", "python", "octave", "js")
 CONTROLLERS = ("pid", "pid+observer")
+#: The stiffness schedules the generated code runs (the simulator's, less ``true``, which needs the
+#: simulated plant), each with its value of the generated constant ``SCHEDULE``.
+SCHEDULE_CODES = {"estimated": 0, "constant": 1, "estimated-raw": 2}
+#: ``SCHEDULE`` of ``paper-k0``: the stiffness is 0 whatever the schedule.
+SCHEDULE_ZERO = 3
+#: The estimators run as the paper's observer with the low-pass; every other registered estimator
+#: (:data:`obsdesign.estimators.ESTIMATORS`) runs in the common discrete form, unfiltered.
+PAPER_ESTIMATORS = ("paper", "paper-k0")
+#: Reversal threshold of the ``estimated`` schedule in units of ``sensor.noise_rms``: the value of
+#: the simulator's ``obsdesign.sim.simulate.REVERSAL_NOISE_FACTOR`` (a test holds the two equal).
+REVERSAL_NOISE_FACTOR = 4.0
 #: Longest sanitized config name placed in a comment or docstring.
 NAME_MAX = _NAME_MAX
 
@@ -89,9 +114,22 @@ def _choice(name: str, value, options) -> str:
     return value
 
 
+def _check_schedule(schedule) -> str:
+    if schedule == "true":
+        raise ValueError(f"schedule: 'true' (the simulated plant's stiffness) cannot run on an axis; expected one of "
+                         f"{', '.join(SCHEDULE_CODES)}, found 'true'")
+    return _choice("schedule", schedule, tuple(SCHEDULE_CODES))
+
+
 def controller_constants(cfg: Config, *, controller: str = "pid+observer",
-                         compensation: CompensationSpec | None = None) -> dict[str, float]:
+                         compensation: CompensationSpec | None = None, schedule: str = "estimated",
+                         estimator: str = "paper") -> dict[str, float]:
     """Every number of the generated controller, computed as :func:`obsdesign.simulate` computes it.
+
+    A pure function of the config and the choices: the observer arrays (:func:`export_spec`), the
+    low-pass (:func:`~obsdesign.design.discretize.lowpass_arrays`), the PID
+    (:func:`~obsdesign.design.pid.pid_gains`), the compensation knobs, the reversal threshold and,
+    for a baseline, :func:`obsdesign.estimators.tune` (imported only then: it loads python-control).
 
     Parameters
     ----------
@@ -101,18 +139,55 @@ def controller_constants(cfg: Config, *, controller: str = "pid+observer",
         The controller.
     compensation : CompensationSpec, optional
         The compensation knobs (default: the config's ``[compensation]`` section).
+    schedule : {'estimated', 'constant', 'estimated-raw'}
+        Stiffness schedule of the ``paper`` observer (the simulator's ``stiffness``; ``true`` is
+        refused: it needs the simulated plant). ``estimated`` with ``sensor.noise_rms = 0`` has no
+        hysteresis and runs as ``estimated-raw``, as in the simulator.
+    estimator : {'paper', 'paper-k0', 'eso', 'kalman', 'dob'}
+        A name of :data:`obsdesign.estimators.ESTIMATORS`.
 
-    Keys are the constant names of the generated code (``DT``, ``KP``, ``A0_0``, ...);
-    flags (``COMP_ON``, ``COMP_VISCOUS``) are 0.0 or 1.0.
+    Returns
+    -------
+    dict of str to float
+        Keys are the constant names of the generated code. Always: ``DT``, ``K``, ``G``, ``U_MAX``,
+        ``SIGMA``, ``V_HAT0``, ``F_HAT0``, the PID (``KP``, ``KI``, ``KD``, ``ALPHA_D``) and the
+        compensation (``COMP_ON``, ``COMP_GAIN``, ``COMP_VISCOUS``, ``COMP_DEADZONE``; flags are
+        0.0 or 1.0). ``paper``/``paper-k0``: ``CF``, ``S``, ``KAPPA``, ``L1``, ``L2``, the affine
+        observer arrays ``A0_i`` ... ``G1_i``, the low-pass ``LP_*``, ``SCHEDULE``
+        (:data:`SCHEDULE_CODES`, :data:`SCHEDULE_ZERO`) and ``REVERSAL_THRESHOLD`` [m]. A baseline:
+        ``E_NZ`` and its arrays ``E_PHI_i_j``, ``E_GU_i``, ``E_G0_i``, ``E_G1_i``, ``E_CZ_r_j``,
+        ``E_D_r``, ``E_INIT_i_c``.
 
+    Raises
+    ------
+    TypeError
+        ``cfg`` is not a Config or ``compensation`` not a CompensationSpec.
+    ValueError
+        Unknown controller, schedule or estimator; ``schedule='true'``; knobs other than the
+        default with ``pid``.
+
+    Examples
+    --------
     >>> import obsdesign as od
     >>> c = controller_constants(od.load_preset("vcm"), controller="pid")
     >>> c["COMP_ON"], round(c["KP"], 2), round(c["G"] / c["K"], 4)
     (0.0, 428.97, 1.6067)
+    >>> c["SCHEDULE"] == SCHEDULE_CODES["estimated-raw"]  # vcm has no random noise: no hysteresis
+    True
+    >>> controller_constants(od.load_preset("vcm"), estimator="paper-k0")["SCHEDULE"] == SCHEDULE_ZERO
+    True
+    >>> controller_constants(od.load_preset("vcm"), estimator="dob")["E_NZ"]
+    2.0
     """
+    # ---- the sampled controller of the simulator's closed loop, from the config and the choices ----
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
     controller = _choice("controller", controller, CONTROLLERS)
+    schedule = _check_schedule(schedule)
+    if estimator not in PAPER_ESTIMATORS:
+        from ..estimators import ESTIMATORS  # python-control: loaded only for a baseline
+
+        _choice("estimator", estimator, tuple(ESTIMATORS))
     if compensation is None:
         compensation = cfg.compensation if controller == "pid+observer" else CompensationSpec()
     if not isinstance(compensation, CompensationSpec):
@@ -120,26 +195,51 @@ def controller_constants(cfg: Config, *, controller: str = "pid+observer",
     if controller == "pid" and compensation != CompensationSpec():
         raise ValueError("compensation: only the controller 'pid+observer' compensates friction; "
                          "leave the default CompensationSpec() for 'pid'")
-    spec = export_spec(cfg)
-    arr = spec.arrays
-    dt = spec.dt
-    lp_phi, lp_g0, lp_g1 = lowpass_arrays(cfg.observer.omega_co, dt)
+    dt = cfg.observer.dt
     _, _, kp, ki, kd = pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
                                  phase_margin_deg=cfg.pid.phase_margin_deg)
     tau_d = kd / kp / cfg.pid.derivative_N
     pl, fr = cfg.plant, cfg.friction
     consts = {
-        "DT": dt, "K": pl.K, "G": pl.G, "U_MAX": pl.u_max, "CF": fr.Cf, "S": fr.s, "KAPPA": fr.kappa,
-        "SIGMA": fr.sigma, "L1": spec.L1, "L2": spec.L2, "V_HAT0": 0.0, "F_HAT0": 0.0,
+        "DT": dt, "K": pl.K, "G": pl.G, "U_MAX": pl.u_max, "SIGMA": fr.sigma, "V_HAT0": 0.0, "F_HAT0": 0.0,
         "KP": kp, "KI": ki, "KD": kd, "ALPHA_D": math.exp(-dt / tau_d) if tau_d > 0.0 else 0.0,
         "COMP_ON": 1.0 if controller == "pid+observer" else 0.0, "COMP_GAIN": compensation.gain,
         "COMP_VISCOUS": 1.0 if compensation.viscous else 0.0, "COMP_DEADZONE": compensation.deadzone,
     }
-    for name, values in (("A0", arr.A0.ravel()), ("A1", arr.A1.ravel()), ("B0", arr.b0), ("B1", arr.b1),
-                         ("G0", arr.g0), ("G1", arr.g1), ("LP_PHI", lp_phi.ravel()), ("LP_G0", lp_g0),
-                         ("LP_G1", lp_g1)):
-        consts.update({f"{name}_{i}": float(v) for i, v in enumerate(values)})
+    if estimator in PAPER_ESTIMATORS:
+        spec = export_spec(cfg)
+        arr = spec.arrays
+        lp_phi, lp_g0, lp_g1 = lowpass_arrays(cfg.observer.omega_co, dt)
+        threshold = REVERSAL_NOISE_FACTOR * cfg.sensor.noise_rms
+        if estimator == "paper-k0":
+            code = SCHEDULE_ZERO
+        elif schedule == "estimated" and threshold == 0.0:
+            code = SCHEDULE_CODES["estimated-raw"]  # the simulator's kernel does the same
+        else:
+            code = SCHEDULE_CODES[schedule]
+        consts.update({"CF": fr.Cf, "S": fr.s, "KAPPA": fr.kappa, "L1": spec.L1, "L2": spec.L2,
+                       "SCHEDULE": code, "REVERSAL_THRESHOLD": threshold})
+        arrays = (("A0", arr.A0), ("A1", arr.A1), ("B0", arr.b0), ("B1", arr.b1), ("G0", arr.g0), ("G1", arr.g1),
+                  ("LP_PHI", lp_phi), ("LP_G0", lp_g0), ("LP_G1", lp_g1))
+        for name, values in arrays:  # flat, row-major: A0_0 .. A0_3
+            consts.update({f"{name}_{i}": float(v) for i, v in enumerate(values.ravel())})
+    else:
+        from ..estimators import tune
+
+        est = tune(estimator, cfg)
+        consts["E_NZ"] = est.nz
+        for name, values in (("E_PHI", est.Phi), ("E_GU", est.gu), ("E_G0", est.g0), ("E_G1", est.g1),
+                             ("E_CZ", est.Cz), ("E_D", est.d), ("E_INIT", est.init)):
+            for index, v in zip(_indices(values.shape), values.ravel()):
+                consts[f"{name}_{index}"] = float(v)
     return {key: float(value) for key, value in consts.items()}
+
+
+def _indices(shape: tuple[int, ...]) -> list[str]:
+    """Suffixes ``i`` or ``i_j`` of the elements of an array of ``shape``, row-major."""
+    if len(shape) == 1:
+        return [str(i) for i in range(shape[0])]
+    return [f"{i}_{j}" for i in range(shape[0]) for j in range(shape[1])]
 
 
 def _literal(value: float) -> str:
@@ -162,9 +262,14 @@ def _c_core() -> str:
     return resources.files("obsdesign.export").joinpath("c/obsdesign_core.inc").read_text(encoding="utf-8")
 
 
-def _python_helpers() -> str:
-    fns = (friction.presliding_shape, friction.coulomb_normalized, friction.stiffness, friction.track_reversal,
-           discretize._mul, discretize.coefficients)
+def _python_helpers(baseline: bool) -> str:
+    if baseline:
+        from ..estimators import base  # python-control: loaded only for a baseline
+
+        fns = (base.estimator_step, base.estimator_output)
+    else:
+        fns = (friction.presliding_shape, friction.coulomb_normalized, friction.stiffness, friction.track_reversal,
+               friction.track_reversal_hysteresis, discretize._mul, discretize.coefficients)
     return "\n\n".join(_plain_source(fn) for fn in fns)
 
 
@@ -177,7 +282,8 @@ _TEMPLATES = {
 
 
 def controller_files(cfg: Config, language: str, *, controller: str = "pid+observer",
-                     compensation: CompensationSpec | None = None) -> dict[str, str]:
+                     compensation: CompensationSpec | None = None, schedule: str = "estimated",
+                     estimator: str = "paper") -> dict[str, str]:
     """The sampled controller of the simulator's closed loop as source files of one language.
 
     Parameters
@@ -185,12 +291,19 @@ def controller_files(cfg: Config, language: str, *, controller: str = "pid+obser
     cfg : Config
         The design; its ``name`` appears in comments only in sanitized form (:func:`sanitize_comment`).
     language : {'c', 'python', 'octave', 'js'}
+        The language of the files.
     controller : {'pid+observer', 'pid'}
-        As in :func:`obsdesign.simulate`; ``pid`` still runs the observer (for monitoring) but
+        As in :func:`obsdesign.simulate`; ``pid`` still runs the estimator (for monitoring) but
         does not compensate.
     compensation : CompensationSpec, optional
         Knobs of the compensation law (``pid+observer`` only; default: the config's
         ``[compensation]`` section, as the simulator reads it).
+    schedule : {'estimated', 'constant', 'estimated-raw'}
+        The observer's stiffness schedule, as the simulator's ``stiffness`` (``estimated``: with the
+        reversal hysteresis of :data:`REVERSAL_NOISE_FACTOR` x ``sensor.noise_rms``); ``true`` is
+        refused (it needs the simulated plant). Without effect for ``paper-k0`` and the baselines.
+    estimator : {'paper', 'paper-k0', 'eso', 'kalman', 'dob'}
+        As the simulator's ``estimator``; a baseline is tuned by :func:`obsdesign.estimators.tune`.
 
     Returns
     -------
@@ -205,7 +318,8 @@ def controller_files(cfg: Config, language: str, *, controller: str = "pid+obser
     TypeError
         ``cfg`` is not a Config or ``compensation`` not a CompensationSpec.
     ValueError
-        Unknown language or controller; knobs other than the default with ``pid``.
+        Unknown language, controller, schedule or estimator; ``schedule='true'``; knobs other than
+        the default with ``pid``.
 
     Examples
     --------
@@ -216,16 +330,27 @@ def controller_files(cfg: Config, language: str, *, controller: str = "pid+obser
     >>> ctrl = namespace["Controller"]()
     >>> round(ctrl.step(1e-3, 0.0), 6)  # 1 mm error: kp e + ki e dt + G/K [V]
     2.036116
+    >>> text = controller_files(od.load_preset("vcm"), "python", estimator="eso")["obsdesign_controller.py"]
+    >>> exec(compile(text, "obsdesign_controller.py", "exec"), namespace)
+    >>> round(namespace["Controller"]().step(1e-3, 0.0), 6)  # the first step: no estimate yet
+    2.036116
     """
     language = _choice("language", language, LANGUAGES)
-    consts = controller_constants(cfg, controller=controller, compensation=compensation)
+    consts = controller_constants(cfg, controller=controller, compensation=compensation, schedule=schedule,
+                                  estimator=estimator)
     compensation = CompensationSpec(gain=consts["COMP_GAIN"], viscous=consts["COMP_VISCOUS"] != 0.0,
                                     deadzone=consts["COMP_DEADZONE"])
+    baseline = "E_NZ" in consts
+    codes = {"SCHEDULE_" + name.upper().replace("-", "_"): code for name, code in SCHEDULE_CODES.items()}
+    codes["SCHEDULE_ZERO"] = SCHEDULE_ZERO
     ctx = {
         "name": sanitize_comment(cfg.name), "variant": cfg.observer.variant, "controller": controller,
+        "estimator": estimator, "schedule": schedule, "baseline": baseline,
+        "nz": int(consts["E_NZ"]) if baseline else 0,
         "compensation": compensation, "consts": {k: _literal(v) for k, v in consts.items()},
-        "core": _c_core() if language == "c" else "",
-        "helpers": _python_helpers() if language == "python" else "",
+        "codes": {k: _literal(v) for k, v in codes.items()} if not baseline else {},
+        "core": _c_core() if language == "c" and not baseline else "",
+        "helpers": _python_helpers(baseline) if language == "python" else "",
         "terms": discretize._TERMS,
     }
     env = _environment()

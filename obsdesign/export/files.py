@@ -15,6 +15,10 @@ Examples
 Traceback (most recent call last):
 ...
 ValueError: format: the controller is exported as one of python, c, octave, js, found 'latex'
+>>> export(od.load_preset("vcm"), "c", ".", estimator="eso")
+Traceback (most recent call last):
+...
+ValueError: estimator: applies to what='controller' only, found 'eso' with what='observer'
 """
 
 from __future__ import annotations
@@ -35,7 +39,8 @@ CONTROLLER_FORMATS = ("python", "c", "octave", "js")
 
 def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, variant: str | None = None,
            rho: float | None = None, dt: float | None = None, what: str = "observer",
-           controller: str = "pid+observer") -> list[Path]:
+           controller: str = "pid+observer", schedule: str | None = None,
+           estimator: str | None = None) -> list[Path]:
     """Write the export files of one format into ``out_dir`` (created if missing).
 
     Parameters
@@ -54,6 +59,11 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, variant: str | 
         ``obsdesign_controller*.m``, ``obsdesign_controller.mjs``.
     controller : {'pid+observer', 'pid'}
         With ``what='controller'``: the controller of :func:`obsdesign.simulate` to generate.
+    schedule : {'estimated', 'constant', 'estimated-raw'}, optional
+        With ``what='controller'``: the stiffness schedule (default ``estimated``, with the reversal
+        hysteresis, as the simulator's default). The observer export has the ``estimated-raw`` one.
+    estimator : {'paper', 'paper-k0', 'eso', 'kalman', 'dob'}, optional
+        With ``what='controller'``: the estimator (default ``paper``).
 
     Returns
     -------
@@ -72,8 +82,13 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, variant: str | 
 
         if not isinstance(cfg, Config):
             raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
-        files = controller_files(cfg.override(variant=variant, rho=rho, dt=dt), fmt, controller=controller)
+        files = controller_files(cfg.override(variant=variant, rho=rho, dt=dt), fmt, controller=controller,
+                                 schedule="estimated" if schedule is None else schedule,
+                                 estimator="paper" if estimator is None else estimator)
         return _write(files, out_dir)
+    for name, value in (("schedule", schedule), ("estimator", estimator)):
+        if value is not None:
+            raise ValueError(f"{name}: applies to what='controller' only, found {value!r} with what='observer'")
     spec = export_spec(cfg, variant=variant, rho=rho, dt=dt)
     if fmt == "latex":
         files = {f"obsdesign_{spec.variant}.tex": latex_document(spec)}
