@@ -281,7 +281,10 @@ def test_the_controller_export_has_the_simulators_schedule_and_no_warning(capsys
     assert code == 0 and err == [] and "OD_E_PHI_1_1" in (tmp_path / "a" / "obsdesign_controller.c").read_text()
     code, _, err = run(capsys, "export", "--what", "controller", "--format", "js", "--preset", "table1",
                        "--stiffness", "constant", "-o", str(tmp_path / "b"))
-    assert code == 0 and err == [] and "SCHEDULE: 1.0," in (tmp_path / "b" / "obsdesign_controller.mjs").read_text()
+    from obsdesign.sampled.choices import SCHEDULES
+
+    constant = f"SCHEDULE: {float(SCHEDULES.code('constant'))},"  # the simulator's code of the schedule
+    assert code == 0 and err == [] and constant in (tmp_path / "b" / "obsdesign_controller.mjs").read_text()
     code, _, err = run(capsys, "export", "--what", "controller", "--format", "c", "--stiffness", "true", "-o",
                        str(tmp_path / "c"))
     assert code == 2 and len(err) == 1 and "--stiffness" in err[0] and "'true'" in err[0]

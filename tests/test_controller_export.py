@@ -22,9 +22,8 @@ import pytest
 
 import obsdesign as od
 from obsdesign.export.controller import (
-    PAPER_ESTIMATORS,
     REVERSAL_NOISE_FACTOR,
-    SCHEDULE_CODES,
+    SCHEDULE_NAMES,
     SCHEDULE_ZERO,
     CompensationSpec,
     controller_constants,
@@ -48,6 +47,11 @@ CASES = {
     "noisy-lag": (od.load_preset("table1").override(noise_rms=2e-7),
                   # simulated and exported with the schedule without reversal hysteresis
                   dict(scenario="tracking", controller="pid+observer", stiffness="estimated-raw")),
+    # the computation delay ([pid] delay_samples): the command of sample n applied from n + d
+    "delayed": (od.load_preset("table1").override(quantization=1e-7, delay_samples=2),
+                dict(scenario=od.sim.Positioning(step_down=1.2), controller="pid+observer")),
+    "delayed-eso": (VCM.override(noise_rms=1e-6, delay_samples=1),
+                    dict(scenario="tracking", controller="pid+observer", estimator="eso")),
 }
 
 
@@ -163,7 +167,8 @@ def test_exported_controller_reproduces_the_simulator(language, case, tmp_path):
         pytest.skip(f"{language}: toolchain not installed")
     name, cfg, controller, res = case
     n = len(res.t)
-    files = controller_files(cfg, language, controller=controller, schedule=res.stiffness_schedule)
+    files = controller_files(cfg, language, controller=controller, schedule=res.stiffness_schedule,
+                             estimator=res.estimator)
     command = run(files, res.x_ref[:n], res.x_meas[:n], tmp_path)
     assert command.shape == (n,)
     assert _max_rel(command, cfg, res.u) <= 1e-9
@@ -198,8 +203,17 @@ def test_octave_files_are_well_formed(estimator, schedule):
 
 # ---------------------------------------------------------------------------------------------
 # Compensation knobs against a reference step written from the kernel and the knob law.
+def _flat(loop):
+    """The numbers of a run's sampled controller under one namespace (the reference below reads them)."""
+    import types
+
+    obs, _, ctrl = loop.sampled.kernel_args()
+    return types.SimpleNamespace(**{**obs._asdict(), **ctrl._asdict()}, tau_d=loop.sampled.tau_d)
+
+
 def _reference_commands(loop, x_ref, x_meas, comp: CompensationSpec):
     """Steps 2-5 of the kernel's sample, with ``comp = gain (ff + sigma vh [viscous]) fade``."""
+    loop = _flat(loop)
     A0, A1, b0, b1, g0, g1 = loop.A0, loop.A1, loop.b0, loop.b1, loop.g0, loop.g1
     alpha = math.exp(-loop.dt / loop.tau_d)
     y = np.zeros(2)
@@ -346,25 +360,29 @@ def test_the_export_and_the_simulator_share_the_choices_and_the_threshold():
     from obsdesign.sim.simulate import REVERSAL_NOISE_FACTOR as SIM_FACTOR
 
     assert REVERSAL_NOISE_FACTOR == SIM_FACTOR
-    assert tuple(SCHEDULE_CODES) == tuple(name for name in SCHEDULES.names() if name != "true")
-    assert set(PAPER_ESTIMATORS) < set(ESTIMATORS.names())
-    assert len(set(SCHEDULE_CODES.values()) | {SCHEDULE_ZERO}) == len(SCHEDULE_CODES) + 1
+    assert SCHEDULE_NAMES == tuple(name for name in SCHEDULES.names() if name != "true")
+    from obsdesign.export import CONTROLLER_FORMATS
+    from obsdesign.export.controller import LANGUAGES
+
+    assert set(LANGUAGES) == set(CONTROLLER_FORMATS)  # every controller format has its templates
+    assert SCHEDULE_ZERO not in {SCHEDULES.code(name) for name in SCHEDULES.names()}
     table1 = od.load_preset("table1")
     c = controller_constants(table1)
-    assert c["SCHEDULE"] == SCHEDULE_CODES["estimated"] and c["REVERSAL_THRESHOLD"] == 4.0 * 1e-6
-    assert controller_constants(VCM)["SCHEDULE"] == SCHEDULE_CODES["estimated-raw"]  # no noise: no hysteresis
+    assert c["SCHEDULE"] == SCHEDULES.code("estimated") and c["REVERSAL_THRESHOLD"] == 4.0 * 1e-6
+    assert controller_constants(VCM)["SCHEDULE"] == SCHEDULES.code("estimated-raw")  # no noise: no hysteresis
     assert controller_constants(table1, estimator="paper-k0", schedule="constant")["SCHEDULE"] == SCHEDULE_ZERO
     eso = controller_constants(table1, estimator="eso")
     assert eso["E_NZ"] == 3.0 and "L1" not in eso and "E_PHI_2_2" in eso
 
 
 def test_a_paper_export_does_not_load_the_estimators():
-    """The baselines' module (python-control tuning) is imported only when a baseline is exported."""
+    """The baselines' modules (python-control tuning) are imported only when a baseline is exported; the
+    estimators' light catalogue (obsdesign.estimators.registry, the names) is read either way."""
     code = ("import sys, obsdesign as od; from obsdesign.export.controller import controller_files; "
             "controller_files(od.load_preset('table1'), 'c', estimator='paper-k0'); "
-            "assert 'obsdesign.estimators' not in sys.modules; "
+            "assert 'obsdesign.estimators.base' not in sys.modules; "
             "controller_files(od.load_preset('table1'), 'c', estimator='kalman'); "
-            "assert 'obsdesign.estimators' in sys.modules")
+            "assert 'obsdesign.estimators.base' in sys.modules")
     subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
 
 
@@ -442,7 +460,7 @@ def test_pid_export_does_not_compensate():
      "found 'raw'"),
     ((VCM, "c"), {"estimator": "luenberger"}, ValueError,
      "estimator: expected one of paper, paper-k0, eso, kalman, dob, found 'luenberger'"),
-    ((VCM, "c"), {"estimator": None}, ValueError, "estimator: expected one of .*found None"),
+    ((VCM, "c"), {"estimator": 3}, ValueError, "estimator: expected one of .*found 3"),
 ])
 def test_controller_files_errors(args, kwargs, exc, match):
     with pytest.raises(exc, match=match):

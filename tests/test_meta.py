@@ -237,12 +237,7 @@ SUBSET_MARK = "# choice subset:"
 #: Known copies in files that other work owns (issue 16): (file, kind, names). Remove a line when
 #: its copy is gone; the test fails on a stale line so that this list only shrinks.
 PENDING = {
-    ("cli/_output.py", "controllers", ("pid", "pid+observer")),             # --controller choices=
-    ("export/controller.py", "controllers", ("pid", "pid+observer")),      # CONTROLLERS
     ("export/controller.py", "export formats", ("c", "js", "octave", "python")),  # LANGUAGES, _TEMPLATES
-    ("export/files.py", "export formats", ("c", "js", "octave", "python")),       # CONTROLLER_FORMATS
-    ("export/files.py", "export formats", ("c", "js", "latex", "octave", "python")),  # export's docstring sets
-    ("export/files.py", "controllers", ("pid", "pid+observer")),
 }
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 from ..export import FORMATS as EXPORT_FORMATS
 from ..export import WHAT as EXPORT_WHAT
 from ..params import VARIANTS
-from ..sampled.choices import ESTIMATORS, SCHEDULES
+from ..sampled.choices import CONTROLLERS, ESTIMATORS, SCHEDULES
 from ._common import (INPUT_DIR, INPUT_FILE, POSITIVE_ARG, UsageError, add_config_flags, check_output_dir,
                       check_output_file, load, print_warnings, warn_unstable)
 from ._data import add_trace_flags, load_trace_args
@@ -23,12 +23,13 @@ def _cmd_export(args: argparse.Namespace) -> int:
     if args.what == "controller" and args.format == "latex":
         raise UsageError("obsdesign export: argument --format: the controller is exported as one of "
                          "python, c, octave, js, found 'latex'")
-    for flag, value in (("--stiffness", args.stiffness), ("--estimator", args.estimator)):
+    for flag, value in (("--controller", args.controller), ("--stiffness", args.stiffness),
+                        ("--estimator", args.estimator)):
         if value is not None and args.what != "controller":
             raise UsageError(f"obsdesign export: argument {flag}: applies to --what controller only, found {value!r}")
-    cfg = load(args)
-    paths = export(cfg, args.format, args.output, variant=args.variant, rho=args.rho, dt=args.dt,
-                   what=args.what, controller=args.controller, schedule=args.stiffness, estimator=args.estimator)
+    cfg = load(args).override(dt=args.dt)  # --rho, --kappa, --variant: applied by load, once
+    paths = export(cfg, args.format, args.output, what=args.what, controller=args.controller,
+                   schedule=args.stiffness, estimator=args.estimator)
     warn_unstable(cfg, "the exported observer diverges")
     if cfg.sensor.noise_rms > 0 and args.what == "observer" and args.format != "latex":
         print_warnings([f"the exported observer's stiffness schedule reverses at sign changes of v_hat (the "
@@ -65,7 +66,7 @@ def add_commands(sub) -> None:
     p.add_argument("--what", choices=EXPORT_WHAT, default="observer",
                    help="observer (default) or controller: observer, low-pass, PID and compensation of the "
                         "simulator, step(x_ref, x_meas) -> command [V]")
-    p.add_argument("--controller", choices=("pid+observer", "pid"), default="pid+observer",
+    p.add_argument("--controller", choices=[name for name in CONTROLLERS.names() if name != "open-loop"],
                    help="with --what controller: the simulator's controller to generate (default pid+observer)")
     p.add_argument("--stiffness", choices=[name for name in SCHEDULES.names() if name != "true"],
                    help="with --what controller: the observer's stiffness schedule, as in simulate (default "

@@ -21,8 +21,10 @@ from __future__ import annotations
 FORMATS = ("latex", "python", "c", "octave", "js")
 #: What can be exported: the observer (default) or the whole sampled controller.
 WHAT = ("observer", "controller")
+#: The formats of the whole sampled controller: the code formats (not the derivation's LaTeX).
+CONTROLLER_FORMATS = tuple(fmt for fmt in FORMATS if fmt != "latex")
 
-__all__ = ["export", "FORMATS", "WHAT"]
+__all__ = ["export", "FORMATS", "WHAT", "CONTROLLER_FORMATS"]
 
 
 def __getattr__(name: str):

@@ -42,18 +42,14 @@ class ExportSpec:
     L2 = property(lambda self: self.arrays.design.L2)
 
 
-def export_spec(cfg: Config, *, variant: str | None = None, rho: float | None = None,
-                dt: float | None = None) -> ExportSpec:
-    """Design the observer to export (the config with overrides).
+def export_spec(cfg: Config) -> ExportSpec:
+    """Design the observer to export.
 
     Parameters
     ----------
     cfg : Config
-        The design.
-    variant, rho, dt : optional
-        Overrides of the config.
+        The design (change values with :meth:`obsdesign.Config.override` before).
     """
-    cfg = cfg.override(variant=variant, rho=rho, dt=dt)
     return ExportSpec(cfg, design_observer(cfg).affine())
 
 

@@ -57,33 +57,28 @@ ValueError: schedule: 'true' (the simulated plant's stiffness) cannot run on an 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
-from ..design.pid import pid_gains
-from ..params import CompensationSpec, Config
 from ..design import discretize
-from ..design.discretize import lowpass_arrays
 from ..friction import presliding as friction
-from .codegen import _plain_source, export_spec
+from ..params import CompensationSpec, Config
+from ..sampled.choices import CONTROLLERS, ESTIMATORS, SCHEDULES
+from ..sampled.controller import REVERSAL_NOISE_FACTOR, SampledController, sampled_controller
+from .codegen import _plain_source
 from .literals import NAME_MAX as _NAME_MAX
 from .literals import comment_text
 
-__all__ = ["CompensationSpec", "controller_files", "controller_constants", "sanitize_comment", "LANGUAGES",
-           "CONTROLLERS", "SCHEDULE_CODES", "SCHEDULE_ZERO", "PAPER_ESTIMATORS", "REVERSAL_NOISE_FACTOR"]
+__all__ = ["CompensationSpec", "controller_files", "controller_constants", "exported_controller", "sanitize_comment",
+           "LANGUAGES", "EXPORTED_CONTROLLERS", "SCHEDULE_NAMES", "SCHEDULE_ZERO", "REVERSAL_NOISE_FACTOR"]
 
-LANGUAGES = ("c", "python", "octave", "js")
-CONTROLLERS = ("pid", "pid+observer")
-#: The stiffness schedules the generated code runs (the simulator's, less ``true``, which needs the
-#: simulated plant), each with its value of the generated constant ``SCHEDULE``.
-SCHEDULE_CODES = {"estimated": 0, "constant": 1, "estimated-raw": 2}
-#: ``SCHEDULE`` of ``paper-k0``: the stiffness is 0 whatever the schedule.
-SCHEDULE_ZERO = 3
-#: The estimators run as the paper's observer with the low-pass; every other registered estimator
-#: (:data:`obsdesign.estimators.ESTIMATORS`) runs in the common discrete form, unfiltered.
-PAPER_ESTIMATORS = ("paper", "paper-k0")
-#: Reversal threshold of the ``estimated`` schedule in units of ``sensor.noise_rms``: the value of
-#: the simulator's ``obsdesign.sim.simulate.REVERSAL_NOISE_FACTOR`` (a test holds the two equal).
-REVERSAL_NOISE_FACTOR = 4.0
+#: The controllers that run on an axis (``open-loop`` is a simulation scenario's).
+EXPORTED_CONTROLLERS = tuple(name for name in CONTROLLERS.names() if name != "open-loop")
+#: The stiffness schedules the generated code runs: the simulator's, less ``true`` (it needs the
+#: simulated plant). The generated constant ``SCHEDULE`` holds the registry's code.
+SCHEDULE_NAMES = tuple(name for name in SCHEDULES.names() if name != "true")
+#: ``SCHEDULE`` of ``paper-k0``: the stiffness is 0 whatever the schedule (a code no schedule has).
+SCHEDULE_ZERO = -1
 #: Longest sanitized config name placed in a comment or docstring.
 NAME_MAX = _NAME_MAX
 
@@ -117,51 +112,93 @@ def _choice(name: str, value, options) -> str:
 def _check_schedule(schedule) -> str:
     if schedule == "true":
         raise ValueError(f"schedule: 'true' (the simulated plant's stiffness) cannot run on an axis; expected one of "
-                         f"{', '.join(SCHEDULE_CODES)}, found 'true'")
-    return _choice("schedule", schedule, tuple(SCHEDULE_CODES))
+                         f"{', '.join(SCHEDULE_NAMES)}, found 'true'")
+    return _choice("schedule", schedule, SCHEDULE_NAMES)
 
 
-def controller_constants(cfg: Config, *, controller: str = "pid+observer",
-                         compensation: CompensationSpec | None = None, schedule: str = "estimated",
-                         estimator: str = "paper") -> dict[str, float]:
-    """Every number of the generated controller, computed as :func:`obsdesign.simulate` computes it.
-
-    A pure function of the config and the choices: the observer arrays (:func:`export_spec`), the
-    low-pass (:func:`~obsdesign.design.discretize.lowpass_arrays`), the PID
-    (:func:`~obsdesign.design.pid.pid_gains`), the compensation knobs, the reversal threshold and,
-    for a baseline, :func:`obsdesign.estimators.tune` (imported only then: it loads python-control).
+def exported_controller(cfg, *, controller: str | None = None, compensation: CompensationSpec | None = None,
+                        schedule: str | None = None, estimator: str | None = None) -> SampledController:
+    """The one :class:`~obsdesign.sampled.SampledController` an export generates: the object the simulator runs.
 
     Parameters
     ----------
-    cfg : Config
-        The design.
-    controller : {'pid+observer', 'pid'}
-        The controller.
+    cfg : Config or SampledController
+        The design, or the controller itself (then no other argument may be given).
+    controller : str, optional
+        A name of :data:`EXPORTED_CONTROLLERS` (default ``pid+observer``).
     compensation : CompensationSpec, optional
-        The compensation knobs (default: the config's ``[compensation]`` section).
-    schedule : {'estimated', 'constant', 'estimated-raw'}
-        Stiffness schedule of the ``paper`` observer (the simulator's ``stiffness``; ``true`` is
-        refused: it needs the simulated plant). ``estimated`` with ``sensor.noise_rms = 0`` has no
-        hysteresis and runs as ``estimated-raw``, as in the simulator.
-    estimator : {'paper', 'paper-k0', 'eso', 'kalman', 'dob'}
-        A name of :data:`obsdesign.estimators.ESTIMATORS`.
+        Replaces the config's ``[compensation]`` section (``pid+observer`` only).
+    schedule : str, optional
+        A name of :data:`obsdesign.sampled.choices.SCHEDULES` but ``true`` (default ``estimated``).
+    estimator : str, optional
+        A name of :data:`obsdesign.sampled.choices.ESTIMATORS` (default ``paper``).
+
+    Returns
+    -------
+    SampledController
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> exported_controller(od.load_preset("table1")).reversal_threshold   # 4 x sensor.noise_rms
+    4e-06
+    """
+    given = {"controller": controller, "compensation": compensation, "schedule": schedule, "estimator": estimator}
+    if isinstance(cfg, SampledController):
+        extra = [k for k, v in given.items() if v is not None]
+        if extra:
+            raise ValueError(f"{extra[0]}: a SampledController has its own; expected None, found {given[extra[0]]!r}")
+        ctrl = cfg
+        _choice("controller", ctrl.controller, EXPORTED_CONTROLLERS)
+        _check_schedule(ctrl.schedule)
+        return ctrl
+    if not isinstance(cfg, Config):
+        raise TypeError(f"cfg: expected a Config or a SampledController, found {type(cfg).__name__}")
+    controller = _choice("controller", "pid+observer" if controller is None else controller, EXPORTED_CONTROLLERS)
+    schedule = _check_schedule("estimated" if schedule is None else schedule)
+    estimator = ESTIMATORS.check("paper" if estimator is None else estimator)
+    if compensation is not None:
+        if not isinstance(compensation, CompensationSpec):
+            raise TypeError(f"compensation: expected a CompensationSpec, found {type(compensation).__name__}")
+        if controller == "pid" and compensation != CompensationSpec():
+            raise ValueError("compensation: only the controller 'pid+observer' compensates friction; "
+                             "leave the default CompensationSpec() for 'pid'")
+        cfg = dataclasses.replace(cfg, compensation=compensation)
+    return sampled_controller(cfg, controller=controller, schedule=schedule, estimator=estimator)
+
+
+def controller_constants(cfg, *, controller: str | None = None, compensation: CompensationSpec | None = None,
+                         schedule: str | None = None, estimator: str | None = None) -> dict[str, float]:
+    """Every number of the generated controller: those of the simulator's own sampled controller.
+
+    The numbers are read from :meth:`obsdesign.sampled.SampledController.kernel_args` of
+    :func:`exported_controller`, the groups the simulator's kernel runs, so what is exported is
+    what is simulated.
+
+    Parameters
+    ----------
+    cfg : Config or SampledController
+        The design, or the controller (see :func:`exported_controller` for the other arguments).
+    controller, compensation, schedule, estimator : optional
+        As in :func:`exported_controller`.
 
     Returns
     -------
     dict of str to float
         Keys are the constant names of the generated code. Always: ``DT``, ``K``, ``G``, ``U_MAX``,
-        ``SIGMA``, ``V_HAT0``, ``F_HAT0``, the PID (``KP``, ``KI``, ``KD``, ``ALPHA_D``) and the
+        ``SIGMA``, ``V_HAT0``, ``F_HAT0``, the PID (``KP``, ``KI``, ``KD``, ``ALPHA_D``), the
         compensation (``COMP_ON``, ``COMP_GAIN``, ``COMP_VISCOUS``, ``COMP_DEADZONE``; flags are
-        0.0 or 1.0). ``paper``/``paper-k0``: ``CF``, ``S``, ``KAPPA``, ``L1``, ``L2``, the affine
-        observer arrays ``A0_i`` ... ``G1_i``, the low-pass ``LP_*``, ``SCHEDULE``
-        (:data:`SCHEDULE_CODES`, :data:`SCHEDULE_ZERO`) and ``REVERSAL_THRESHOLD`` [m]. A baseline:
-        ``E_NZ`` and its arrays ``E_PHI_i_j``, ``E_GU_i``, ``E_G0_i``, ``E_G1_i``, ``E_CZ_r_j``,
-        ``E_D_r``, ``E_INIT_i_c``.
+        0.0 or 1.0) and the computation delay (``DELAY`` [samples], ``DELAY_INIT``: the saturated
+        ``G / K`` in flight before the first command). ``paper``/``paper-k0``: ``CF``, ``S``,
+        ``KAPPA``, ``L1``, ``L2``, the affine observer arrays ``A0_i`` ... ``G1_i``, the low-pass
+        ``LP_*``, ``SCHEDULE`` (the registry's code; :data:`SCHEDULE_ZERO` for ``paper-k0``) and
+        ``REVERSAL_THRESHOLD`` [m]. A baseline: ``E_NZ`` and its arrays ``E_PHI_i_j``, ``E_GU_i``,
+        ``E_G0_i``, ``E_G1_i``, ``E_CZ_r_j``, ``E_D_r``, ``E_INIT_i_c``.
 
     Raises
     ------
     TypeError
-        ``cfg`` is not a Config or ``compensation`` not a CompensationSpec.
+        ``cfg`` is not a Config or SampledController, or ``compensation`` not a CompensationSpec.
     ValueError
         Unknown controller, schedule or estimator; ``schedule='true'``; knobs other than the
         default with ``pid``.
@@ -172,62 +209,38 @@ def controller_constants(cfg: Config, *, controller: str = "pid+observer",
     >>> c = controller_constants(od.load_preset("vcm"), controller="pid")
     >>> c["COMP_ON"], round(c["KP"], 2), round(c["G"] / c["K"], 4)
     (0.0, 428.97, 1.6067)
-    >>> c["SCHEDULE"] == SCHEDULE_CODES["estimated-raw"]  # vcm has no random noise: no hysteresis
+    >>> c["SCHEDULE"] == SCHEDULES.code("estimated-raw")  # vcm has no random noise: no hysteresis
     True
     >>> controller_constants(od.load_preset("vcm"), estimator="paper-k0")["SCHEDULE"] == SCHEDULE_ZERO
     True
     >>> controller_constants(od.load_preset("vcm"), estimator="dob")["E_NZ"]
     2.0
     """
-    # ---- the sampled controller of the simulator's closed loop, from the config and the choices ----
-    if not isinstance(cfg, Config):
-        raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
-    controller = _choice("controller", controller, CONTROLLERS)
-    schedule = _check_schedule(schedule)
-    if estimator not in PAPER_ESTIMATORS:
-        from ..estimators import ESTIMATORS  # python-control: loaded only for a baseline
-
-        _choice("estimator", estimator, tuple(ESTIMATORS))
-    if compensation is None:
-        compensation = cfg.compensation if controller == "pid+observer" else CompensationSpec()
-    if not isinstance(compensation, CompensationSpec):
-        raise TypeError(f"compensation: expected a CompensationSpec, found {type(compensation).__name__}")
-    if controller == "pid" and compensation != CompensationSpec():
-        raise ValueError("compensation: only the controller 'pid+observer' compensates friction; "
-                         "leave the default CompensationSpec() for 'pid'")
-    dt = cfg.observer.dt
-    _, _, kp, ki, kd = pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
-                                 phase_margin_deg=cfg.pid.phase_margin_deg)
-    tau_d = kd / kp / cfg.pid.derivative_N
-    pl, fr = cfg.plant, cfg.friction
+    ctrl = exported_controller(cfg, controller=controller, compensation=compensation, schedule=schedule,
+                               estimator=estimator)
+    obs, est, c = ctrl.kernel_args()
     consts = {
-        "DT": dt, "K": pl.K, "G": pl.G, "U_MAX": pl.u_max, "SIGMA": fr.sigma, "V_HAT0": 0.0, "F_HAT0": 0.0,
-        "KP": kp, "KI": ki, "KD": kd, "ALPHA_D": math.exp(-dt / tau_d) if tau_d > 0.0 else 0.0,
-        "COMP_ON": 1.0 if controller == "pid+observer" else 0.0, "COMP_GAIN": compensation.gain,
-        "COMP_VISCOUS": 1.0 if compensation.viscous else 0.0, "COMP_DEADZONE": compensation.deadzone,
+        "DT": c.dt, "K": c.K, "G": c.G, "U_MAX": c.u_max, "SIGMA": c.sigma, "V_HAT0": obs.v_hat0,
+        "F_HAT0": obs.f_hat0, "KP": c.kp, "KI": c.ki, "KD": c.kd, "ALPHA_D": c.alpha_d,
+        "COMP_ON": 1.0 if ctrl.controller == "pid+observer" else 0.0, "COMP_GAIN": c.comp_gain,
+        "COMP_VISCOUS": 1.0 if c.comp_viscous else 0.0, "COMP_DEADZONE": c.comp_deadzone,
+        "DELAY": c.delay, "DELAY_INIT": min(max(c.G / c.K, -c.u_max), c.u_max),  # as sampled.kernel.delay_buffer
     }
-    if estimator in PAPER_ESTIMATORS:
-        spec = export_spec(cfg)
-        arr = spec.arrays
-        lp_phi, lp_g0, lp_g1 = lowpass_arrays(cfg.observer.omega_co, dt)
-        threshold = REVERSAL_NOISE_FACTOR * cfg.sensor.noise_rms
-        if estimator == "paper-k0":
+    if ctrl.baseline is None:
+        if ctrl.estimator == "paper-k0":
             code = SCHEDULE_ZERO
-        elif schedule == "estimated" and threshold == 0.0:
-            code = SCHEDULE_CODES["estimated-raw"]  # the simulator's kernel does the same
+        elif ctrl.schedule == "estimated" and obs.reversal_threshold == 0.0:
+            code = SCHEDULES.code("estimated-raw")  # the simulator's kernel does the same
         else:
-            code = SCHEDULE_CODES[schedule]
-        consts.update({"CF": fr.Cf, "S": fr.s, "KAPPA": fr.kappa, "L1": spec.L1, "L2": spec.L2,
-                       "SCHEDULE": code, "REVERSAL_THRESHOLD": threshold})
-        arrays = (("A0", arr.A0), ("A1", arr.A1), ("B0", arr.b0), ("B1", arr.b1), ("G0", arr.g0), ("G1", arr.g1),
-                  ("LP_PHI", lp_phi), ("LP_G0", lp_g0), ("LP_G1", lp_g1))
+            code = obs.schedule
+        consts.update({"CF": obs.Cf, "S": obs.s, "KAPPA": obs.kappa, "L1": obs.L1, "L2": obs.L2,
+                       "SCHEDULE": code, "REVERSAL_THRESHOLD": obs.reversal_threshold})
+        arrays = (("A0", obs.A0), ("A1", obs.A1), ("B0", obs.b0), ("B1", obs.b1), ("G0", obs.g0), ("G1", obs.g1),
+                  ("LP_PHI", obs.lp_phi), ("LP_G0", obs.lp_g0), ("LP_G1", obs.lp_g1))
         for name, values in arrays:  # flat, row-major: A0_0 .. A0_3
             consts.update({f"{name}_{i}": float(v) for i, v in enumerate(values.ravel())})
     else:
-        from ..estimators import tune
-
-        est = tune(estimator, cfg)
-        consts["E_NZ"] = est.nz
+        consts["E_NZ"] = ctrl.baseline.nz
         for name, values in (("E_PHI", est.Phi), ("E_GU", est.gu), ("E_G0", est.g0), ("E_G1", est.g1),
                              ("E_CZ", est.Cz), ("E_D", est.d), ("E_INIT", est.init)):
             for index, v in zip(_indices(values.shape), values.ravel()):
@@ -279,31 +292,39 @@ _TEMPLATES = {
     "octave": ("obsdesign_controller_init.m", "obsdesign_controller_step.m", "obsdesign_controller.m"),
     "js": ("obsdesign_controller.mjs",),
 }
+#: The languages of the generated controller: :data:`obsdesign.export.CONTROLLER_FORMATS`, in the
+#: order of their templates (a test holds the two sets equal).
+LANGUAGES = tuple(_TEMPLATES)
 
 
-def controller_files(cfg: Config, language: str, *, controller: str = "pid+observer",
-                     compensation: CompensationSpec | None = None, schedule: str = "estimated",
-                     estimator: str = "paper") -> dict[str, str]:
+def controller_files(cfg, language: str, *, controller: str | None = None,
+                     compensation: CompensationSpec | None = None, schedule: str | None = None,
+                     estimator: str | None = None) -> dict[str, str]:
     """The sampled controller of the simulator's closed loop as source files of one language.
 
     Parameters
     ----------
-    cfg : Config
-        The design; its ``name`` appears in comments only in sanitized form (:func:`sanitize_comment`).
-    language : {'c', 'python', 'octave', 'js'}
-        The language of the files.
-    controller : {'pid+observer', 'pid'}
-        As in :func:`obsdesign.simulate`; ``pid`` still runs the estimator (for monitoring) but
-        does not compensate.
+    cfg : Config or SampledController
+        The design (its ``name`` appears in comments only in sanitized form, :func:`sanitize_comment`),
+        or the sampled controller itself (:func:`obsdesign.sampled.sampled_controller`; then none of
+        the choices below).
+    language : str
+        The language of the files, a name of :data:`LANGUAGES`.
+    controller : str, optional
+        A name of :data:`EXPORTED_CONTROLLERS` (default ``pid+observer``), as in
+        :func:`obsdesign.simulate`; ``pid`` still runs the estimator (for monitoring) but does not
+        compensate.
     compensation : CompensationSpec, optional
         Knobs of the compensation law (``pid+observer`` only; default: the config's
         ``[compensation]`` section, as the simulator reads it).
-    schedule : {'estimated', 'constant', 'estimated-raw'}
-        The observer's stiffness schedule, as the simulator's ``stiffness`` (``estimated``: with the
-        reversal hysteresis of :data:`REVERSAL_NOISE_FACTOR` x ``sensor.noise_rms``); ``true`` is
-        refused (it needs the simulated plant). Without effect for ``paper-k0`` and the baselines.
-    estimator : {'paper', 'paper-k0', 'eso', 'kalman', 'dob'}
-        As the simulator's ``estimator``; a baseline is tuned by :func:`obsdesign.estimators.tune`.
+    schedule : str, optional
+        A name of :data:`SCHEDULE_NAMES` (default ``estimated``, with the reversal hysteresis of
+        :data:`REVERSAL_NOISE_FACTOR` x ``sensor.noise_rms``), as the simulator's ``stiffness``;
+        ``true`` is refused (it needs the simulated plant). Without effect for ``paper-k0`` and the
+        baselines.
+    estimator : str, optional
+        A name of :data:`obsdesign.sampled.choices.ESTIMATORS` (default ``paper``), as the
+        simulator's ``estimator``; a baseline is tuned by :func:`obsdesign.estimators.tune`.
 
     Returns
     -------
@@ -336,12 +357,13 @@ def controller_files(cfg: Config, language: str, *, controller: str = "pid+obser
     2.036116
     """
     language = _choice("language", language, LANGUAGES)
-    consts = controller_constants(cfg, controller=controller, compensation=compensation, schedule=schedule,
-                                  estimator=estimator)
-    compensation = CompensationSpec(gain=consts["COMP_GAIN"], viscous=consts["COMP_VISCOUS"] != 0.0,
-                                    deadzone=consts["COMP_DEADZONE"])
-    baseline = "E_NZ" in consts
-    codes = {"SCHEDULE_" + name.upper().replace("-", "_"): code for name, code in SCHEDULE_CODES.items()}
+    ctrl = exported_controller(cfg, controller=controller, compensation=compensation, schedule=schedule,
+                               estimator=estimator)
+    consts = controller_constants(ctrl)
+    cfg, compensation = ctrl.config, ctrl.compensation
+    controller, schedule, estimator = ctrl.controller, ctrl.schedule, ctrl.estimator
+    baseline = ctrl.baseline is not None
+    codes = {"SCHEDULE_" + name.upper().replace("-", "_"): SCHEDULES.code(name) for name in SCHEDULE_NAMES}
     codes["SCHEDULE_ZERO"] = SCHEDULE_ZERO
     ctx = {
         "name": sanitize_comment(cfg.name), "variant": cfg.observer.variant, "controller": controller,
@@ -351,7 +373,7 @@ def controller_files(cfg: Config, language: str, *, controller: str = "pid+obser
         "codes": {k: _literal(v) for k, v in codes.items()} if not baseline else {},
         "core": _c_core() if language == "c" and not baseline else "",
         "helpers": _python_helpers(baseline) if language == "python" else "",
-        "terms": discretize._TERMS,
+        "terms": discretize._TERMS, "delay": ctrl.delay,
     }
     env = _environment()
     return {name: env.get_template(name + ".j2").render(**ctx) for name in _TEMPLATES[language]}

@@ -28,42 +28,41 @@ from pathlib import Path
 
 from .._io import atomic_write
 from ..params import Config
-from . import FORMATS, WHAT
+from . import CONTROLLER_FORMATS, FORMATS, WHAT
 from .codegen import c_files, export_spec, js_module, latex_document, octave_files, python_module
 
 __all__ = ["export"]
 
-#: Formats the whole controller is exported in (:mod:`obsdesign.export.controller`).
-CONTROLLER_FORMATS = ("python", "c", "octave", "js")
 
 
-def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, variant: str | None = None,
-           rho: float | None = None, dt: float | None = None, what: str = "observer",
-           controller: str = "pid+observer", schedule: str | None = None,
+def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "observer",
+           controller: str | None = None, schedule: str | None = None,
            estimator: str | None = None) -> list[Path]:
     """Write the export files of one format into ``out_dir`` (created if missing).
 
     Parameters
     ----------
     cfg : Config
-    fmt : {'latex', 'python', 'c', 'octave', 'js'}
-        The format (:data:`obsdesign.export.FORMATS`).
+        The design (change values with :meth:`obsdesign.Config.override` before).
+    fmt : str
+        The format, a name of :data:`obsdesign.export.FORMATS`.
     out_dir : path
         Output folder (created if missing); a file of the export's names there must not be a folder.
-    variant, rho, dt : optional
-        Overrides of the config.
     what : {'observer', 'controller'}
         ``observer``: the derivation (LaTeX) or the discrete observer; ``controller``: the whole
         sampled controller of the simulator (observer, low-pass, PID, compensation of the config's
         ``[compensation]`` section, saturation): ``obsdesign_controller.h/.c``, ``obsdesign_controller.py``,
         ``obsdesign_controller*.m``, ``obsdesign_controller.mjs``.
-    controller : {'pid+observer', 'pid'}
-        With ``what='controller'``: the controller of :func:`obsdesign.simulate` to generate.
-    schedule : {'estimated', 'constant', 'estimated-raw'}, optional
-        With ``what='controller'``: the stiffness schedule (default ``estimated``, with the reversal
-        hysteresis, as the simulator's default). The observer export has the ``estimated-raw`` one.
-    estimator : {'paper', 'paper-k0', 'eso', 'kalman', 'dob'}, optional
-        With ``what='controller'``: the estimator (default ``paper``).
+    controller : str, optional
+        With ``what='controller'``: the controller of :func:`obsdesign.simulate` to generate
+        (:data:`obsdesign.export.controller.EXPORTED_CONTROLLERS`, default ``pid+observer``).
+    schedule : str, optional
+        With ``what='controller'``: the stiffness schedule (:data:`obsdesign.export.controller.SCHEDULE_NAMES`,
+        default ``estimated``, with the reversal hysteresis, as the simulator's default). The observer
+        export has the ``estimated-raw`` one.
+    estimator : str, optional
+        With ``what='controller'``: the estimator (:data:`obsdesign.sampled.choices.ESTIMATORS`,
+        default ``paper``).
 
     Returns
     -------
@@ -82,14 +81,12 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, variant: str | 
 
         if not isinstance(cfg, Config):
             raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
-        files = controller_files(cfg.override(variant=variant, rho=rho, dt=dt), fmt, controller=controller,
-                                 schedule="estimated" if schedule is None else schedule,
-                                 estimator="paper" if estimator is None else estimator)
+        files = controller_files(cfg, fmt, controller=controller, schedule=schedule, estimator=estimator)
         return _write(files, out_dir)
-    for name, value in (("schedule", schedule), ("estimator", estimator)):
+    for name, value in (("controller", controller), ("schedule", schedule), ("estimator", estimator)):
         if value is not None:
             raise ValueError(f"{name}: applies to what='controller' only, found {value!r} with what='observer'")
-    spec = export_spec(cfg, variant=variant, rho=rho, dt=dt)
+    spec = export_spec(cfg)
     if fmt == "latex":
         files = {f"obsdesign_{spec.variant}.tex": latex_document(spec)}
     elif fmt == "python":
