@@ -13,16 +13,12 @@ from __future__ import annotations
 import time
 
 import obsdesign as od
+from _timing import best_of
 from obsdesign.design.certificate import certify
 
 
-def _best(fn, repeats: int = 5) -> float:
-    best = float("inf")
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
+def _best(fn) -> float:
+    return best_of(fn, 5)
 
 
 def run() -> list[dict]:

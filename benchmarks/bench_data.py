@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 import obsdesign as od
+from _timing import best_of
 from obsdesign.data import Trace, identify, load_trace, observe
 from obsdesign.sampled import sampled_controller
 from obsdesign.sampled.kernel import observe_loop
@@ -41,13 +42,8 @@ def _trace() -> tuple[Trace, str]:
     return Trace(t=t, position=x, force=force, sample_time=1e-3, source="synthetic"), "synthetic record"
 
 
-def _best(fn, repeats: int = 7) -> float:
-    best = np.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
+def _best(fn) -> float:
+    return best_of(fn, 7)
 
 
 def run() -> list[dict]:
