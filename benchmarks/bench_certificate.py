@@ -10,10 +10,9 @@ Target (issue 18): one certificate under 1 s.
 
 from __future__ import annotations
 
-import time
+from _timing import best_of
 
 import obsdesign as od
-from _timing import best_of
 from obsdesign.design.certificate import certify
 
 

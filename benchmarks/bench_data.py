@@ -15,13 +15,12 @@ Target (issue 10): the whole ``observe`` call under 0.1 s after warm-up.
 from __future__ import annotations
 
 import os
-import time
 from pathlib import Path
 
 import numpy as np
+from _timing import best_of
 
 import obsdesign as od
-from _timing import best_of
 from obsdesign.data import Trace, identify, load_trace, observe
 from obsdesign.sampled import sampled_controller
 from obsdesign.sampled.kernel import observe_loop
