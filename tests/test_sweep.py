@@ -105,8 +105,11 @@ def test_interrupted_sweep_resumes_to_the_same_file(tmp_path):
     full = tmp_path / "full"
     assert cli(*args, "--out", str(full)).returncode == 0
     part = tmp_path / "part"
+    # SIGINT as the default in the child: a suite started in the background (where the shell ignores
+    # SIGINT, and children inherit that) still tests the sweep's interrupt
     proc = subprocess.Popen([sys.executable, "-m", "obsdesign", *args, "--out", str(part)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     results = part / "results.csv"
     deadline = time.time() + 120
     while time.time() < deadline:

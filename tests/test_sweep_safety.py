@@ -261,12 +261,18 @@ def _alive(pid: int) -> bool:
         return False
 
 
+def _interruptible() -> None:
+    """In the child: SIGINT as the default (a suite started in the background inherits an ignored
+    SIGINT from the shell, and Python keeps an ignored SIGINT ignored)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start_long(out: Path, min_rows: int = 3):
     """The LONG sweep, once it has written ``min_rows`` rows; stderr goes to a file (no pipe that
     a leaked worker could hold open)."""
     err = open(out.parent / f"{out.name}.stderr", "w")
     proc = subprocess.Popen([sys.executable, "-m", "obsdesign", *LONG, "--out", str(out)],
-                            stdout=subprocess.DEVNULL, stderr=err, text=True)
+                            stdout=subprocess.DEVNULL, stderr=err, text=True, preexec_fn=_interruptible)
     err.close()
     deadline = time.time() + 180
     results = out / "results.csv"
