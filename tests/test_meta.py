@@ -153,8 +153,9 @@ def _documented(doc: str, section: str = "Parameters") -> set[str]:
     return names
 
 
-def _public_functions():
-    """Functions named in the ``__all__`` of public modules (no ``_private`` part in the module name)."""
+def _public(keep):
+    """``(qualified name, object)`` of every object named in the ``__all__`` of a public module (no
+    ``_private`` part in the module name), defined in the package, for which ``keep(obj)`` holds, once each."""
     seen = set()
     for path in MODULES:
         name = _module_name(path)
@@ -163,12 +164,12 @@ def _public_functions():
         module = importlib.import_module(name)
         for name in getattr(module, "__all__", ()):
             obj = getattr(module, name, None)
-            if inspect.isfunction(obj) and obj.__module__.startswith("obsdesign") and id(obj) not in seen:
+            if keep(obj) and getattr(obj, "__module__", "").startswith("obsdesign") and id(obj) not in seen:
                 seen.add(id(obj))
                 yield f"{obj.__module__}.{obj.__qualname__}", obj
 
 
-PUBLIC = sorted(_public_functions(), key=lambda item: item[0])
+PUBLIC = sorted(_public(inspect.isfunction), key=lambda item: item[0])
 
 
 @pytest.mark.parametrize("name, func", PUBLIC, ids=[n for n, _ in PUBLIC])
@@ -181,23 +182,8 @@ def test_public_parameters_are_documented(name, func):
     assert not missing, f"{name}: parameters not in the Parameters section: {missing}"
 
 
-def _public_dataclasses():
-    """Dataclasses named in the ``__all__`` of public modules, defined in the package."""
-    seen = set()
-    for path in MODULES:
-        name = _module_name(path)
-        if any(part.startswith("_") for part in name.split(".")):
-            continue
-        module = importlib.import_module(name)
-        for name in getattr(module, "__all__", ()):
-            obj = getattr(module, name, None)
-            if (isinstance(obj, type) and dataclasses.is_dataclass(obj) and obj.__module__.startswith("obsdesign")
-                    and id(obj) not in seen):
-                seen.add(id(obj))
-                yield f"{obj.__module__}.{obj.__qualname__}", obj
-
-
-DATACLASSES = sorted(_public_dataclasses(), key=lambda item: item[0])
+DATACLASSES = sorted(_public(lambda obj: isinstance(obj, type) and dataclasses.is_dataclass(obj)),
+                     key=lambda item: item[0])
 #: In files being rewritten for the sampled-controller room (issue 16): document them there.
 UNDOCUMENTED_FIELDS_ALLOWED = {"obsdesign.export.codegen.ExportSpec"}
 
