@@ -146,3 +146,35 @@ def test_identical_figures_are_identical_files(tmp_path):
         save_figure(fig, tmp_path / name)
     assert (tmp_path / "a.svg").read_bytes() == (tmp_path / "b.svg").read_bytes()
     assert b"<dc:date>" not in (tmp_path / "a.svg").read_bytes()
+
+
+@pytest.mark.slow
+# python-control notes that it computes these margins on a frequency grid ('frd'): expected here
+@pytest.mark.filterwarnings("ignore:stability_margins.*frd:UserWarning")
+def test_the_report_shows_the_sampled_loop_beside_the_continuous_one(tmp_path):
+    """The loop view carries the sampled loop's margins (an independent python-control computation of
+    the same discrete loop: c2d ZOH of the plant, the discrete filtered-derivative PID) and says which
+    system each table is about."""
+    import math
+    import re
+
+    import control as ct
+
+    from obsdesign.cli import main
+    from obsdesign.sampled import sampled_controller
+
+    out = tmp_path / "r.html"
+    assert main(["report", "--preset", "vcm", "-o", str(out)]) == 0
+    page = out.read_text(encoding="utf-8")
+    assert "continuous idealisation" in page and "ZOH plant, discrete PID with derivative filter N=10" in page
+    cfg = od.load_preset("vcm")
+    c = sampled_controller(cfg, controller="pid")
+    dt, a = cfg.observer.dt, c.alpha_d
+    z = ct.tf([1.0, 0.0], [1.0], dt)
+    C = c.kp + c.ki * dt * z / (z - 1) + c.kd * (1 - a) / dt * (z - 1) / (z - a)
+    H = ct.c2d(ct.tf([cfg.phi], [cfg.pid.tau, 1.0, 0.0]), dt, "zoh")
+    pm = ct.stability_margins(C * H)[1]
+    i = page.index("Below, the loop that runs")
+    cells = re.findall(r"<td>([^<]*)</td>", page[i:i + 3000])
+    shown = float(cells[1].split()[0])  # phase margin [deg], 4 significant digits
+    assert math.isclose(shown, pm, rel_tol=1e-3), (shown, pm)
