@@ -60,6 +60,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+from .._validate import check_choice
 from ..design import discretize
 from ..friction import presliding as friction
 from ..params import CompensationSpec, Config
@@ -103,17 +104,11 @@ def sanitize_comment(text: str, *, limit: int = NAME_MAX) -> str:
     return comment_text(text, limit=limit)
 
 
-def _choice(name: str, value, options) -> str:
-    if not isinstance(value, str) or value not in options:
-        raise ValueError(f"{name}: expected one of {', '.join(options)}, found {value!r}")
-    return value
-
-
 def _check_schedule(schedule) -> str:
     if schedule == "true":
         raise ValueError(f"schedule: 'true' (the simulated plant's stiffness) cannot run on an axis; expected one of "
                          f"{', '.join(SCHEDULE_NAMES)}, found 'true'")
-    return _choice("schedule", schedule, SCHEDULE_NAMES)
+    return check_choice("schedule", schedule, SCHEDULE_NAMES)
 
 
 def exported_controller(cfg, *, controller: str | None = None, compensation: CompensationSpec | None = None,
@@ -149,12 +144,12 @@ def exported_controller(cfg, *, controller: str | None = None, compensation: Com
         if extra:
             raise ValueError(f"{extra[0]}: a SampledController has its own; expected None, found {given[extra[0]]!r}")
         ctrl = cfg
-        _choice("controller", ctrl.controller, EXPORTED_CONTROLLERS)
+        check_choice("controller", ctrl.controller, EXPORTED_CONTROLLERS)
         _check_schedule(ctrl.schedule)
         return ctrl
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config or a SampledController, found {type(cfg).__name__}")
-    controller = _choice("controller", "pid+observer" if controller is None else controller, EXPORTED_CONTROLLERS)
+    controller = check_choice("controller", "pid+observer" if controller is None else controller, EXPORTED_CONTROLLERS)
     schedule = _check_schedule("estimated" if schedule is None else schedule)
     estimator = ESTIMATORS.check("paper" if estimator is None else estimator)
     if compensation is not None:
@@ -224,7 +219,7 @@ def controller_constants(cfg, *, controller: str | None = None, compensation: Co
         "F_HAT0": obs.f_hat0, "KP": c.kp, "KI": c.ki, "KD": c.kd, "ALPHA_D": c.alpha_d,
         "COMP_ON": 1.0 if ctrl.controller == "pid+observer" else 0.0, "COMP_GAIN": c.comp_gain,
         "COMP_VISCOUS": 1.0 if c.comp_viscous else 0.0, "COMP_DEADZONE": c.comp_deadzone,
-        "DELAY": c.delay, "DELAY_INIT": min(max(c.G / c.K, -c.u_max), c.u_max),  # as sampled.kernel.delay_buffer
+        "DELAY": c.delay, "DELAY_INIT": c.delay_init,
     }
     if ctrl.baseline is None:
         if ctrl.estimator == "paper-k0":
@@ -356,7 +351,7 @@ def controller_files(cfg, language: str, *, controller: str | None = None,
     >>> round(namespace["Controller"]().step(1e-3, 0.0), 6)  # the first step: no estimate yet
     2.036116
     """
-    language = _choice("language", language, LANGUAGES)
+    language = check_choice("language", language, LANGUAGES)
     ctrl = exported_controller(cfg, controller=controller, compensation=compensation, schedule=schedule,
                                estimator=estimator)
     consts = controller_constants(ctrl)

@@ -143,6 +143,8 @@ class ControllerArgs(NamedTuple):
         The compensation law of :class:`obsdesign.params.CompensationSpec`.
     delay : int
         Computation delay [samples] between the measurement and the command's output.
+    delay_init : float
+        The command [V] in flight before the first computed one arrives: the saturated feed-forward ``G / K``.
     """
 
     controller: int
@@ -159,6 +161,7 @@ class ControllerArgs(NamedTuple):
     comp_viscous: bool
     comp_deadzone: float
     delay: int
+    delay_init: float
 
 
 @dataclass(frozen=True, eq=False)
@@ -243,7 +246,7 @@ class SampledController:
         c = ControllerArgs(controller=CONTROLLERS.code(self.controller), dt=self.dt, K=pl.K, G=pl.G, sigma=fr.sigma,
                            kp=self.kp, ki=self.ki, kd=self.kd, alpha_d=self.alpha_d, u_max=pl.u_max,
                            comp_gain=comp.gain, comp_viscous=comp.viscous, comp_deadzone=comp.deadzone,
-                           delay=self.delay)
+                           delay=self.delay, delay_init=min(max(pl.G / pl.K, -pl.u_max), pl.u_max))
         return o, e, c
 
 

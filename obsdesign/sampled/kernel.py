@@ -219,8 +219,7 @@ def delay_buffer(ctrl):
     >>> [round(float(u), 4) for u in delay_buffer(c)]   # G / K = 5.27 / 3.28 V
     [1.6067, 1.6067]
     """
-    ff = min(max(ctrl.G / ctrl.K, -ctrl.u_max), ctrl.u_max)
-    return np.full(max(ctrl.delay, 1), ff)
+    return np.full(max(ctrl.delay, 1), ctrl.delay_init)
 
 
 @njit(cache=True, error_model="numpy")
