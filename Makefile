@@ -49,3 +49,19 @@ lint: $(LINT_STAMP)
 # Build the sdist and wheel, check them, install the wheel outside the repository and run it there.
 wheel-smoke:
 	.ci/wheel-smoke.sh
+
+# The documentation site: Sphinx into docs/_build/html, warnings as errors; the gallery and the
+# notebooks run at build time, and the build fails when a page loads anything from another host
+# (docs/_ext/check_local.py). From the same .venv with the `docs` extra.
+.PHONY: docs
+DOCS_STAMP := $(VENV)/.installed-docs
+
+$(DOCS_STAMP): pyproject.toml | $(PY)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[test,distributed,docs]'
+	touch $(DOCS_STAMP)
+
+docs: $(DOCS_STAMP)
+	rm -rf docs/_build/html docs/_build/doctrees docs/_build/gallery-out docs/gallery docs/api
+	MPLBACKEND=agg $(PY) -m sphinx -b html -W --keep-going -q docs docs/_build/html
+	@echo "docs: docs/_build/html/index.html"

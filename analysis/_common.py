@@ -7,10 +7,13 @@ from pathlib import Path
 
 from obsdesign.report.figures import save_figure
 
+#: Default folder of the figures (``--out``); the gallery of ``make docs`` gives each script its own.
+OUT = Path(__file__).resolve().parent / "out"
+
 
 def parse_out(description: str) -> Path:
     ap = argparse.ArgumentParser(description=description)
-    ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "out"), help="folder for the figures")
+    ap.add_argument("--out", default=str(OUT), help="folder for the figures")
     out = Path(ap.parse_args().out)
     out.mkdir(parents=True, exist_ok=True)
     return out

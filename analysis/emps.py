@@ -1,4 +1,5 @@
 """EMPS benchmark: identification, design and the observer on a real positioning axis.
+===================================================================================
 
 Runs the whole measured-data path on a copy of the benchmark's ``DATA_EMPS.mat`` (A. Janot,
 M. Gautier, M. Brunot, "Data Set and Reference Models of EMPS", 2019): load the record,
@@ -27,15 +28,17 @@ from obsdesign.data.trace import zero_phase_velocity
 from obsdesign.report.data_section import fit_figure, observation_figure
 from obsdesign.report.figures import save_figure
 
+from _common import OUT
+
 GAIN = 35.15065188  # N/V: vir is the controller's output voltage
 PUBLISHED = {"m": 95.1089, "sigma": 203.5034, "Cf": 20.3935, "offset": -3.1648}
 TOLERANCE = {"m": 1e-3, "sigma": 1e-3, "Cf": 1e-3, "offset": 2e-2}
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n", 1)[0])  # __doc__ is empty in the gallery
     ap.add_argument("data", help="the benchmark's DATA_EMPS.mat")
-    ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "out"), help="folder for the outputs")
+    ap.add_argument("--out", default=str(OUT), help="folder for the outputs")
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

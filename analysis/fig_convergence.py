@@ -1,4 +1,5 @@
 """Fig. simconv: rho 0.98 vs 1.02 on Table 1 (section 3.3).
+========================================================
 
 Asserts: in steady sliding the estimation error grows (rho 0.98) or decays (rho 1.02) at the
 gross-sliding eigenvalue -sqrt(kappa/m)(rho - 1) = -+2.44 1/s within 5 %; under a slow 0.2 Hz

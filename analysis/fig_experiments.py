@@ -1,4 +1,5 @@
 """Fig. experror: positioning and tracking on the VCM, PID vs PID + observer (section 4.2).
+========================================================================================
 
 Asserts: the observer compensation settles faster after both steps and tracks with a lower
 RMS error in every chirp-frequency band. Reports the steady-state error per hold.

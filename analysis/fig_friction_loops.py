@@ -1,4 +1,5 @@
 """Fig. frictionloops: friction estimate vs displacement against the model's f and Fc.
+===================================================================================
 
 Asserts: the filtered estimate stays within 10 % of Cf (RMS) of the plant's Coulomb friction.
 """

@@ -1,4 +1,5 @@
 """Section 3.4: measurement noise in the friction estimate, with and without the low-pass.
+=======================================================================================
 
 Asserts: the simulated RMS of the noise in the raw and filtered estimates matches the design
 prediction (obsdesign noise) within 5 % and 15 % for Table 1 and the VCM.

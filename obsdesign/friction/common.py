@@ -3,15 +3,15 @@
 Every model is described by a flat ``float64`` parameter array ``p`` whose first
 :data:`P_MODEL` entries are common to all models:
 
-====================  ===========  ==============================================
-index                 symbol       meaning
-====================  ===========  ==============================================
-``P_CF``  (0)         ``Cf``       Coulomb level, positive direction [N]
-``P_CF_NEG`` (1)      ``Cf_neg``   Coulomb level, negative direction [N]
-``P_SIGMA`` (2)       ``sigma``    viscous coefficient, positive direction [N s/m]
-``P_SIGMA_NEG`` (3)   ``sigma_neg`` viscous coefficient, negative direction [N s/m]
-``P_OFFSET`` (4)      ``offset``   constant force added to the friction [N]
-====================  ===========  ==============================================
+====================  =============  ==============================================
+index                 symbol         meaning
+====================  =============  ==============================================
+``P_CF``  (0)         ``Cf``         Coulomb level, positive direction [N]
+``P_CF_NEG`` (1)      ``Cf_neg``     Coulomb level, negative direction [N]
+``P_SIGMA`` (2)       ``sigma``      viscous coefficient, positive direction [N s/m]
+``P_SIGMA_NEG`` (3)   ``sigma_neg``  viscous coefficient, negative direction [N s/m]
+``P_OFFSET`` (4)      ``offset``     constant force added to the friction [N]
+====================  =============  ==============================================
 
 The model's own parameters follow from index :data:`P_MODEL`. The arrays are
 built and validated by :mod:`obsdesign.friction.registry`; the kernels trust them.

@@ -6,16 +6,15 @@ stable for any ``dt``), but the plant is integrated with an explicit method:
 ``h = dt / n_sub``. An explicit step is only stable when ``h`` is small against
 the plant's fastest time constant. The rates [1/s] of the plant are
 
-=============================  ===========================================================
-rate                           origin
-=============================  ===========================================================
-``sigma / m``                  viscous damping of the mass
-``1 / beta``                   first-order lag of the viscous friction (``beta`` set)
-``sqrt(sigma / (m beta))``     the mass against the lagged viscous force (``beta`` set)
-``sqrt(kappa / m)``            the mass on the pre-sliding spring (stiffness up to ``kappa``)
-``sqrt((kappa + sigma/beta)    the ``model`` plant of variant ``lag`` (A(3,2) = k + sigma/beta)
-/ m)``
-=============================  ===========================================================
+===============================  ===========================================================
+rate                             origin
+===============================  ===========================================================
+``sigma / m``                    viscous damping of the mass
+``1 / beta``                     first-order lag of the viscous friction (``beta`` set)
+``sqrt(sigma / (m beta))``       the mass against the lagged viscous force (``beta`` set)
+``sqrt(kappa / m)``              the mass on the pre-sliding spring (stiffness up to ``kappa``)
+``sqrt((kappa+sigma/beta)/m)``   the ``model`` plant of variant ``lag`` (A(3,2) = k + sigma/beta)
+===============================  ===========================================================
 
 and the rule is ``h * max(rates) <= MAX_STEP_RATE`` (0.2). Heun's method is
 stable on the negative real axis up to ``h lambda = -2``; on an undamped

@@ -3,20 +3,20 @@
 A scenario is chosen by name (its default options) or by a small frozen spec
 holding its options:
 
-=============  ===========  =====================  ==============================================
-scenario       loop         spec                   signal
-=============  ===========  =====================  ==============================================
-excitation     open loop    :class:`Excitation`    band-limited random force, RMS ``force_rms``
-                                                   (default 1 N), bandwidth ``bandwidth`` (default
-                                                   5 Hz): the paper's numerical illustration
-constant       open loop    :class:`ConstantForce` constant force ``force`` (default 1 N)
-positioning    closed loop  :class:`Positioning`   steps ``0 -> step_size`` at ``step_up``, back to
-                                                   0 at ``step_down`` (defaults 1 mm, 0.5 s, 3.0 s,
-                                                   end 6.0 s), like Fig. expref(a)
-tracking       closed loop  :class:`Chirp`         linear up-chirp 0.01 -> 3 Hz over the run
-                                                   (default 60 s), amplitude so that the peak
-                                                   reference velocity is 0.1 m/s, Fig. expref(b)
-=============  ===========  =====================  ==============================================
+=============  ===========  ========================  ==============================================
+scenario       loop         spec                      signal
+=============  ===========  ========================  ==============================================
+excitation     open loop    :class:`Excitation`       band-limited random force, RMS ``force_rms``
+                                                      (default 1 N), bandwidth ``bandwidth`` (default
+                                                      5 Hz): the paper's numerical illustration
+constant       open loop    :class:`ConstantForce`    constant force ``force`` (default 1 N)
+positioning    closed loop  :class:`Positioning`      steps ``0 -> step_size`` at ``step_up``, back to
+                                                      0 at ``step_down`` (defaults 1 mm, 0.5 s, 3.0 s,
+                                                      end 6.0 s), like Fig. expref(a)
+tracking       closed loop  :class:`Chirp`            linear up-chirp 0.01 -> 3 Hz over the run
+                                                      (default 60 s), amplitude so that the peak
+                                                      reference velocity is 0.1 m/s, Fig. expref(b)
+=============  ===========  ========================  ==============================================
 
 Examples
 --------
