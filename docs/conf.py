@@ -48,6 +48,9 @@ exclude_patterns = ["_build", "conftest.py", "examples", "**/.ipynb_checkpoints"
 templates_path = ["_templates"]
 suppress_warnings = ["myst.header"]  # pages start at '#' and some skip a level, as on GitHub
 
+# MathJax's menu can switch on its speech/assistive modules, whose IE fallbacks name a CDN: no menu.
+mathjax3_config = {"options": {"enableMenu": False}}
+
 # MyST: the pages are GitHub Markdown; '$' is not math there (shell prompts, prices), so no dollarmath.
 myst_enable_extensions = ["colon_fence"]
 myst_heading_anchors = 3

@@ -51,3 +51,21 @@ def test_bars_escaped_outside_literals_and_roles():
     assert escape_bars("| a | grid row |") == "| a | grid row |"
     assert escape_bars("+-----+-----+") == "+-----+-----+"
     assert escape_bars("        |values| above the limit") == r"        \|values\| above the limit"
+
+
+ROOT = Path(__file__).resolve().parents[1]
+GALLERY_SCRIPTS = sorted([*(ROOT / "analysis").glob("fig_*.py"), ROOT / "analysis" / "emps.py",
+                          *(ROOT / "docs" / "examples").glob("plot_*.py")])
+
+
+@pytest.mark.parametrize("script", GALLERY_SCRIPTS, ids=[p.name for p in GALLERY_SCRIPTS])
+def test_gallery_script_has_a_title_and_asserts(script):
+    """sphinx-gallery makes a page of every script: its docstring opens with an underlined title
+    (the page's title) and says what it asserts, and the script asserts something."""
+    import ast
+
+    text = script.read_text(encoding="utf-8")
+    doc = ast.get_docstring(ast.parse(text), clean=False).strip("\n").splitlines()
+    assert len(doc) > 2 and doc[0].strip() and set(doc[1]) == {"="} and len(doc[1]) >= len(doc[0]), doc[:2]
+    assert "Asserts:" in "\n".join(doc)
+    assert "assert " in text or "require(" in text
