@@ -33,8 +33,9 @@ screenshot: $(STAMP)
 clean:
 	rm -rf $(VENV) build *.egg-info
 
-# Lint (not part of `make test` yet): ruff with the [tool.ruff] rules of pyproject.toml, from the
-# same .venv with the `lint` extra installed beside the test tools.
+# Lint (not part of `make test` yet): ruff with the [tool.ruff] rules of pyproject.toml and mypy with
+# its [tool.mypy] configuration (the package), from the same .venv with the `lint` extra installed
+# beside the test tools.
 .PHONY: lint wheel-smoke
 LINT_STAMP := $(VENV)/.installed-lint
 
@@ -45,6 +46,7 @@ $(LINT_STAMP): pyproject.toml | $(PY)
 
 lint: $(LINT_STAMP)
 	$(VENV)/bin/ruff check .
+	$(VENV)/bin/mypy
 
 # Build the sdist and wheel, check them, install the wheel outside the repository and run it there.
 wheel-smoke:

@@ -16,12 +16,12 @@ from __future__ import annotations
 import importlib
 import sys
 import types
-from typing import Callable, Mapping
+from typing import Any, Callable, Mapping
 
 __all__ = ["lazy_names", "keep_functions"]
 
 
-def lazy_names(package: str, table: Mapping[str, str]) -> tuple[Callable[[str], object], Callable[[], list]]:
+def lazy_names(package: str, table: Mapping[str, str]) -> tuple[Callable[[str], Any], Callable[[], list]]:
     """The module ``__getattr__`` and ``__dir__`` of a package whose names load on first use.
 
     Parameters

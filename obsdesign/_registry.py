@@ -30,7 +30,7 @@ ValueError: paint: expected one of red, blue, found 'green'
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterator, Mapping
+from typing import Iterable, Iterator, Mapping, TypeVar
 
 from ._validate import check_choice
 
@@ -59,7 +59,10 @@ class Entry:
     parameters: tuple = ()
 
 
-class Registry(Mapping):
+E = TypeVar("E", bound=Entry)
+
+
+class Registry(Mapping[str, E]):
     """An ordered, read-only mapping ``name -> Entry`` with unique names and codes.
 
     ``registry[name]`` and :meth:`check` raise a ``ValueError`` naming the argument, the
@@ -73,13 +76,13 @@ class Registry(Mapping):
         The choices, in the order the command line and the docs list them.
     """
 
-    def __init__(self, kind: str, entries) -> None:
+    def __init__(self, kind: str, entries: Iterable[E]) -> None:
         self.kind = kind
-        self._entries: dict[str, Entry] = {}
+        self._entries: dict[str, E] = {}
         for entry in entries:
             self.register(entry)
 
-    def register(self, entry: Entry) -> None:
+    def register(self, entry: E) -> None:
         """Add an entry; its name and code must be new.
 
         Parameters
@@ -93,7 +96,7 @@ class Registry(Mapping):
             raise ValueError(f"{self.kind}: {entry.name!r} or code {entry.code} is registered already")
         self._entries[entry.name] = entry
 
-    def __getitem__(self, name: str) -> Entry:
+    def __getitem__(self, name: str) -> E:
         return self._entries[check_choice(self.kind, name, self._entries)]
 
     def __contains__(self, name: object) -> bool:

@@ -145,7 +145,7 @@ class Chirp:
 
 
 ScenarioSpec = Union[Excitation, ConstantForce, Positioning, Chirp]
-_SPECS: dict[str, type] = {cls.name: cls for cls in (Excitation, ConstantForce, Positioning, Chirp)}
+_SPECS: dict[str, Any] = {cls.name: cls for cls in (Excitation, ConstantForce, Positioning, Chirp)}
 #: Scenario names, in documentation order.
 SCENARIOS = tuple(_SPECS)
 OPEN_LOOP = tuple(name for name, cls in _SPECS.items() if cls.open_loop)

@@ -118,7 +118,7 @@ def _polynomial_ml(expr) -> str:
         return _ml(expr)
     if poly.degree() < 1:
         return _ml(expr)
-    parts = []
+    parts: list[str] = []
     for (deg,), coeff in sorted(poly.terms(), key=lambda term: -term[0][0]):
         negative = coeff.could_extract_minus_sign()
         if negative:
