@@ -137,7 +137,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     trace = load_trace_args(args, args.data)
     ident = identify(trace, model="asymmetric" if args.asymmetric else "coulomb-viscous", stribeck=args.stribeck,
                      fix=fix, bounds=bounds, min_speed=args.min_speed, window=args.window, n_boot=args.bootstrap,
-                     seed=args.seed)
+                     seed=args.seed, input_timing=args.input_timing)
     payload = ident.to_dict()
     text = str(ident)
     try:
@@ -212,6 +212,9 @@ def add_commands(sub) -> None:
     p.add_argument("--bootstrap", type=integer(0), default=400, metavar="N",
                    help="bootstrap replicates of the intervals (default 400; 0: 1.96 standard errors)")
     p.add_argument("--seed", type=integer(0), default=0, help="seed of the bootstrap (default 0)")
+    p.add_argument("--input-timing", choices=("sample", "hold"), default="sample",
+                   help="hold: the logged input is held until the next sample (a sampled controller's output); "
+                        "default sample: as logged")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("-o", "--output", metavar="FILE.toml", help="write the identified design config")
     p.set_defaults(run=_cmd_identify)

@@ -180,7 +180,8 @@ def _rows_of(cols: dict, name: str) -> float:
 
 def cautions(est: dict, cols: dict, noise_var: dict, units, filter_hz: float) -> tuple[str, ...]:
     """A parameter at a bound; an errors-in-variables shift larger than the half-interval."""
-    out = [f"{name} is at its {side} bound: the data push it beyond; fix it (--fix {name}=VALUE) or give other "
+    out = [f"{name} is at its {side} bound: the data push it beyond (a friction the model does not hold, e.g. a "
+           f"Stribeck drop with the term off, or too slow an excitation); fix it (--fix {name}=VALUE) or give other "
            f"bounds (--bounds {name}=LO:HI) if you know better" for name, side in est["at_bound"].items()]
     for name, shift in est["eiv_shift"].items():
         lo, hi = est["intervals"][name]

@@ -45,7 +45,7 @@ ASYMMETRIC = ("m", "sigma_pos", "sigma_neg", "Cf_pos", "Cf_neg", "Fs", "vs")
 PHYSICAL = {"m": (0.0, math.inf), "sigma": (0.0, math.inf), "Cf": (0.0, math.inf), "offset": (-math.inf, math.inf),
             "Fs": (0.0, math.inf), "vs": (0.0, math.inf), "sigma_pos": (0.0, math.inf),
             "sigma_neg": (0.0, math.inf), "Cf_pos": (0.0, math.inf), "Cf_neg": (0.0, math.inf)}
-_GRID = 16
+_GRID = 10
 
 
 def stribeck_shape(v: np.ndarray, vs: float) -> np.ndarray:
@@ -136,15 +136,32 @@ def _one(cols: dict) -> np.ndarray:
     return cols["one"] if "one" in cols else np.ones_like(cols["v"])
 
 
-def _linear_columns(cols: dict, model: str, S: np.ndarray | None) -> dict[str, np.ndarray]:
-    S = np.zeros_like(cols["v"]) if S is None else S
+def _shape(cols: dict, vs: float, parts: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """The Stribeck columns at ``vs``: ``S``, and ``S_pos``, ``S_neg``, ``dS`` (d/dvs) when asked.
+
+    ``cols["shape"]`` (a callable ``(vs, parts) -> dict``) computes them at the full rate and decimates
+    them like the other columns (the nonlinearity before the filter, as in the force); without it
+    they are evaluated on the rows' velocity.
+    """
+    if "shape" in cols:
+        return cols["shape"](vs, parts)
+    v = cols["v"]
+    S = stribeck_shape(v, vs)
+    out = {"S": S, "S_pos": S * (v > 0), "S_neg": S * (v < 0), "dS": S * 2.0 * v**2 / vs**3}
+    return {k: out[k] for k in ("S",) + parts}
+
+
+def _linear_columns(cols: dict, model: str, S: dict | None) -> dict[str, np.ndarray]:
+    zero = np.zeros_like(cols["v"])
+    S = {"S": zero, "S_pos": zero, "S_neg": zero} if S is None else S
     if model == "asymmetric":
-        pos, neg = cols["v"] > 0, cols["v"] < 0
         out = {"m": cols["a"], "sigma_pos": cols["v_pos"], "sigma_neg": cols["v_neg"],
-               "Cf_pos": cols["pos"] - S * pos, "Cf_neg": -(cols["neg"] + S * neg)}
+               "Cf_pos": cols["pos"] - S["S_pos"], "Cf_neg": -(cols["neg"] + S["S_neg"])}
+        out["Fs"] = S["S"]
+        return out
     else:
-        out = {"m": cols["a"], "sigma": cols["v"], "Cf": cols["sign"] - S, "offset": _one(cols)}
-    out["Fs"] = S
+        out = {"m": cols["a"], "sigma": cols["v"], "Cf": cols["sign"] - S["S"], "offset": _one(cols)}
+    out["Fs"] = S["S"]
     return out
 
 
@@ -215,13 +232,15 @@ def fit_model(cols: dict, y: np.ndarray, *, model: str = "coulomb-viscous", stri
     rng.update(bounds or {})
     y = np.asarray(y, dtype=float) - (offset * _one(cols) if model == "asymmetric" else 0.0)
 
-    def solve_at(vs: float):
-        S = stribeck_shape(cols["v"], vs) if stribeck else None
+    parts = ("S_pos", "S_neg") if model == "asymmetric" else ()
+
+    def solve_at(vs: float, deriv: tuple = ()):
+        S = _shape(cols, vs, parts + deriv) if stribeck else None
         X = _linear_columns(cols, model, S)
-        return (X,) + _solve_linear(X, y, lin, fix, rng)
+        return (X,) + _solve_linear(X, y, lin, fix, rng) + (S,)
 
     if not stribeck:
-        X, free, theta, resid = solve_at(1.0)
+        X, free, theta, resid, _ = solve_at(1.0)
         values = dict(fix, **dict(zip(free, theta)))
         jac = np.column_stack([X[n] for n in free])
     else:
@@ -231,18 +250,42 @@ def fit_model(cols: dict, y: np.ndarray, *, model: str = "coulomb-viscous", stri
         else:  # variable projection: least_squares over log(vs), the linear parameters solved at each vs
             grid = np.geomspace(lo_vs, hi_vs, _GRID)
             vs0 = min(grid, key=lambda g: float(np.sum(solve_at(g)[3] ** 2)))
-            sol = least_squares(lambda z: solve_at(math.exp(z[0]))[3], [math.log(vs0)], jac="3-point",
+            cache: dict = {}
+
+            def at(z):
+                if cache.get("z") != z[0]:
+                    cache.update(z=z[0], out=solve_at(math.exp(z[0]), ("dS",)))
+                return cache["out"]
+
+            def jac_vp(z):  # Kaufman's variable-projection Jacobian: d(model)/d(log vs) off the linear span
+                X, free_lin, theta, _, S = at(z)
+                p = dict(fix, **dict(zip(free_lin, theta)))
+                cf = p["Cf"] if model != "asymmetric" else np.where(cols["v"] > 0, p["Cf_pos"], p["Cf_neg"])
+                d = (p["Fs"] - cf) * S["dS"] * math.exp(z[0])
+                A = np.column_stack([X[n] for n in free_lin])
+                return (d - A @ lstsq_gram(A, d))[:, None]
+
+            sol = least_squares(lambda z: at(z)[3], [math.log(vs0)], jac=jac_vp,
                                 bounds=([math.log(lo_vs)], [math.log(hi_vs)]), xtol=1e-15, ftol=1e-15,
                                 gtol=1e-15, max_nfev=100)
-            vs = min(max(math.exp(sol.x[0]), lo_vs), hi_vs)
-        X, free_lin, theta, resid = solve_at(vs)
+            z = float(sol.x[0])
+            for _ in range(20):  # Gauss-Newton polish: trf stops on a flat optimum before the gradient is 0
+                j, r = jac_vp([z])[:, 0], at([z])[3]
+                step = -float(j @ r) / float(j @ j) if float(j @ j) > 0 else 0.0
+                trial = min(max(z + step, math.log(lo_vs)), math.log(hi_vs))
+                if abs(trial - z) > 1e-3 or trial == z:  # only the last digits: a larger step is not a polish
+                    break
+                z = trial
+                if abs(step) < 1e-14:
+                    break
+            vs = min(max(math.exp(z), lo_vs), hi_vs)
+        X, free_lin, theta, resid, S = solve_at(vs, () if "vs" in fix else ("dS",))
         values = dict(fix, **dict(zip(free_lin, theta)), vs=vs)
         free = free_lin + (() if "vs" in fix else ("vs",))
-        S = stribeck_shape(cols["v"], vs)
         jac_cols = [X[n] for n in free_lin]
         if "vs" not in fix:
             cf = values["Cf"] if model != "asymmetric" else np.where(cols["v"] > 0, values["Cf_pos"], values["Cf_neg"])
-            jac_cols.append((values["Fs"] - cf) * S * 2.0 * cols["v"] ** 2 / vs**3)
+            jac_cols.append((values["Fs"] - cf) * S["dS"])
         jac = np.column_stack(jac_cols)
     at_bound = {}
     for n in free:

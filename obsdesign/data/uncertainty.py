@@ -86,8 +86,7 @@ def bootstrap(jac: np.ndarray, resid: np.ndarray, theta: np.ndarray, lo: np.ndar
     scale = np.linalg.norm(jac, axis=0)
     scale[scale == 0] = 1.0
     js = jac / scale
-    counts = np.zeros((idx.shape[0], n))
-    np.add.at(counts, (np.repeat(np.arange(idx.shape[0]), idx.shape[1]), idx.ravel()), 1.0)
+    counts = np.stack([np.bincount(rows, minlength=n) for rows in idx]).astype(float)
     outer = (js[:, :, None] * js[:, None, :]).reshape(n, p * p)
     grams = (counts @ outer).reshape(-1, p, p)
     rhs = counts @ (js * -resid[:, None])

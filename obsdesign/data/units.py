@@ -31,7 +31,7 @@ POSITION_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "rad": 1.0, "counts": None}
 INPUT_UNITS = ("V", "A", "N", "N m")
 #: Plausible ranges (SI) of a servo axis record; outside, :func:`check_plausible` warns.
 PLAUSIBLE = {"sample_time": (1e-6, 0.02), "position_range": (1e-7, 5.0), "speed": (0.0, 10.0),
-             "mass": (1e-4, 2000.0)}
+             "mass": (1e-4, 1000.0)}
 
 
 def _choice(param: str, value: object, choices) -> str:
@@ -176,7 +176,8 @@ def check_plausible(units: Units, *, sample_time: float | None = None, position_
                    f"position unit (--position-unit) and the time unit (--time-unit)")
     if mass is not None and mass > 0 and not PLAUSIBLE["mass"][0] <= mass <= PLAUSIBLE["mass"][1]:
         low, high = PLAUSIBLE["mass"]
-        why = ("a time in ms read as s makes it 1e6 x too large, a position in mm read as m 1000 x too small"
+        why = ("a time in ms read as s makes it 1e6 x too large, a position in mm read as m 1000 x too small, "
+               "both together 1000 x too large"
                if mass > high else "a position in mm read as m makes it 1000 x too small, a time in s read as ms "
                "1e6 x too small")
         out.append(f"identified {'inertia' if rot else 'mass'} {mass:.6g} {units.mass_unit} is outside "
