@@ -274,3 +274,26 @@ def test_emps_symmetric_fit_unchanged_and_intervals_wider():
         lo, hi = ident.intervals[key]
         assert lo < getattr(ident, key) < hi
         assert hi - lo > 2 * 1.96 * getattr(ident, key + "_std")  # the bootstrap sees the correlated residuals
+
+
+# -- Monte Carlo coverage of the intervals (slow) ------------------------------------------------
+
+#: Measured on 40 seeds (2026-12-02): where the 95 % interval held the truth in fewer than 90 %.
+SHORTFALL = {("open", 1e-6, "sigma"): 0.85, ("open", 1e-6, "Cf"): 0.80}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("loop", ["open", "closed"])
+@pytest.mark.parametrize("eta", [1e-6, 1e-5])
+def test_interval_coverage_monte_carlo(loop, eta):
+    """40 simulated records per case: the 95 % interval covers m, sigma and Cf in >= 90 % of them.
+
+    Two cases do not reach it (open loop at 1 um: sigma 85 %, Cf 80 %, docs/measured-data.md); they
+    are held to their measured value less one seed, so a regression still fails.
+    """
+    from _coverage import coverage
+
+    result = coverage(loop, eta, seeds=40)
+    for key, (covered, _) in result.items():
+        need = SHORTFALL.get((loop, eta, key), 0.9) - (0.025 if (loop, eta, key) in SHORTFALL else 0.0)
+        assert covered >= need, (key, result)
