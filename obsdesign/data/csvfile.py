@@ -28,7 +28,13 @@ DELIMITERS = {",": ",", ";": ";", "tab": "\t", "\t": "\t", "|": "|", "space": " 
 
 
 def parse_delimiter(value: object) -> str | None:
-    """The delimiter character for a name of :data:`DELIMITERS` (``None``: detect it)."""
+    """The delimiter character for a name of :data:`DELIMITERS` (``None``: detect it).
+
+    Parameters
+    ----------
+    value : str or None
+        ``','``, ``';'``, ``'tab'``, ``'space'``, ``'|'`` (or the character itself).
+    """
     if value is None:
         return None
     if not isinstance(value, str) or value not in DELIMITERS:
@@ -49,6 +55,13 @@ def detect_delimiter(header: str, first_row: str) -> str:
     Tried in the order ``,`` ``;`` tab ``|`` whitespace; a comma only if the row has no
     semicolon-separated fields of the same count (a decimal comma in a ``;`` file); ``,`` when
     none fits (a one-column file).
+
+    Parameters
+    ----------
+    header : str
+        The header line.
+    first_row : str
+        The first data line.
     """
     for delimiter in (",", ";", "\t", "|", " "):
         n_header, n_row = len(_split(header, delimiter)), len(_split(first_row, delimiter))
@@ -62,7 +75,15 @@ def _name(delimiter: str) -> str:
 
 
 def read_csv(path: Path, delimiter: str | None = None) -> dict[str, np.ndarray]:
-    """Columns by header name; lines starting with ``#`` (after spaces) are skipped everywhere."""
+    """Columns by header name; lines starting with ``#`` (after spaces) are skipped everywhere.
+
+    Parameters
+    ----------
+    path : Path
+        The CSV file (UTF-8).
+    delimiter : str, optional
+        The delimiter character (``' '``: any whitespace); default :func:`detect_delimiter`.
+    """
     try:
         text = path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as e:

@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from ._idim import ols
-from .friction_fit import fit_model
+from .friction_fit import PHYSICAL, fit_model
 from .uncertainty import block_length, bootstrap, eiv_shift, intervals, make_index_sets
 
 __all__ = ["estimate", "cautions", "BIC_MARGIN", "STRIBECK_CHOICES"]
@@ -52,7 +52,7 @@ def _idim_std(cols: dict, y: np.ndarray, model: str) -> tuple[dict, float]:
                    Cf=math.sqrt(s2 * float(np.sum((0.5 * (pinv_a[3] - pinv_a[4])) ** 2))),
                    Cf_pos=math.sqrt(s2 * float(np.sum((pinv_a[3] - r) ** 2))),
                    Cf_neg=math.sqrt(s2 * float(np.sum((r - pinv_a[4]) ** 2))))
-    return {k: float(v) for k, v in out.items()}, cond
+    return {k: float(v) for k, v in out.items()}, cond, float(theta[0])
 
 
 def _jac_std(fit) -> dict:
@@ -92,10 +92,36 @@ def estimate(cols: dict, y: np.ndarray, *, model: str, stribeck: str, fix: dict,
 
     ``noise_var`` gives the white-noise variance of the ``a`` and ``v`` columns (per row) for the
     errors-in-variables shift; ``n_boot = 0`` skips the bootstrap (intervals from the standard errors).
+
+    Parameters
+    ----------
+    cols : dict
+        The regressor columns on the rows of the fit (see :func:`obsdesign.data.friction_fit.fit_model`).
+    y : ndarray
+        The force on those rows.
+    model : str
+        ``'coulomb-viscous'`` or ``'asymmetric'``.
+    stribeck : str
+        One of :data:`STRIBECK_CHOICES`.
+    fix, bounds : dict
+        Checked fixed values and bounds.
+    vs_range : (float, float)
+        Default bounds of ``vs``.
+    noise_var : dict
+        ``{"a": var, "v": var}`` per row.
+    n_boot, seed : int
+        Bootstrap replicates and seed.
     """
-    base, sym, selection = _select(cols, y, stribeck=stribeck, fix=fix, bounds=bounds, vs_range=vs_range)
+    idim, cond, m_ols = _idim_std(cols, y, model)
+    if not m_ols > 0 and not fix and not bounds:  # a sign or column error: bounds would only hide it
+        free = {n: (-math.inf, math.inf) for n in PHYSICAL}
+        base = sym = fit_model(cols, y, bounds=free)
+        selection = ("no bounds and no Stribeck term: the IDIM-LS mass is <= 0, a sign or column error (see the "
+                     "warnings), so the values are shown as found")
+        bounds = free
+    else:
+        base, sym, selection = _select(cols, y, stribeck=stribeck, fix=fix, bounds=bounds, vs_range=vs_range)
     kept = "Fs" in sym.values
-    idim, cond = _idim_std(cols, y, model)
     fits = [sym]
     if model == "asymmetric":
         afix = dict(fix, **({"Fs": sym.values["Fs"], "vs": sym.values["vs"]} if kept else {}))
@@ -179,7 +205,21 @@ def _rows_of(cols: dict, name: str) -> float:
 
 
 def cautions(est: dict, cols: dict, noise_var: dict, units, filter_hz: float) -> tuple[str, ...]:
-    """A parameter at a bound; an errors-in-variables shift larger than the half-interval."""
+    """Cautions: a parameter at a bound; an errors-in-variables shift larger than the half-interval.
+
+    Parameters
+    ----------
+    est : dict
+        The result of :func:`estimate`.
+    cols : dict
+        The rows' columns.
+    noise_var : dict
+        Noise variance of the ``a`` and ``v`` columns.
+    units : Units
+        For the units in the sentences.
+    filter_hz : float
+        The fit's cut-off (named in the advice).
+    """
     out = [f"{name} is at its {side} bound: the data push it beyond (a friction the model does not hold, e.g. a "
            f"Stribeck drop with the term off, or too slow an excitation); fix it (--fix {name}=VALUE) or give other "
            f"bounds (--bounds {name}=LO:HI) if you know better" for name, side in est["at_bound"].items()]

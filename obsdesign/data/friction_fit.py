@@ -49,12 +49,28 @@ _GRID = 10
 
 
 def stribeck_shape(v: np.ndarray, vs: float) -> np.ndarray:
-    """``sign(v) exp(-(v/vs)^2)``: the Stribeck column per unit of ``Fs - Cf``."""
+    """``sign(v) exp(-(v/vs)^2)``: the Stribeck column per unit of ``Fs - Cf``.
+
+    Parameters
+    ----------
+    v : ndarray
+        Velocity [m/s].
+    vs : float
+        Stribeck speed [m/s].
+    """
     return np.sign(v) * np.exp(-((v / vs) ** 2))
 
 
 def check_fix(fix: object, names=PARAMETERS + ASYMMETRIC) -> dict[str, float]:
-    """``{name: value}`` with known names and values in the physical domain (``vs`` > 0, ``m`` > 0)."""
+    """``{name: value}`` with known names and values in the physical domain (``vs`` > 0, ``m`` > 0).
+
+    Parameters
+    ----------
+    fix : dict or None
+        Parameter name -> value.
+    names : tuple of str
+        The names allowed.
+    """
     if fix is None:
         return {}
     if not isinstance(fix, dict):
@@ -75,7 +91,15 @@ def check_fix(fix: object, names=PARAMETERS + ASYMMETRIC) -> dict[str, float]:
 
 
 def check_bounds(bounds: object, names=PARAMETERS + ASYMMETRIC) -> dict[str, tuple[float, float]]:
-    """``{name: (lo, hi)}`` with ``lo < hi`` inside the physical domain of the parameter."""
+    """``{name: (lo, hi)}`` with ``lo < hi`` inside the physical domain of the parameter.
+
+    Parameters
+    ----------
+    bounds : dict or None
+        Parameter name -> ``(low, high)``.
+    names : tuple of str
+        The names allowed.
+    """
     if bounds is None:
         return {}
     if not isinstance(bounds, dict):

@@ -36,7 +36,7 @@ from .estimate import STRIBECK_CHOICES, cautions, estimate
 from .friction_fit import check_bounds, check_fix
 from .presliding import MIN_REVERSALS, MIN_ROWS as MIN_PRESLIDING_ROWS, _reversals, fit_presliding
 from .trace import REVERSAL_THRESHOLD, Trace
-from .uncertainty import N_BOOT, noise_variance
+from .uncertainty import N_BOOT, column_noise
 from .units import Units, check_plausible
 
 __all__ = ["Identification", "identify", "MODELS", "FILTER_ORDER", "DEFAULT_DECIMATION",
@@ -459,18 +459,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
 
     cols["shape"] = shape
 
-    # white position noise (encoder steps included) through the chain to the a and v columns
-    white = float(np.mean((position - x_f)[keep] ** 2))
-    length = max(4096, 400 * q)
-    lowpass = noise_variance(lambda h: h - signal.sosfiltfilt(sos, h), length)
-    eta2 = white / lowpass
-
-    def smooth(h: np.ndarray) -> np.ndarray:  # the decimation filter without the subsampling (same variance)
-        return signal.sosfiltfilt(dec_sos, h) if q > 1 else h
-
-    noise_var = {"v": eta2 * noise_variance(lambda h: smooth(np.gradient(signal.sosfiltfilt(sos, h), dt)), length),
-                 "a": eta2 * noise_variance(
-                     lambda h: smooth(np.gradient(np.gradient(signal.sosfiltfilt(sos, h), dt), dt)), length)}
+    noise_var = column_noise(float(np.mean((position - x_f)[keep] ** 2)), sos, dec_sos, q, dt)
     vs_range = (max(threshold, 1e-12), max(0.5 * peak, 2.0 * max(threshold, 1e-12)))
     est = estimate(cols, y, model=model, stribeck=stribeck, fix=fix, bounds=bounds, vs_range=vs_range,
                    noise_var=noise_var, n_boot=n_boot, seed=seed)

@@ -102,6 +102,12 @@ def design_rules(ident, *, K: float | None = None, u_max: float | None = None, r
 
     The units are those of the identified axis (a rotary axis in kg m^2, N m, rad; the input unit named).
 
+    Parameters
+    ----------
+    ident : Identification
+    K, u_max, rho, presliding_window :
+        As for :func:`config_from`.
+
     Examples
     --------
     >>> from obsdesign.data import Identification

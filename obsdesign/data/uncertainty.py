@@ -36,8 +36,7 @@ import math
 
 import numpy as np
 
-__all__ = ["block_length", "bootstrap", "noise_variance", "eiv_shift", "intervals", "ACF_CUTOFF", "N_BOOT",
-           "LEVEL"]
+__all__ = ["block_length", "bootstrap", "column_noise", "eiv_shift", "ACF_CUTOFF", "N_BOOT", "LEVEL"]
 
 #: The residual autocorrelation below which rows count as independent (block length rule).
 ACF_CUTOFF = 0.1
@@ -48,7 +47,13 @@ LEVEL = 0.95
 
 
 def block_length(resid: np.ndarray) -> int:
-    """First lag with residual autocorrelation < :data:`ACF_CUTOFF`, at least ``ceil(n^(1/3))``, at most ``n/5``."""
+    """First lag with residual autocorrelation < :data:`ACF_CUTOFF`, at least ``ceil(n^(1/3))``, at most ``n/5``.
+
+    Parameters
+    ----------
+    resid : ndarray
+        The residuals in row order.
+    """
     n = resid.size
     r = resid - resid.mean()
     spec = np.fft.rfft(r, 2 * n)
@@ -110,12 +115,57 @@ def noise_variance(chain, length: int) -> float:
     return float(h @ h)
 
 
+def column_noise(white: float, sos: np.ndarray, dec_sos: np.ndarray | None, q: int, dt: float) -> dict[str, float]:
+    """Noise variance of the ``v`` and ``a`` columns of the fit from white position noise.
+
+    Parameters
+    ----------
+    white : float
+        Mean square of the position minus its filtered version [m^2].
+    sos : ndarray
+        The zero-phase Butterworth low-pass of the fit (``sosfiltfilt``).
+    dec_sos : ndarray or None
+        The decimation filter (``None`` without decimation); the subsampling keeps the variance.
+    q : int
+        Decimation factor.
+    dt : float
+        Sample time [s].
+
+    Returns
+    -------
+    dict
+        ``{"v": var, "a": var}``: ``eta^2 sum h^2`` with ``eta^2 = white / sum (delta - h_lp)^2``.
+    """
+    from scipy import signal
+
+    length = max(4096, 400 * q)
+    eta2 = white / noise_variance(lambda h: h - signal.sosfiltfilt(sos, h), length)
+
+    def smooth(h: np.ndarray) -> np.ndarray:
+        return signal.sosfiltfilt(dec_sos, h) if q > 1 else h
+
+    def vel(h: np.ndarray) -> np.ndarray:
+        return np.gradient(signal.sosfiltfilt(sos, h), dt)
+
+    return {"v": eta2 * noise_variance(lambda h: smooth(vel(h)), length),
+            "a": eta2 * noise_variance(lambda h: smooth(np.gradient(vel(h), dt)), length)}
+
+
 def eiv_shift(jac: np.ndarray, theta: np.ndarray, noisy: dict[int, float]) -> np.ndarray:
     """Predicted bias-compensation shift ``(J^T J - N Sigma)^-1 N Sigma theta``.
 
     ``noisy`` maps a column of ``jac`` to the summed noise variance of that column over the rows
     (``rows x variance``). Returns NaN where ``J^T J - N Sigma`` is not positive definite (the noise
     is as large as the signal: no correction can be trusted).
+
+    Parameters
+    ----------
+    jac : ndarray
+        Jacobian (regressors) ``(n, p)``.
+    theta : ndarray
+        The estimate.
+    noisy : dict
+        Column index -> summed noise variance.
     """
     p = theta.size
     ns = np.zeros((p, p))

@@ -146,7 +146,14 @@ def check_plausible(units: Units, *, sample_time: float | None = None, position_
 
     The ranges are those of a servo axis (linear; for a rotary axis the position range is
     taken up to 1e4 rad and the speed up to 1e3 rad/s): a sample time in [1 us, 20 ms], a
-    position range in [0.1 um, 5 m], a peak speed up to 10 m/s, a mass in [0.1 g, 2 t].
+    position range in [0.1 um, 5 m], a peak speed up to 10 m/s, a mass in [0.1 g, 1 t].
+
+    Parameters
+    ----------
+    units : Units
+        The log's units (the guesses depend on them).
+    sample_time, position_range, speed, mass : float, optional
+        SI values to check [s, m or rad, m/s or rad/s, kg or kg m^2].
 
     Examples
     --------
