@@ -297,3 +297,27 @@ def test_interval_coverage_monte_carlo(loop, eta):
     for key, (covered, _) in result.items():
         need = SHORTFALL.get((loop, eta, key), 0.9) - (0.025 if (loop, eta, key) in SHORTFALL else 0.0)
         assert covered >= need, (key, result)
+
+
+def test_observe_reads_the_same_units(logs, tmp_path):
+    """The config written from the mm/ms log runs over the same log with the same unit flags."""
+    mm, _ = logs["fast"]
+    cols = ["--position", "pos_mm", "--input", "i_A", "--time", "time_ms", *UNIT_FLAGS]
+    code, _, err = run("identify", mm, *cols, "--bootstrap", "0", "--u-max", "6", "-o", tmp_path / "c.toml")
+    assert code == 0, err
+    code, out, err = run("observe", mm, "--config", tmp_path / "c.toml", *cols, "--json")
+    assert code == 0, err
+    summary = json.loads(out)
+    assert summary["sample_time"] == pytest.approx(DT) and summary["samples"] == 48_000
+    assert summary["rms_v_hat"] == pytest.approx(float(np.std(np.gradient(axis_log("fast")["x"], DT))), rel=0.05)
+
+
+def test_asymmetric_with_the_stribeck_term_holds_the_symmetric_truth():
+    ident = identify(_slow_trace(), model="asymmetric", n_boot=200)
+    assert ident.stribeck and ident.model == "asymmetric"
+    for key, truth in (("sigma_pos", 12.0), ("sigma_neg", 12.0), ("Cf_pos", 2.4), ("Cf_neg", 2.4), ("m", 1.8)):
+        lo, hi = ident.intervals[key]
+        assert lo <= truth <= hi, (key, lo, hi)
+    v = np.array([-0.01, -1e-3, 1e-3, 0.01])  # friction() holds the Stribeck term: an independent formula
+    expected = 2.4 * np.sign(v) + 12.0 * v + 0.6 * np.sign(v) * np.exp(-((v / 2e-3) ** 2))
+    assert ident.friction(v) == pytest.approx(expected, rel=0.02)
