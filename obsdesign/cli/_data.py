@@ -195,11 +195,13 @@ def _cmd_observe(args: argparse.Namespace) -> int:
 
 def add_commands(sub) -> None:
     """Add ``identify`` and ``observe`` to the subparsers ``sub``."""
+    from ..data.choices import INPUT_TIMINGS, STRIBECK_CHOICES
+
     p = sub.add_parser("identify", help="identify mass, viscous and Coulomb friction and offset from a record")
     p.add_argument("data", metavar="DATA", type=INPUT_FILE, help="measured record (.csv with a header row, or .mat)")
     add_trace_flags(p)
     p.add_argument("--asymmetric", action="store_true", help="separate viscous and Coulomb terms per direction")
-    p.add_argument("--stribeck", choices=("auto", "on", "off"), default="auto",
+    p.add_argument("--stribeck", choices=STRIBECK_CHOICES, default="auto",
                    help="the Stribeck term (Fs, vs): kept where it explains the data (auto, BIC), always, never")
     p.add_argument("--fix", action="append", metavar="NAME=VALUE", help="hold a parameter (SI units), repeatable")
     p.add_argument("--bounds", action="append", metavar="NAME=LO:HI",
@@ -212,7 +214,7 @@ def add_commands(sub) -> None:
     p.add_argument("--bootstrap", type=integer(0), default=400, metavar="N",
                    help="bootstrap replicates of the intervals (default 400; 0: 1.96 standard errors)")
     p.add_argument("--seed", type=integer(0), default=0, help="seed of the bootstrap (default 0)")
-    p.add_argument("--input-timing", choices=("sample", "hold"), default="sample",
+    p.add_argument("--input-timing", choices=INPUT_TIMINGS, default="sample",
                    help="hold: the logged input is held until the next sample (a sampled controller's output); "
                         "default sample: as logged")
     p.add_argument("--json", action="store_true", help="print one JSON object")

@@ -19,6 +19,7 @@ import math
 import numpy as np
 
 from ._idim import ols
+from .choices import STRIBECK_CHOICES
 from .friction_fit import PHYSICAL, fit_model
 from .uncertainty import block_length, bootstrap, eiv_shift, intervals, make_index_sets
 
@@ -26,8 +27,6 @@ __all__ = ["estimate", "cautions", "BIC_MARGIN", "STRIBECK_CHOICES"]
 
 #: The BIC decrease the Stribeck term must bring to be kept (``stribeck='auto'``).
 BIC_MARGIN = 10.0
-#: ``stribeck`` choices of :func:`obsdesign.data.identify`.
-STRIBECK_CHOICES = ("auto", "on", "off")
 
 
 def _bic(fit) -> float:

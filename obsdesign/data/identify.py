@@ -32,7 +32,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._idim import check_int, implausible, positive_number, quantization, time_window
-from .estimate import STRIBECK_CHOICES, cautions, estimate
+from .choices import INPUT_TIMINGS, STRIBECK_CHOICES
+from .estimate import cautions, estimate
 from .friction_fit import check_bounds, check_fix
 from .presliding import MIN_REVERSALS, MIN_ROWS as MIN_PRESLIDING_ROWS, _reversals, fit_presliding
 from .trace import REVERSAL_THRESHOLD, Trace
@@ -408,8 +409,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     presliding_window = positive_number("presliding_window", presliding_window, 0.0, trace.units.length_unit)
     if min_speed is not None:
         min_speed = positive_number("min_speed", min_speed, 0.0, trace.units.si("speed"))
-    if input_timing not in ("sample", "hold"):
-        raise ValueError(f"input_timing: expected 'sample' or 'hold', found {input_timing!r}")
+    if input_timing not in INPUT_TIMINGS:
+        raise ValueError(f"input_timing: expected one of {', '.join(map(repr, INPUT_TIMINGS))}, found {input_timing!r}")
     position, force, span = time_window(trace, window)
     if input_timing == "hold":
         force = np.concatenate([force[:1], 0.5 * (force[1:] + force[:-1])])
