@@ -321,3 +321,19 @@ def test_asymmetric_with_the_stribeck_term_holds_the_symmetric_truth():
     v = np.array([-0.01, -1e-3, 1e-3, 0.01])  # friction() holds the Stribeck term: an independent formula
     expected = 2.4 * np.sign(v) + 12.0 * v + 0.6 * np.sign(v) * np.exp(-((v / 2e-3) ** 2))
     assert ident.friction(v) == pytest.approx(expected, rel=0.02)
+
+
+def test_errors_in_variables_caution_and_correction():
+    """Open loop at 10 um: the noise attenuates m; the predicted shift matches the bias against the noise-free run."""
+    from _coverage import record
+
+    noisy, clean = record("open", 1e-5, 0), record("open", 0.0, 0)
+    a = identify(noisy, stribeck="off", input_timing="hold", n_boot=200)
+    b = identify(Trace(t=clean.t, position=clean.position, force=noisy.force, sample_time=clean.sample_time),
+                 stribeck="off", input_timing="hold", n_boot=0)
+    bias = a.m - b.m  # the same force: only the position noise differs
+    assert bias < 0 and a.eiv_shift["m"] == pytest.approx(-bias, rel=0.3)
+    lo, hi = a.intervals["m"]
+    assert lo < b.m < hi
+    caution = [n for n in a.notices if n.startswith("errors in variables")]
+    assert caution and "acceleration" in caution[0] and "larger, faster moves" in caution[0]
