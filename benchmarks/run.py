@@ -20,6 +20,7 @@ import bench_cli  # noqa: E402
 import bench_compare  # noqa: E402
 import bench_data  # noqa: E402
 import bench_derive  # noqa: E402
+import bench_identify  # noqa: E402
 import bench_sim  # noqa: E402
 import bench_sweep  # noqa: E402
 
@@ -28,6 +29,7 @@ SUITES = {
     "Closed-loop simulator (issue 4)": bench_sim.run,
     "Sweeps (issue 6)": bench_sweep.run,
     "Measured data (issue 10)": bench_data.run,
+    "Identification (issue 17)": bench_identify.run,
     "Command-line start-up (issue 13)": bench_cli.run,
     "Estimator comparison (issue 11)": bench_compare.run,
     "Stability certificate (issue 18)": bench_certificate.run,

@@ -67,7 +67,7 @@ CASES = [
     ("i12", [*ID, "--time", "t", "{fx}/tr_huge_dt.csv"], 2, "time: expected a sample time in [1e-12, 1] s, found 1e+297 s"),
     ("i28", [*ID, "--time", "t", "{fx}/tr_dup_cols.csv"], 2, "found 'x' as columns 2 and 3"),
     ("i29", [*ID, "--time", "t", "{fx}/tr_dup_cols_space.csv"], 2, "found 'x' as columns 2 and 3"),
-    ("i35", [*ID, "--time", "t", "{fx}/tr_comment.csv"], 2, "is a '#' comment, taken as the header row"),
+    # i35 (a '#' comment above the header) is read since issue 17: tests/test_identify_units.py
     ("i65", ["identify", "--position", "x", "--input", "x", "--time", "t", "{fx}/tr_good.csv"], 2,
      "input: expected a column other than the position column, found 'x' for both"),
     ("i66", ["identify", "--position", "t", "--input", "u", "--time", "t", "{fx}/tr_good.csv"], 2,
@@ -149,7 +149,8 @@ def test_a_plausible_identification_has_no_warnings(fx, capsys):
     assert main([*ID, "--time", "t", str(fx / "tr_good.csv")]) == 0
     captured = capsys.readouterr()
     payload = json.loads(captured.out)
-    assert "warnings" not in payload and captured.err == ""
+    err = captured.err.strip().splitlines()  # only the u_max caution (issue 17: the log's peak is not the limit)
+    assert "warnings" not in payload and len(err) == 1 and err[0].startswith("obsdesign: warning: u_max")
     assert payload["m"] == pytest.approx(0.5, rel=1e-3) and payload["sigma"] == pytest.approx(5.0, rel=1e-3)
 
 

@@ -168,7 +168,9 @@ def test_identify_exact_model_closed_form():
     assert ident.nrmse_percent < 1.0
     assert set(ident.to_dict()) == {"m", "sigma", "Cf", "offset", "m_std", "sigma_std", "Cf_std", "offset_std",
                                     "nrmse_percent", "condition_number", "samples", "s", "s_note", "model",
-                                    "sample_time", "filter_hz", "decimation"}
+                                    "sample_time", "filter_hz", "decimation", "stribeck", "selection",
+                                    "interval_method", "at_bound", "fixed", "min_speed", "window", "intervals",
+                                    "eiv_shift", "units"}
     # the rows of the fit: decimated by 10 after cutting 50 samples at both ends, minus low-velocity rows
     assert ident.samples <= math.ceil((20_000 - 100) / 10)
 

@@ -7,20 +7,52 @@ from pathlib import Path
 
 from ..params import preset_names
 from ..sampled.choices import SCHEDULES
-from ._common import FINITE_ARG, INPUT_FILE, POSITIVE_ARG, UsageError, check_output_file, emit
+from ._common import (FINITE_ARG, INPUT_FILE, POSITIVE_ARG, UsageError, check_output_file, emit,
+                      integer, print_warnings)
 
 __all__ = ["add_commands", "add_trace_flags", "load_trace_args"]
 
 
+def _input_unit(text: str) -> str:
+    from ..data.units import INPUT_UNITS
+
+    unit = {"Nm": "N m", "N.m": "N m"}.get(text, text)
+    if unit not in INPUT_UNITS:
+        raise argparse.ArgumentTypeError(f"expected one of {', '.join(INPUT_UNITS)} (or Nm), found {text!r}")
+    return unit
+
+
+def _delimiter(text: str) -> str:
+    from ..data.csvfile import DELIMITERS
+
+    if text not in DELIMITERS:
+        raise argparse.ArgumentTypeError(f"expected one of ',', ';', tab, space, '|', found {text!r}")
+    return text
+
+
 def add_trace_flags(p: argparse.ArgumentParser, *, required: bool = True) -> None:
-    """``--position NAME --input NAME [--time NAME] [--sample-time DT] [--input-gain G]``."""
-    p.add_argument("--position", required=required, metavar="NAME", help="column or variable of the displacement [m]")
+    """``--position NAME --input NAME [--time NAME] [--sample-time DT] [--input-gain G]`` and the unit flags."""
+    from ..data.units import POSITION_UNITS, TIME_UNITS
+
+    p.add_argument("--position", required=required, metavar="NAME",
+                   help="column or variable of the displacement (in --position-unit)")
     p.add_argument("--input", required=required, metavar="NAME",
-                   help="column or variable of the actuator input (times --input-gain gives N)")
-    p.add_argument("--time", metavar="NAME", help="column or variable of the time [s]")
+                   help="column or variable of the actuator input (in --input-unit; times --input-gain gives N)")
+    p.add_argument("--time", metavar="NAME", help="column or variable of the time (in --time-unit)")
     p.add_argument("--sample-time", type=POSITIVE_ARG, metavar="DT", help="sample time [s] (without a time column)")
     p.add_argument("--input-gain", type=FINITE_ARG, default=1.0, metavar="G",
-                   help="force per unit of the logged input [N/unit], nonzero (default 1: logged in N)")
+                   help="force (torque) per unit of the logged input [N/unit, N m/unit], nonzero (default 1)")
+    p.add_argument("--time-unit", choices=tuple(TIME_UNITS), default="s", help="unit of the time column (default s)")
+    p.add_argument("--position-unit", choices=tuple(POSITION_UNITS), default="m",
+                   help="unit of the position column (default m; rad: a rotary axis; counts: give --resolution)")
+    p.add_argument("--resolution", type=POSITIVE_ARG, metavar="R",
+                   help="size of one encoder count [m, or rad with --rotary] (with --position-unit counts)")
+    p.add_argument("--rotary", action="store_true",
+                   help="a rotary axis (position in rad or counts; inertia kg m^2, torque N m)")
+    p.add_argument("--input-unit", type=_input_unit, metavar="UNIT",
+                   help="unit of the logged input: V, A, N or 'N m' (default N with gain 1, else V)")
+    p.add_argument("--delimiter", type=_delimiter, metavar="D",
+                   help="CSV delimiter: ',', ';', tab, space or '|' (default: detected)")
 
 
 def load_trace_args(args: argparse.Namespace, path: str):
@@ -36,8 +68,56 @@ def load_trace_args(args: argparse.Namespace, path: str):
             check_sample_time("--sample-time", args.sample_time, "the flag")
         except ValueError as e:
             raise UsageError(f"obsdesign {args.command}: argument {e}") from None
+    if args.resolution is not None and args.position_unit != "counts":
+        raise UsageError(f"obsdesign {args.command}: argument --resolution: expected only with --position-unit "
+                         f"counts, found --position-unit {args.position_unit}")
+    if args.position_unit == "counts" and args.resolution is None:
+        raise UsageError(f"obsdesign {args.command}: argument --position-unit counts: expected --resolution R "
+                         "(the size of one count), found none")
+    if args.rotary and args.position_unit in ("m", "mm", "um"):
+        raise UsageError(f"obsdesign {args.command}: argument --rotary: expected --position-unit rad or counts, "
+                         f"found {args.position_unit}")
     return load_trace(path, position=args.position, input=args.input, time=args.time,
-                      sample_time=args.sample_time, input_gain=args.input_gain)
+                      sample_time=args.sample_time, input_gain=args.input_gain, time_unit=args.time_unit,
+                      position_unit=args.position_unit, input_unit=args.input_unit, resolution=args.resolution,
+                      rotary=args.rotary, delimiter=args.delimiter)
+
+
+def _pairs(args: argparse.Namespace, flag: str, items, parse) -> dict:
+    """``NAME=VALUE`` items of a repeated flag, parsed by ``parse`` (refused in one line naming the flag)."""
+    from ..data.friction_fit import ASYMMETRIC, PARAMETERS
+
+    names = tuple(dict.fromkeys(PARAMETERS + ASYMMETRIC))
+    form = {"--fix": "NAME=VALUE", "--bounds": "NAME=LO:HI"}[flag]
+    out = {}
+    for item in items or ():
+        name, sep, text = item.partition("=")
+        try:
+            if not sep or name not in names:
+                raise ValueError
+            out[name] = parse(text)
+        except ValueError:
+            raise UsageError(f"obsdesign {args.command}: argument {flag}: expected {form} with NAME one of "
+                             f"{', '.join(names)}, found {item!r}") from None
+    return out
+
+
+def _bounds_pair(text: str) -> tuple[float, float]:
+    lo, sep, hi = text.partition(":")
+    if not sep:
+        raise ValueError(text)
+    pair = (float(lo) if lo.strip() else float("-inf"), float(hi) if hi.strip() else float("inf"))
+    if any(x != x for x in pair) or not pair[0] < pair[1]:
+        raise ValueError(text)
+    return pair
+
+
+def _window_arg(text: str) -> tuple[float, float]:
+    try:
+        t0, t1 = _bounds_pair(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected T0:T1 [s] with T0 < T1, found {text!r}") from None
+    return t0, t1
 
 
 def _load_config(args: argparse.Namespace):
@@ -49,14 +129,42 @@ def _load_config(args: argparse.Namespace):
 def _cmd_identify(args: argparse.Namespace) -> int:
     from ..data import identify
 
+    from ..data.rules import design_rules
+
     check_output_file("identify", "-o/--output", args.output, (".toml",))
+    fix = _pairs(args, "--fix", args.fix, float)
+    bounds = _pairs(args, "--bounds", args.bounds, _bounds_pair)
     trace = load_trace_args(args, args.data)
-    ident = identify(trace, model="asymmetric" if args.asymmetric else "coulomb-viscous")
+    ident = identify(trace, model="asymmetric" if args.asymmetric else "coulomb-viscous", stribeck=args.stribeck,
+                     fix=fix, bounds=bounds, min_speed=args.min_speed, window=args.window, n_boot=args.bootstrap,
+                     seed=args.seed, input_timing=args.input_timing)
+    payload = ident.to_dict()
+    text = str(ident)
+    try:
+        rules = design_rules(ident, u_max=args.u_max)
+    except ValueError as e:
+        if args.output:
+            raise
+        rules, text = [], f"{text}\nno design config: {e}"
+    if rules:
+        payload["config"] = {key: {"value": value, "unit": unit, "rule": rule} for key, value, unit, rule in rules}
+        width = max(len(key) for key, *_ in rules)
+        text += "\nDesign config (Identification.to_config; each rule):\n" + "\n".join(
+            f"  {key:<{width}}  {value if isinstance(value, str) else format(value, '.6g')} {unit}  ({rule})"
+            for key, value, unit, rule in rules)
     if args.output:
         stem = Path(args.data).stem
         name = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in stem) or "identified"
-        ident.to_config(name=name).save(args.output)
-    emit(args, ident, ident.to_dict())
+        ident.to_config(name=name, u_max=args.u_max).save(args.output)
+    notes = list(ident.notices) + ([] if args.u_max is not None or not rules else [
+        f"u_max = {rules[3][1]:.4g} {rules[3][2]} is 1.2 x the log's peak input, not the actuator's limit: give the "
+        "limit with --u-max U (in the input unit)"])
+    print_warnings(notes)
+    emit(args, text, payload)
+    if args.output:
+        import sys
+
+        print(f"obsdesign: wrote {args.output}", file=sys.stderr)
     return 0
 
 
@@ -87,10 +195,28 @@ def _cmd_observe(args: argparse.Namespace) -> int:
 
 def add_commands(sub) -> None:
     """Add ``identify`` and ``observe`` to the subparsers ``sub``."""
+    from ..data.choices import INPUT_TIMINGS, STRIBECK_CHOICES
+
     p = sub.add_parser("identify", help="identify mass, viscous and Coulomb friction and offset from a record")
     p.add_argument("data", metavar="DATA", type=INPUT_FILE, help="measured record (.csv with a header row, or .mat)")
     add_trace_flags(p)
     p.add_argument("--asymmetric", action="store_true", help="separate viscous and Coulomb terms per direction")
+    p.add_argument("--stribeck", choices=STRIBECK_CHOICES, default="auto",
+                   help="the Stribeck term (Fs, vs): kept where it explains the data (auto, BIC), always, never")
+    p.add_argument("--fix", action="append", metavar="NAME=VALUE", help="hold a parameter (SI units), repeatable")
+    p.add_argument("--bounds", action="append", metavar="NAME=LO:HI",
+                   help="bounds of a parameter (SI units; LO or HI may be empty), repeatable")
+    p.add_argument("--min-speed", type=POSITIVE_ARG, metavar="V",
+                   help="rows with |v| at or below V [m/s, rad/s] are left out (default 1 %% of the peak)")
+    p.add_argument("--window", type=_window_arg, metavar="T0:T1", help="fit only the samples in [T0, T1] s")
+    p.add_argument("--u-max", type=POSITIVE_ARG, metavar="U",
+                   help="the actuator limit in the input unit (default 1.2 x the log's peak, with a warning)")
+    p.add_argument("--bootstrap", type=integer(0), default=400, metavar="N",
+                   help="bootstrap replicates of the intervals (default 400; 0: 1.96 standard errors)")
+    p.add_argument("--seed", type=integer(0), default=0, help="seed of the bootstrap (default 0)")
+    p.add_argument("--input-timing", choices=INPUT_TIMINGS, default="sample",
+                   help="hold: the logged input is held until the next sample (a sampled controller's output); "
+                        "default sample: as logged")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("-o", "--output", metavar="FILE.toml", help="write the identified design config")
     p.set_defaults(run=_cmd_identify)

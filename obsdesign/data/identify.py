@@ -27,12 +27,18 @@ from __future__ import annotations
 import html
 import math
 import warnings
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._idim import check_int, implausible, positive_number, quantization, time_window
+from .choices import INPUT_TIMINGS, STRIBECK_CHOICES
+from .estimate import cautions, estimate
+from .friction_fit import check_bounds, check_fix
 from .presliding import MIN_REVERSALS, MIN_ROWS as MIN_PRESLIDING_ROWS, _reversals, fit_presliding
 from .trace import REVERSAL_THRESHOLD, Trace
+from .uncertainty import N_BOOT, column_noise
+from .units import Units, check_plausible
 
 __all__ = ["Identification", "identify", "MODELS", "FILTER_ORDER", "DEFAULT_DECIMATION",
            "MIN_REVERSALS", "MIN_PRESLIDING_ROWS"]
@@ -46,6 +52,8 @@ FILTER_FRACTION = 0.1
 DEFAULT_DECIMATION = 10
 #: Default pre-sliding window [m]: the largest travel after a reversal still called pre-sliding.
 PRESLIDING_WINDOW = 1e-4
+#: The per-direction parameters of the ``asymmetric`` model.
+ASYM = ("sigma_pos", "sigma_neg", "Cf_pos", "Cf_neg")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -87,6 +95,32 @@ class Identification:
         Why the values are not physical, if they are not: a mass, viscous coefficient or Coulomb
         level <= 0, each with its likely cause (the sign of the input gain, swapped columns, units).
         Empty for a plausible identification.
+    Fs, vs, Fs_std, vs_std : float or None
+        Stribeck level at standstill [N] and Stribeck speed [m/s] when the term is kept.
+    stribeck : bool
+        Whether the Stribeck term is in the model.
+    selection : str
+        The model selection: the BIC with and without the Stribeck term and the decision.
+    intervals : dict
+        ``name -> (low, high)``: 95 % intervals of every parameter (moving-block bootstrap,
+        widened by the errors-in-variables shift; ``interval_method`` says which).
+    interval_method : str
+        How :attr:`intervals` were obtained.
+    eiv_shift : dict
+        ``name -> shift``: predicted change of the bias-compensated estimate (errors in variables).
+    at_bound : dict
+        ``name -> 'lower'|'upper'`` for a fitted parameter at one of its bounds.
+    fixed : tuple of str
+        Parameters held at a given value.
+    min_speed : float
+        The speed threshold of the rows of the fit [m/s].
+    window : str
+        The time window of the fit (empty: the whole record).
+    units : Units
+        The units of the log (axis kind, input unit); values here are SI.
+    notices : tuple of str
+        Cautions: implausible values for the units, a parameter at a bound, an errors-in-variables
+        bias larger than the interval (naming a better excitation).
     """
 
     model: str
@@ -121,31 +155,61 @@ class Identification:
     reversals: int = 0
     source: str = ""
     warnings: tuple[str, ...] = ()
+    Fs: float | None = None
+    vs: float | None = None
+    Fs_std: float | None = None
+    vs_std: float | None = None
+    stribeck: bool = False
+    selection: str = ""
+    intervals: dict = field(default_factory=dict)
+    interval_method: str = ""
+    eiv_shift: dict = field(default_factory=dict)
+    at_bound: dict = field(default_factory=dict)
+    fixed: tuple[str, ...] = ()
+    min_speed: float = 0.0
+    window: str = ""
+    units: Units = field(default_factory=Units)
+    notices: tuple[str, ...] = ()
 
     _KEYS = ("m", "sigma", "Cf", "offset", "m_std", "sigma_std", "Cf_std", "offset_std", "nrmse_percent",
              "condition_number", "samples")
     _ASYM = ("sigma_pos", "sigma_neg", "Cf_pos", "Cf_neg")
-    _EXTRA = ("s", "s_note", "model", "sample_time", "filter_hz", "decimation")
+    _EXTRA = ("s", "s_note", "model", "sample_time", "filter_hz", "decimation", "stribeck", "selection",
+              "interval_method", "at_bound", "fixed", "min_speed", "window")
 
     def to_dict(self) -> dict:
         """JSON-ready mapping: the parameters, their standard errors and the fit statistics.
 
         Keys: ``m, sigma, Cf, offset, m_std, sigma_std, Cf_std, offset_std, nrmse_percent,
         condition_number, samples``; with ``asymmetric`` also ``sigma_pos, sigma_neg, Cf_pos,
-        Cf_neg``; always ``s, s_note, model, sample_time, filter_hz, decimation``; and ``warnings``
-        (a list of sentences) when the identification is not physical.
+        Cf_neg``; with the Stribeck term ``Fs, vs, Fs_std, vs_std``; always ``s, s_note, model,
+        sample_time, filter_hz, decimation, stribeck, selection, interval_method, at_bound, fixed,
+        min_speed, window``, ``intervals`` (name -> [low, high]), ``eiv_shift`` and ``units``
+        (``axis``, ``input_unit``, ``mass_unit``, ``force_unit``, ``length_unit``, the logged
+        ``time``/``position`` units); ``warnings`` (a list of sentences) when the identification is
+        not physical, ``notices`` when there are cautions.
         """
-        data = asdict(self)
-        keys = self._KEYS + (self._ASYM if self.model == "asymmetric" else ()) + self._EXTRA
+        data = {f: getattr(self, f) for f in self.__dataclass_fields__}
+        keys = (self._KEYS + (self._ASYM if self.model == "asymmetric" else ())
+                + (("Fs", "vs", "Fs_std", "vs_std") if self.stribeck else ()) + self._EXTRA)
         out = {k: data[k] for k in keys}
+        out["intervals"] = {k: list(v) for k, v in self.intervals.items()}
+        out["eiv_shift"] = dict(self.eiv_shift)
+        u = self.units
+        out["units"] = {"axis": u.axis, "input_unit": u.input_unit(self.input_gain), "mass_unit": u.mass_unit,
+                        "force_unit": u.force_unit, "length_unit": u.length_unit, "time": u.time,
+                        "position": u.position}
         if self.warnings:
             out["warnings"] = list(self.warnings)
+        if self.notices:
+            out["notices"] = list(self.notices)
         return out
 
     def friction(self, v: np.ndarray | float) -> np.ndarray:
         """Model friction force [N] along a velocity trace ``v`` [m/s], without the offset.
 
-        ``Cf sign(v) + sigma v`` (per direction for ``asymmetric``; 0 at ``v = 0``). The
+        ``Cf sign(v) + sigma v`` (per direction for ``asymmetric``; 0 at ``v = 0``), plus
+        ``(Fs - Cf) sign(v) exp(-(v/vs)^2)`` with the Stribeck term. The
         offset is a load, not friction: it is the config's ``G`` (see :meth:`to_config`).
         The actuator force the model predicts is ``m a + friction(v) + offset``.
 
@@ -159,8 +223,13 @@ class Identification:
         """
         v = np.asarray(v, dtype=float)
         if self.model == "asymmetric":
-            return np.where(v > 0, self.Cf_pos + self.sigma_pos * v, np.where(v < 0, -self.Cf_neg + self.sigma_neg * v, 0.0))
-        return self.Cf * np.sign(v) + self.sigma * v
+            out = np.where(v > 0, self.Cf_pos + self.sigma_pos * v, np.where(v < 0, -self.Cf_neg + self.sigma_neg * v, 0.0))
+            level = np.where(v > 0, self.Cf_pos, self.Cf_neg)
+        else:
+            out, level = self.Cf * np.sign(v) + self.sigma * v, self.Cf
+        if self.stribeck:
+            out = out + (self.Fs - level) * np.sign(v) * np.exp(-((v / self.vs) ** 2))
+        return out
 
     def to_config(self, *, name: str = "identified", K: float | None = None, u_max: float | None = None,
                   rho: float = 4.0, presliding_window: float = PRESLIDING_WINDOW):
@@ -171,23 +240,35 @@ class Identification:
 
     # -- display ---------------------------------------------------------------------------------
     def _rows(self) -> list[tuple[str, str]]:
-        def pm(value, std, unit, digits=5):
-            return f"{value:.{digits}g} ± {std:.2g} {unit}"
+        u = self.units
 
-        rows = [("model", self.model), ("source", self.source or "-"),
-                ("m", pm(self.m, self.m_std, "kg")), ("sigma", pm(self.sigma, self.sigma_std, "N s/m")),
-                ("Cf", pm(self.Cf, self.Cf_std, "N")), ("offset", pm(self.offset, self.offset_std, "N"))]
-        if self.model == "asymmetric":
-            rows += [("sigma_pos", pm(self.sigma_pos, self.sigma_pos_std, "N s/m")),
-                     ("sigma_neg", pm(self.sigma_neg, self.sigma_neg_std, "N s/m")),
-                     ("Cf_pos", pm(self.Cf_pos, self.Cf_pos_std, "N")),
-                     ("Cf_neg", pm(self.Cf_neg, self.Cf_neg_std, "N"))]
-        rows += [("s", "-" if self.s is None else f"{self.s:.5g} 1/m"), ("s note", self.s_note),
+        def pm(name, digits=5):
+            value, std = getattr(self, name), getattr(self, name + "_std")
+            unit = u.si(name.split("_")[0])
+            text = f"{value:.{digits}g} ± {std:.2g} {unit}"
+            if name in self.intervals:
+                lo, hi = self.intervals[name]
+                text += f"  [95 %: {lo:.{digits}g} to {hi:.{digits}g}]"
+            if name in self.fixed:
+                text += "  (fixed)"
+            if name in self.at_bound:
+                text += f"  (at its {self.at_bound[name]} bound)"
+            return text
+
+        names = ["m", "sigma", "Cf", "offset"] + (list(ASYM) if self.model == "asymmetric" else [])
+        names += ["Fs", "vs"] if self.stribeck else []
+        rows = [("model", self.model + (" + Stribeck" if self.stribeck else "")), ("source", self.source or "-"),
+                ("units", u.describe(self.input_gain) + f"; input gain {self.input_gain:g} "
+                 f"{u.force_unit}/{u.input_unit(self.input_gain)}")]
+        rows += [(n, pm(n)) for n in names]
+        rows += [("s", "-" if self.s is None else f"{self.s:.5g} 1/{u.length_unit}"), ("s note", self.s_note),
+                 ("selection", self.selection or "-"), ("intervals", self.interval_method or "-"),
                  ("NRMSE", f"{self.nrmse_percent:.3g} %"), ("condition number", f"{self.condition_number:.4g}"),
-                 ("rows in the fit", str(self.samples)),
+                 ("rows in the fit", f"{self.samples} (|v| > {self.min_speed:.3g} {u.si('speed')}"
+                  + (f", {self.window}" if self.window else "") + ")"),
                  ("filter", f"Butterworth {FILTER_ORDER}th order {self.filter_hz:g} Hz, zero phase"),
                  ("decimation", f"{self.decimation} (sample time {self.sample_time:g} s)")]
-        rows += [("WARNING", w) for w in self.warnings]
+        rows += [("WARNING", w) for w in self.warnings] + [("caution", w) for w in self.notices]
         return rows
 
     def __str__(self) -> str:
@@ -203,79 +284,12 @@ class Identification:
 
 # -- the procedure -----------------------------------------------------------------------------
 
-def _check_int(name: str, value: object, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise ValueError(f"{name}: expected an integer >= {low}, found {value!r}")
-    return int(value)
-
-
-def _ols(X: np.ndarray, y: np.ndarray, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """Estimates, covariance ``sigma_e^2 (X^T X)^-1``, residual, scaled condition number.
-
-    The columns are scaled to a largest |value| of 1 before the solve, so LAPACK never sees an
-    overflowing product (and never prints its own error text); a regressor that is non-finite,
-    zero in every row or a combination of the others is refused naming it.
-    """
-    if not (np.all(np.isfinite(X)) and np.all(np.isfinite(y))):
-        bad = [n for n, col in zip(names, X.T) if not np.all(np.isfinite(col))] or ["the force"]
-        raise ValueError(f"trace: the regressor {', '.join(bad)} overflows to non-finite values (derivatives of the "
-                         "position over the sample time); check the units of position and time")
-    scale = np.max(np.abs(X), axis=0)
-    zero = [n for n, sc in zip(names, scale) if not sc > 0]
-    if zero:
-        raise ValueError(f"trace: expected every regressor to vary, found {', '.join(zero)} zero in every row of "
-                         "the fit: the record does not excite that term")
-    Xs = X / scale
-    y_scale = float(np.max(np.abs(y))) or 1.0
-    theta_s, _, rank, _ = np.linalg.lstsq(Xs, y / y_scale, rcond=None)
-    if rank < X.shape[1]:
-        raise ValueError(f"trace: the regressors ({', '.join(names)}) are linearly dependent over the rows of the "
-                         f"fit (rank {rank} of {X.shape[1]}): the record cannot separate these terms")
-    theta = theta_s * y_scale / scale
-    resid = y - X @ theta
-    dof = X.shape[0] - X.shape[1]
-    sigma2 = float(resid @ resid) / dof
-    cov = sigma2 * np.linalg.inv(Xs.T @ Xs) / scale[:, None] / scale[None, :]  # no overflowing outer product
-    cond = float(np.linalg.cond(Xs / np.linalg.norm(Xs, axis=0)))
-    return theta, cov, resid, cond
-
-
-def _implausible(result: dict, input_gain: float) -> tuple[str, ...]:
-    """Sentences naming each identified m, sigma, Cf (and per-direction level) <= 0 with its likely cause."""
-    names = {"m": ("mass", "kg"), "sigma": ("viscous coefficient", "N s/m"), "Cf": ("Coulomb level", "N"),
-             "sigma_pos": ("viscous coefficient for v > 0", "N s/m"),
-             "sigma_neg": ("viscous coefficient for v < 0", "N s/m"),
-             "Cf_pos": ("Coulomb level for v > 0", "N"), "Cf_neg": ("Coulomb level for v < 0", "N")}
-    bad = [k for k in names if result.get(k) is not None and not result[k] > 0]
-    if not bad:
-        return ()
-    if input_gain < 0:
-        cause = (f"the input gain is negative (input_gain = {input_gain:g}): check its sign; a force that opposes "
-                 "the logged input gives a negative mass")
-    elif result["m"] <= 0 and result["sigma"] <= 0 and result["Cf"] <= 0:
-        cause = ("every term is negative: the input acts against the position, so check the sign of the input "
-                 "gain (or of the position column)")
-    else:
-        cause = ("check that the position and input columns are not swapped, the sign of the input gain, and the "
-                 "units (position in m, time in s, input times the gain in N)")
-    found = ", ".join(f"{k} = {result[k]:.4g} {names[k][1]}" for k in bad)
-    return (f"identify: not physical: expected a positive {names[bad[0]][0]}, found {found}; {cause}",)
-
-
-def _quantization(position: np.ndarray) -> float:
-    """Smallest nonzero position increment if every increment is a multiple of it, else 0."""
-    steps = np.abs(np.diff(position))
-    steps = steps[steps > 0]
-    if steps.size == 0:
-        return 0.0
-    q = float(steps.min())
-    ratio = steps / q
-    return q if bool(np.all(np.abs(ratio - np.round(ratio)) < 1e-3)) else 0.0
-
-
 def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float | None = None,
-             decimation: int | None = None, presliding_window: float = PRESLIDING_WINDOW) -> Identification:
-    """Fit ``u = m a + sigma v + Cf sign(v) + offset`` to a trace by ordinary least squares.
+             decimation: int | None = None, presliding_window: float = PRESLIDING_WINDOW, stribeck: str = "auto",
+             fix: dict | None = None, bounds: dict | None = None, min_speed: float | None = None,
+             window: tuple[float, float] | None = None, n_boot: int = N_BOOT, seed: int = 0,
+             input_timing: str = "sample") -> Identification:
+    """Fit ``u = m a + sigma v + Cf sign(v) + offset`` (+ a Stribeck term) to a trace, within bounds.
 
     Parameters
     ----------
@@ -290,6 +304,29 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
         Decimation factor, default 10 (the benchmark's factor at 1 kHz).
     presliding_window : float
         Largest travel [m] after a reversal still taken as pre-sliding (default 1e-4 m).
+    stribeck : {'auto', 'on', 'off'}
+        The Stribeck term ``(Fs - Cf) sign(v) exp(-(v/vs)^2)``: kept by the model selection of
+        :mod:`obsdesign.data.estimate` (``auto``), always fitted, or never.
+    fix : dict, optional
+        Parameters held at a value, e.g. ``{"sigma": 12.0}`` (names of
+        :data:`obsdesign.data.friction_fit.PARAMETERS` and ``ASYMMETRIC``).
+    bounds : dict, optional
+        ``{name: (low, high)}``; defaults: ``m, sigma, Cf, Fs >= 0`` (a fit never returns a
+        negative viscous coefficient), ``vs`` between ``min_speed`` and half the peak speed.
+    min_speed : float, optional
+        Rows with ``|v|`` at or below it [m/s, rad/s] are left out; default 1 % of the peak.
+    window : (float, float), optional
+        Only the samples with ``t0 <= t <= t1`` [s].
+    n_boot : int
+        Bootstrap replicates of the intervals (0: intervals of 1.96 standard errors).
+    seed : int
+        Seed of the bootstrap.
+    input_timing : {'sample', 'hold'}
+        ``hold``: the input logged at sample ``n`` is held until ``n + 1`` (a sampled controller's
+        output, zero-order hold, as in :func:`obsdesign.simulate`); the central-difference
+        acceleration at ``n`` then corresponds to ``(u[n-1] + u[n]) / 2``, which is used. ``sample``
+        (default, the EMPS benchmark's IDIM-LS): the input as logged. On a held input, ``sample``
+        biases the viscous coefficient (-1 % open loop, -3 % closed loop in the coverage check).
 
     Returns
     -------
@@ -298,14 +335,15 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     Raises
     ------
     ValueError
-        A bad model, cut-off, decimation or window; a trace too short for them; an input that
-        is constant; a position that barely moves.
+        A bad model, cut-off, decimation, window, bound, fixed value or minimum speed; a trace
+        too short for them; an input that is constant; a position that barely moves.
 
     Warns
     -----
     UserWarning
         If the identified m, sigma or Cf is <= 0 (also in :attr:`Identification.warnings`), naming the
-        likely cause: the sign of the input gain, swapped columns, units.
+        likely cause: the sign of the input gain, swapped columns, units. Plausibility and
+        uncertainty cautions are in :attr:`Identification.notices` (not warned).
 
     Notes
     -----
@@ -317,13 +355,18 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
        ``scipy.signal.decimate`` (8th-order Chebyshev I anti-alias filter at 0.8 of the new
        Nyquist frequency, zero phase). Oversampled rows are strongly correlated, which OLS
        statistics assume they are not; decimation keeps one row per correlation length.
-    4. Rows with ``|v|`` at or below 1 % of the largest ``|v|`` are dropped: there the axis
-       sticks or is in pre-sliding, where ``Cf sign(v)`` (eq:2:1:2) does not hold.
-    5. ``asymmetric``: in gross sliding the data determine only the two levels
+    4. Rows with ``|v|`` at or below ``min_speed`` (1 % of the largest ``|v|``) are dropped: there
+       the axis sticks or is in pre-sliding, where ``Cf sign(v)`` (eq:2:1:2) does not hold.
+    5. Bounded least squares (:mod:`obsdesign.data.friction_fit`); without an active bound, a
+       fixed value or the Stribeck term this is the IDIM-LS solution and ``*_std`` are its
+       standard errors ``sigma_e^2 (X^T X)^-1``; otherwise from the Jacobian at the solution.
+    6. ``asymmetric``: in gross sliding the data determine only the two levels
        ``Cf_pos + offset`` and ``offset - Cf_neg``, not all three terms. The common offset
        is therefore taken from the ``coulomb-viscous`` fit of the same rows, and ``Cf_pos``,
        ``Cf_neg`` are the levels minus/plus it (standard errors propagated linearly).
-    6. ``s`` (eq:2:3:1-2:3:5) is fitted only if at least 5 reversals each stay within
+    7. ``intervals``: a moving-block bootstrap widened by the errors-in-variables shift
+       (:mod:`obsdesign.data.uncertainty`).
+    8. ``s`` (eq:2:3:1-2:3:5) is fitted only if at least 5 reversals each stay within
        ``presliding_window`` of the reversal point for 5 rows of the fit grid (``5 decimation``
        samples) over at least 5 distinct encoder readings; otherwise ``s = None`` and
        ``s_note`` says why.
@@ -338,6 +381,9 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     >>> ident = identify(tr)
     >>> [round(p, 1) for p in (ident.m, ident.sigma, ident.Cf, ident.offset)]
     [2.0, 20.0, 1.0, 3.0]
+    >>> lo, hi = ident.intervals["m"]          # 95 %: a bootstrap over the record
+    >>> bool(lo < ident.m < hi and (hi - lo) / ident.m < 0.01)
+    True
     """
     from scipy import signal
 
@@ -345,83 +391,108 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
         raise TypeError(f"trace: expected a Trace, found {type(trace).__name__}")
     if not isinstance(model, str) or model not in MODELS:
         raise ValueError(f"model: expected one of {', '.join(repr(m) for m in MODELS)}, found {model!r}")
+    if not isinstance(stribeck, str) or stribeck not in STRIBECK_CHOICES:
+        raise ValueError(f"stribeck: expected one of {', '.join(map(repr, STRIBECK_CHOICES))}, found {stribeck!r}")
+    fix, bounds = check_fix(fix), check_bounds(bounds)
+    both = sorted(set(fix) & set(bounds))
+    if both:
+        raise ValueError(f"fix, bounds: expected a parameter either fixed or bounded, found {both[0]!r} in both")
+    n_boot = check_int("n_boot", n_boot, 0)
+    seed = check_int("seed", seed, 0)
     dt = trace.sample_time
     fs = 1.0 / dt
     if filter_hz is None:
         filter_hz = FILTER_FRACTION * fs
     elif isinstance(filter_hz, bool) or not isinstance(filter_hz, (int, float)) or not 0 < filter_hz < 0.5 * fs:
         raise ValueError(f"filter_hz: expected a cut-off in (0, {0.5 * fs:g}) Hz (below Nyquist), found {filter_hz!r}")
-    q = DEFAULT_DECIMATION if decimation is None else _check_int("decimation", decimation, 1)
-    if isinstance(presliding_window, bool) or not isinstance(presliding_window, (int, float)) or not presliding_window > 0:
-        raise ValueError(f"presliding_window: expected a finite number > 0 [m], found {presliding_window!r}")
-    force_range = float(np.ptp(trace.force))
+    q = DEFAULT_DECIMATION if decimation is None else check_int("decimation", decimation, 1)
+    presliding_window = positive_number("presliding_window", presliding_window, 0.0, trace.units.length_unit)
+    if min_speed is not None:
+        min_speed = positive_number("min_speed", min_speed, 0.0, trace.units.si("speed"))
+    if input_timing not in INPUT_TIMINGS:
+        raise ValueError(f"input_timing: expected one of {', '.join(map(repr, INPUT_TIMINGS))}, found {input_timing!r}")
+    position, force, span = time_window(trace, window)
+    if input_timing == "hold":
+        force = np.concatenate([force[:1], 0.5 * (force[1:] + force[:-1])])
+    n = position.size
+    force_range = float(np.ptp(force))
     if not force_range > 0.0:
-        raise ValueError(f"input: the record has constant input ({float(trace.force[0]):g} N in every sample of "
+        raise ValueError(f"input: the record has constant input ({float(force[0]):g} N in every sample of "
                          f"{trace.source!r}); nothing to identify: the fit needs a force that varies")
     border = int(math.ceil(5.0 * fs / filter_hz))
-    n_used = trace.samples - 2 * border
-    if n_used < 20 * q:
+    if n - 2 * border < 20 * q:
         raise ValueError(f"trace: expected at least {2 * border + 20 * q} samples for filter_hz = {filter_hz:g} Hz "
-                         f"and decimation {q}, found {trace.samples}")
+                         f"and decimation {q}, found {n}")
 
     sos = signal.butter(FILTER_ORDER, filter_hz, fs=fs, output="sos")
-    x_f = signal.sosfiltfilt(sos, trace.position)
-    u_f = signal.sosfiltfilt(sos, trace.force)
+    x_f = signal.sosfiltfilt(sos, position)
+    u_f = signal.sosfiltfilt(sos, force)
     v = np.gradient(x_f, dt)
     a = np.gradient(v, dt)
-    keep = slice(border, trace.samples - border)
+    keep = slice(border, n - border)
 
-    def dec(col: np.ndarray) -> np.ndarray:
-        col = col[keep]
-        return signal.decimate(col, q, ftype="iir", zero_phase=True) if q > 1 else col
+    dec_sos = signal.cheby1(8, 0.05, 0.8 / q, output="sos") if q > 1 else None
+
+    def dec(col: np.ndarray) -> np.ndarray:  # scipy.signal.decimate(col, q, ftype="iir", zero_phase=True), rows at once
+        return signal.sosfiltfilt(dec_sos, col, axis=-1)[..., ::q] if q > 1 else col
 
     pos, neg = (v > 0).astype(float), (v < 0).astype(float)
-    cols = {"a": dec(a), "v": dec(v), "sign": dec(np.sign(v)), "one": dec(np.ones_like(v)),
-            "v_pos": dec(v * pos), "v_neg": dec(v * neg), "pos": dec(pos), "neg": dec(neg)}
-    y = dec(u_f)
-    moving = np.abs(cols["v"]) > REVERSAL_THRESHOLD * np.max(np.abs(cols["v"]))
+    names = ("a", "v", "sign", "one", "v_pos", "v_neg", "pos", "neg", "y")
+    stacked = dec(np.stack([a, v, np.sign(v), np.ones(n), v * pos, v * neg, pos, neg, u_f])[:, keep])
+    cols = dict(zip(names, stacked))
+    y = cols.pop("y")
+    peak = float(np.max(np.abs(cols["v"])))
+    threshold = REVERSAL_THRESHOLD * peak if min_speed is None else min_speed
+    moving = np.abs(cols["v"]) > threshold
     if np.count_nonzero(moving) < 10:
         raise ValueError(f"trace: expected motion in at least 10 rows of the fit, found {np.count_nonzero(moving)} "
-                         f"(the position barely changes)")
+                         f"(|v| > {threshold:.3g} {trace.units.si('speed')}; the position barely changes, or "
+                         f"min_speed is too high)")
+    cols = {k: c[moving] for k, c in cols.items()}
     y = y[moving]
-    X = np.column_stack([cols[c][moving] for c in ("a", "v", "sign", "one")])
-    theta, cov, resid, cond = _ols(X, y, ("acceleration", "velocity", "sign(v)", "offset"))
-    std = np.sqrt(np.diag(cov))
-    result = dict(m=theta[0], sigma=theta[1], Cf=theta[2], offset=theta[3], m_std=std[0], sigma_std=std[1],
-                  Cf_std=std[2], offset_std=std[3])
+    v_kept = v[keep]
+
+    def shape(vs: float, parts: tuple[str, ...]) -> dict:  # Stribeck columns at the full rate, decimated
+        e = np.sign(v_kept) * np.exp(-((v_kept / vs) ** 2))
+        full = {"S": e, "S_pos": e * (v_kept > 0), "S_neg": e * (v_kept < 0), "dS": e * 2.0 * v_kept**2 / vs**3}
+        wanted = ("S",) + parts
+        return dict(zip(wanted, dec(np.stack([full[k] for k in wanted]))[:, moving]))
+
+    cols["shape"] = shape
+
+    noise_var = column_noise(float(np.mean((position - x_f)[keep] ** 2)), sos, dec_sos, q, dt)
+    vs_range = (max(threshold, 1e-12), max(0.5 * peak, 2.0 * max(threshold, 1e-12)))
+    est = estimate(cols, y, model=model, stribeck=stribeck, fix=fix, bounds=bounds, vs_range=vs_range,
+                   noise_var=noise_var, n_boot=n_boot, seed=seed)
+    values, std = est["values"], est["std"]
+    result = {k: float(values[k]) for k in ("m", "sigma", "Cf", "offset")}
+    result.update({f"{k}_std": float(std.get(k, 0.0)) for k in ("m", "sigma", "Cf", "offset")})
     if model == "asymmetric":
-        Xa = np.column_stack([cols[c][moving] for c in ("a", "v_pos", "v_neg", "pos", "neg")])
-        th, cov_a, resid, cond = _ols(Xa, y, ("acceleration", "v for v > 0", "v for v < 0", "v > 0", "v < 0"))
-        sd = np.sqrt(np.diag(cov_a))
-        # offset from the symmetric fit: a linear map r of y; levels: rows p of the pseudo-inverse
-        r = np.linalg.pinv(X)[3]
-        pinv_a = np.linalg.pinv(Xa)
-        s2 = float(resid @ resid) / (Xa.shape[0] - Xa.shape[1])
-        off = theta[3]
-        cf_pos, cf_neg = th[3] - off, off - th[4]
-        cf_pos_std = math.sqrt(s2 * float(np.sum((pinv_a[3] - r) ** 2)))
-        cf_neg_std = math.sqrt(s2 * float(np.sum((r - pinv_a[4]) ** 2)))
-        mean_row = 0.5 * (pinv_a[1] + pinv_a[2]), 0.5 * (pinv_a[3] - pinv_a[4])
-        result.update(m=th[0], m_std=sd[0], sigma=0.5 * (th[1] + th[2]), Cf=0.5 * (th[3] - th[4]),
-                      sigma_std=math.sqrt(s2 * float(np.sum(mean_row[0] ** 2))),
-                      Cf_std=math.sqrt(s2 * float(np.sum(mean_row[1] ** 2))),
-                      sigma_pos=th[1], sigma_neg=th[2], Cf_pos=cf_pos, Cf_neg=cf_neg,
-                      sigma_pos_std=sd[1], sigma_neg_std=sd[2], Cf_pos_std=cf_pos_std, Cf_neg_std=cf_neg_std)
-    result = {k: float(v_) for k, v_ in result.items()}
-    power = float(np.mean(y**2))
-    nrmse = 100.0 * math.sqrt(float(np.mean(resid**2)) / power) if power > 0 else math.inf
-    notes = _implausible(result, trace.input_gain)
+        result.update({k: float(values[k]) for k in ASYM})
+        result.update({f"{k}_std": float(std.get(k, 0.0)) for k in ASYM})
+    if est["stribeck"]:
+        result.update(Fs=float(values["Fs"]), vs=float(values["vs"]), Fs_std=float(std.get("Fs", 0.0)),
+                      vs_std=float(std.get("vs", 0.0)))
+    notes = implausible({k: (None if k in est["at_bound"] else v) for k, v in result.items()}, trace.input_gain)
     for note in notes:
         warnings.warn(note, stacklevel=2)
-
-    quantum = _quantization(trace.position)
-    noise = float(np.sqrt(np.mean((trace.position - x_f)[keep] ** 2)))
-    noise = math.sqrt(max(0.0, noise**2 - quantum**2 / 12.0))
-    s, note = fit_presliding(x=trace.position[keep], x_f=x_f[keep], v=v[keep], a=a[keep], u_f=u_f[keep], dt=dt,
+    quantum = quantization(position)
+    noise = math.sqrt(max(0.0, float(np.mean((position - x_f)[keep] ** 2)) - quantum**2 / 12.0))
+    s, note = fit_presliding(x=position[keep], x_f=x_f[keep], v=v[keep], a=a[keep], u_f=u_f[keep], dt=dt,
                              m=result["m"], sigma=result["sigma"], Cf=result["Cf"], offset=result["offset"],
-                             rows=q, window=float(presliding_window))
-    return Identification(model=model, **result, nrmse_percent=nrmse, condition_number=cond,
+                             rows=q, window=presliding_window)
+    notices = trace.warnings + check_plausible(trace.units, mass=result["m"]) + cautions(
+        est, cols, noise_var, trace.units, filter_hz)
+    return Identification(model=model, **result, nrmse_percent=est["nrmse"], condition_number=est["condition_number"],
                           samples=int(y.size), s=s, s_note=note, sample_time=dt, filter_hz=float(filter_hz),
-                          decimation=q, input_gain=trace.input_gain, force_peak=float(np.max(np.abs(trace.force))),
-                          noise_rms=noise, quantization=quantum, reversals=int(_reversals(v, REVERSAL_THRESHOLD * float(np.max(np.abs(v)))).size),
-                          source=trace.source, warnings=notes)
+                          decimation=q, input_gain=trace.input_gain, force_peak=float(np.max(np.abs(force))),
+                          noise_rms=noise, quantization=quantum,
+                          reversals=int(_reversals(v, REVERSAL_THRESHOLD * float(np.max(np.abs(v)))).size),
+                          source=trace.source, warnings=notes, notices=notices, stribeck=est["stribeck"], selection=est["selection"],
+                          intervals=est["intervals"], eiv_shift=est["eiv_shift"], at_bound=est["at_bound"],
+                          fixed=tuple(sorted(fix)), min_speed=float(threshold), window=span,
+                          interval_method=(f"moving-block bootstrap, {n_boot} replicates, blocks of "
+                                           f"{est['block_length']} rows, widened by the errors-in-variables shift"
+                                           if n_boot else "1.96 standard errors, widened by the "
+                                           "errors-in-variables shift"),
+                          units=trace.units)

@@ -8,7 +8,8 @@ field              rule
 =================  ==========================================================================
 plant.K            the trace's input gain (|gain|; 1.0 when the input was logged in N)
 plant.G            the identified offset (a constant load force)
-plant.u_max        1.2 x the largest logged |input| (= max |force| / K); 10 V if no force
+plant.u_max        the actuator limit given (``u_max``, in the input unit); else 1.2 x the largest
+                   logged |input| (= max |force| / K), with a caution; 10 if no force
 friction.s         identified; else ``1 / presliding_window`` (1e4 1/m at the default 0.1 mm)
 friction.kappa     fastest observer pole ``(rho + 1) sqrt(kappa/m) = 0.2 / dt``
 observer           variant ``static``, ``rho`` = 4, ``dt`` of the trace,
@@ -27,7 +28,7 @@ import math
 
 from ..params import Config, FrictionParams, ObserverSpec, PIDSpec, PlantParams, SensorSpec
 
-__all__ = ["config_from", "PHASE_MARGIN_DEG", "FASTEST_POLE_DT", "U_MAX_MARGIN"]
+__all__ = ["config_from", "design_rules", "PHASE_MARGIN_DEG", "FASTEST_POLE_DT", "U_MAX_MARGIN"]
 
 #: Phase margin [deg] of the PID rule.
 PHASE_MARGIN_DEG = 60.0
@@ -37,9 +38,13 @@ FASTEST_POLE_DT = 0.2
 U_MAX_MARGIN = 1.2
 
 
-def _positive(name: str, value: float, why: str) -> float:
+def _positive(name: str, value: float, why: str, ident=None) -> float:
     if not (math.isfinite(value) and value > 0):
-        raise ValueError(f"{name}: expected an identified value > 0 for a design, found {value!r} ({why})")
+        side = getattr(ident, "at_bound", {}).get(name)
+        hint = (f"; it is at its {side} bound: the record does not resolve it. Fix it (--fix {name}=VALUE, "
+                f"identify(..., fix={{'{name}': VALUE}})), or record an excitation with faster moves"
+                if side else "")
+        raise ValueError(f"{name}: expected an identified value > 0 for a design, found {value!r} ({why}){hint}")
     return value
 
 
@@ -55,7 +60,8 @@ def config_from(ident, *, name: str = "identified", K: float | None = None, u_ma
     K : float, optional
         Actuator gain [N/V]; default the trace's ``|input_gain|``.
     u_max : float, optional
-        Actuator limit [V]; default 1.2 max|force| / K, or 10 V for an all-zero force.
+        Actuator limit in the logged input's unit (V, A, N); default 1.2 max|force| / K (the log's
+        peak, named as such in the config's sources), or 10 for an all-zero force.
     rho : float
         Observer gain parameter (> 1). With 4, the gross-sliding poles are
         ``-(rho -+ 1) sqrt(kappa/m)``: the dominant one is 3/5 of the fastest (0.12/dt).
@@ -69,7 +75,13 @@ def config_from(ident, *, name: str = "identified", K: float | None = None, u_ma
     Raises
     ------
     ValueError
-        If ``m``, ``sigma`` or ``Cf`` was identified non-positive (no physical design).
+        If ``m``, ``sigma`` or ``Cf`` was identified non-positive (no physical design; a value at its
+        bound is named as such), or ``u_max`` is not a number > 0.
+
+    Notes
+    -----
+    The config's ``[sources]`` table records each rule of :func:`design_rules` with its unit (so the
+    input unit and the axis kind travel with the file).
 
     Examples
     --------
@@ -81,13 +93,53 @@ def config_from(ident, *, name: str = "identified", K: float | None = None, u_ma
     >>> cfg.plant.u_max, cfg.friction.kappa, cfg.friction.s, cfg.pid.tau
     (6.0, 3200.0, 10000.0, 0.1)
     """
+    return _build(ident, name=name, K=K, u_max=u_max, rho=rho, presliding_window=presliding_window)[0]
+
+
+def design_rules(ident, *, K: float | None = None, u_max: float | None = None, rho: float = 4.0,
+                 presliding_window: float = 1e-4) -> list[tuple[str, float, str, str]]:
+    """Every field :func:`config_from` sets: ``(key, value, unit, rule)`` rows, in the config's order.
+
+    The units are those of the identified axis (a rotary axis in kg m^2, N m, rad; the input unit named).
+
+    Parameters
+    ----------
+    ident : Identification
+    K, u_max, rho, presliding_window :
+        As for :func:`config_from`.
+
+    Examples
+    --------
+    >>> from obsdesign.data import Identification
+    >>> ident = Identification(model="coulomb-viscous", m=2.0, sigma=20.0, Cf=1.0, offset=3.0, m_std=0.0,
+    ...                        sigma_std=0.0, Cf_std=0.0, offset_std=0.0, nrmse_percent=1.0,
+    ...                        condition_number=2.0, samples=1000, sample_time=1e-3, force_peak=5.0)
+    >>> [row[:3] for row in design_rules(ident, u_max=8.0)][:4]
+    [('plant.m', 2.0, 'kg'), ('plant.K', 1.0, 'N/N'), ('plant.G', 3.0, 'N'), ('plant.u_max', 8.0, 'N')]
+    """
+    return _build(ident, name="identified", K=K, u_max=u_max, rho=rho, presliding_window=presliding_window)[1]
+
+
+def _build(ident, *, name, K, u_max, rho, presliding_window):
+    from .units import Units
+
+    units = getattr(ident, "units", None) or Units()
+    unit_in = units.input_unit(ident.input_gain)
+    F, L, M = units.force_unit, units.length_unit, units.mass_unit
     dt = ident.sample_time
-    m = _positive("m", ident.m, "the mass must be positive")
-    sigma = _positive("sigma", ident.sigma, "the viscous coefficient must be positive")
-    Cf = _positive("Cf", ident.Cf, "the Coulomb level must be positive")
+    m = _positive("m", ident.m, "the mass must be positive", ident)
+    sigma = _positive("sigma", ident.sigma, "the viscous coefficient must be positive", ident)
+    Cf = _positive("Cf", ident.Cf, "the Coulomb level must be positive", ident)
     gain = abs(ident.input_gain) if K is None else K
     if u_max is None:
+        u_max_rule = (f"{U_MAX_MARGIN:g} x the log's peak |input| {ident.force_peak / gain:.4g} {unit_in}: NOT the "
+                      "actuator's limit (give it: --u-max, to_config(u_max=...)); the controller saturates early "
+                      "if the actuator can do more" if ident.force_peak > 0 else "no force in the log: 10")
         u_max = U_MAX_MARGIN * ident.force_peak / gain if ident.force_peak > 0 else 10.0
+    else:
+        if isinstance(u_max, bool) or not isinstance(u_max, (int, float)) or not (math.isfinite(u_max) and u_max > 0):
+            raise ValueError(f"u_max: expected the actuator limit > 0 [{unit_in}], found {u_max!r}")
+        u_max_rule = "the actuator limit given"
     if isinstance(rho, bool) or not isinstance(rho, (int, float)) or not rho > 1:
         raise ValueError(f"rho: expected a finite number > 1 (stable observer), found {rho!r}")
     s = ident.s if ident.s is not None else 1.0 / presliding_window
@@ -97,11 +149,40 @@ def config_from(ident, *, name: str = "identified", K: float | None = None, u_ma
     tau = m / sigma
     phi = gain * tau / m
     max_S = phi / (omega_c * math.sin(math.radians(PHASE_MARGIN_DEG)))
-    return Config(
+    omega_co = 2.0 * math.pi * nyquist / 5.0
+    src = f"identified from {ident.source or 'a record'}"
+    axis = f"{units.axis} axis"
+    rules = [
+        ("plant.m", m, M, f"{src} ({'inertia of a rotary' if units.rotary else 'mass of a linear'} axis)"),
+        ("plant.K", gain, f"{F}/{unit_in}", f"the input gain ({'given' if K is not None else '|input_gain|'}); "
+         f"input logged in {unit_in}, {axis}"),
+        ("plant.G", ident.offset, F, f"{src}: the offset, a constant load"),
+        ("plant.u_max", u_max, unit_in, u_max_rule),
+        ("friction.Cf", Cf, F, src + (" (mean of the two directions)" if ident.model == "asymmetric" else "")),
+        ("friction.sigma", sigma, f"{F} s/{L}", src + (" (mean of the two directions)"
+                                                     if ident.model == "asymmetric" else "")),
+        ("friction.s", s, f"1/{L}", f"{src} (pre-sliding)" if ident.s is not None
+         else f"not resolved by the record: 1 / presliding_window = 1 / {presliding_window:g} {L}"),
+        ("friction.kappa", kappa, f"{F}/{L}", f"fastest observer pole (rho + 1) sqrt(kappa/m) = "
+         f"{FASTEST_POLE_DT:g} / dt"),
+        ("sensor.noise_rms", ident.noise_rms, L, "RMS of the position minus its filtered version, less q^2/12"),
+        ("sensor.noise_bandwidth", nyquist, "Hz", "white up to the Nyquist frequency"),
+        ("sensor.quantization", ident.quantization, L, "smallest position increment, if all are multiples of it"),
+        ("observer.rho", float(rho), "", "gross-sliding poles -(rho -+ 1) sqrt(kappa/m)"),
+        ("observer.omega_co", omega_co, "rad/s", "2 pi f_s / 10 (a fifth of the Nyquist frequency)"),
+        ("observer.variant", "static", "", "viscous friction in the model (the paper's section 4)"),
+        ("observer.dt", dt, "s", "the record's sample time"),
+        ("pid.tau", tau, "s", "m / sigma"),
+        ("pid.phase_margin_deg", PHASE_MARGIN_DEG, "deg", "the PID rule"),
+        ("pid.max_S", max_S, f"{L}/{unit_in}", "crossover k phi / sin(Phi) at a tenth of the Nyquist frequency"),
+    ]
+    cfg = Config(
         name=name,
         plant=PlantParams(m=m, K=gain, G=ident.offset, u_max=u_max),
         friction=FrictionParams(Cf=Cf, sigma=sigma, s=s, kappa=kappa),
         sensor=SensorSpec(noise_rms=ident.noise_rms, noise_bandwidth=nyquist, quantization=ident.quantization),
-        observer=ObserverSpec(rho=float(rho), omega_co=2.0 * math.pi * nyquist / 5.0, variant="static", dt=dt),
+        observer=ObserverSpec(rho=float(rho), omega_co=omega_co, variant="static", dt=dt),
         pid=PIDSpec(max_S=max_S, phase_margin_deg=PHASE_MARGIN_DEG, tau=tau),
+        sources={key: f"{rule} [{unit}]" if unit else rule for key, _, unit, rule in rules},
     )
+    return cfg, rules

@@ -19,7 +19,6 @@ Examples
 
 from __future__ import annotations
 
-import csv
 import io
 import math
 import os
@@ -30,6 +29,8 @@ import numpy as np
 
 from .._io import atomic_write
 from .._validate import SAMPLE_TIME
+from .csvfile import parse_delimiter, read_csv
+from .units import Units, check_plausible
 
 __all__ = ["Trace", "load_trace", "MIN_SAMPLES", "JITTER_TOLERANCE", "MAX_MAGNITUDE", "SAMPLE_TIME_RANGE",
            "check_sample_time", "zero_phase_velocity"]
@@ -198,6 +199,12 @@ class Trace:
         (``None`` when the time base came from ``sample_time``).
     input_gain : float
         Factor [N per logged unit] applied to the input column (1.0: logged in N).
+    units : Units
+        The logged columns' units (:class:`obsdesign.data.units.Units`); the arrays here are SI
+        (m or rad, s, N or N m).
+    warnings : tuple of str
+        Plausibility warnings (:func:`obsdesign.data.units.check_plausible`): a sample time,
+        position range or speed that does not fit a servo axis, naming the likely unit error.
 
     Notes
     -----
@@ -212,6 +219,8 @@ class Trace:
     source: str = "memory"
     names: dict = field(default_factory=lambda: {"position": "position", "input": "force", "time": "t"})
     input_gain: float = 1.0
+    units: Units = field(default_factory=Units)
+    warnings: tuple[str, ...] = field(default=(), repr=False)
 
     def __post_init__(self) -> None:
         cols = {name: _check_column(name, name, getattr(self, name)) for name in ("t", "position", "force")}
@@ -227,6 +236,12 @@ class Trace:
         object.__setattr__(self, "input_gain", _check_gain(self.input_gain))
         if not isinstance(self.source, str):
             raise TypeError(f"source: expected a string, found {type(self.source).__name__}")
+        if not isinstance(self.units, Units):
+            raise TypeError(f"units: expected a Units, found {type(self.units).__name__}")
+        if not self.warnings:
+            speed = float(np.max(np.abs(np.diff(self.position)))) / step
+            object.__setattr__(self, "warnings", check_plausible(
+                self.units, sample_time=step, position_range=float(np.ptp(self.position)), speed=speed))
 
     @property
     def samples(self) -> int:
@@ -283,40 +298,6 @@ class Trace:
 
 # -- loading -------------------------------------------------------------------------------------
 
-def _read_csv(path: Path) -> dict[str, np.ndarray]:
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except UnicodeDecodeError as e:
-        raise ValueError(f"path: expected a UTF-8 text CSV file, found undecodable bytes at byte {e.start} "
-                         f"of {path.name!r}") from e
-    lines = text.splitlines()
-    if not lines or not lines[0].strip():
-        raise ValueError(f"path: expected a CSV file with a header row of column names, found an empty first line "
-                         f"in {path.name!r}")
-    header = [h.strip().strip('"').strip("'").strip() for h in next(csv.reader([lines[0]], skipinitialspace=True))]
-    hint = (f" (the first line {lines[0][:60]!r} is a '#' comment, taken as the header row: remove the comment "
-            "lines above the header)") if lines[0].lstrip().startswith("#") else ""
-    seen: dict[str, int] = {}
-    for i, name in enumerate(header):
-        if name in seen:
-            raise ValueError(f"path: expected distinct column names in {path.name!r}, found {name!r} as columns "
-                             f"{seen[name] + 1} and {i + 1} (names are compared after stripping spaces and quotes)"
-                             f"{hint}")
-        seen[name] = i
-    body = "\n".join(line for line in lines[1:] if line.strip())
-    try:
-        data = np.loadtxt(io.StringIO(body), delimiter=",", ndmin=2, dtype=float)
-    except ValueError as e:
-        raise ValueError(f"path: expected numeric CSV rows below the header, found unreadable data in "
-                         f"{path.name!r} ({e}){hint}") from e
-    if data.size == 0:
-        data = np.empty((0, len(header)))
-    if data.shape[1] != len(header):
-        raise ValueError(f"path: expected {len(header)} values per row (one per header name), found "
-                         f"{data.shape[1]} in {path.name!r}{hint}")
-    return {name: data[:, i] for i, name in enumerate(header)}
-
-
 def _read_mat(path: Path) -> dict[str, np.ndarray]:
     from scipy import io as sio
 
@@ -339,28 +320,44 @@ def _pick(param: str, name: str, table: dict[str, np.ndarray], kind: str) -> tup
 
 
 def load_trace(path: str | os.PathLike, *, position: str, input: str, time: str | None = None,
-               sample_time: float | None = None, input_gain: float = 1.0) -> Trace:
+               sample_time: float | None = None, input_gain: float = 1.0, time_unit: str = "s",
+               position_unit: str = "m", input_unit: str | None = None, resolution: float | None = None,
+               rotary: bool = False, delimiter: str | None = None) -> Trace:
     """Load a measured trace from a CSV or MATLAB ``.mat`` file.
 
     Parameters
     ----------
     path : str or path-like
-        A ``.csv`` file (UTF-8, a header row of column names, then numeric rows) or a
-        ``.mat`` file (read with ``scipy.io.loadmat``; variables are columns).
+        A ``.csv`` file (UTF-8; ``#`` comment lines anywhere; a header row of column names, then
+        numeric rows, split by ``delimiter``) or a ``.mat`` file (read with ``scipy.io.loadmat``;
+        variables are columns).
     position : str
-        Column or variable holding the displacement [m].
+        Column or variable holding the displacement, in ``position_unit``.
     input : str
-        Column or variable holding the actuator input; times ``input_gain`` gives [N].
+        Column or variable holding the actuator input, in ``input_unit``; times ``input_gain``
+        gives the force [N] (the torque [N m] of a rotary axis).
     time : str, optional
-        Column or variable holding the time [s].
+        Column or variable holding the time, in ``time_unit``.
     sample_time : float, optional
-        Sample time [s]. At least one of ``time`` and ``sample_time`` is required; with
-        both, the time column is used if its mean step agrees within 1 %.
+        Sample time [s] (always seconds). At least one of ``time`` and ``sample_time`` is required;
+        with both, the time column is used if its mean step agrees within 1 %.
     input_gain : float
         Conversion of the logged input to force [N/unit], e.g. the actuator gain
         35.15065188 N/V of the EMPS benchmark whose input is a voltage. Negative values
         (a sign convention) are allowed (an identification that comes out with a negative
         mass then warns to check the sign); 0, NaN and infinity are refused.
+    time_unit : {'s', 'ms', 'us'}
+    position_unit : {'m', 'mm', 'um', 'counts', 'rad'}
+        ``rad``: a rotary axis (inertia kg m^2, torque N m); ``counts`` needs ``resolution``.
+    input_unit : {'V', 'A', 'N', 'N m'}, optional
+        The logged input's unit, named in the identification and the config (default: the force
+        unit when ``input_gain`` is 1, else ``V``).
+    resolution : float, optional
+        Size of one encoder count [m, or rad with ``rotary``], with ``position_unit='counts'``.
+    rotary : bool
+        A rotary axis with the position in counts (``rad`` implies it).
+    delimiter : {',', ';', 'tab', 'space', '|'}, optional
+        The CSV delimiter; default: detected from the header and the first row.
 
     Returns
     -------
@@ -410,33 +407,39 @@ def load_trace(path: str | os.PathLike, *, position: str, input: str, time: str 
         if name is not None and name == {"position": position, "input": input}[other]:
             raise ValueError(f"{param}: expected a column other than the {other} column, found {name!r} for both")
     gain = _check_gain(input_gain)
+    units = Units(time=time_unit, position=position_unit, input=input_unit, resolution=resolution, rotary=rotary)
+    delimiter = parse_delimiter(delimiter)
+    if ext == ".mat" and delimiter is not None:
+        raise ValueError(f"delimiter: expected None for a .mat file (it has no delimiter), found {delimiter!r}")
     step = None if sample_time is None else check_sample_time(
         "sample_time", _check_positive("sample_time", sample_time), "sample_time")
     if time is None and step is None:
         raise ValueError("time, sample_time: expected a time column name or a sample time [s], found neither")
     if not p.is_file():
         raise ValueError(f"path: expected an existing file, found {str(p)!r}")
-    table = _read_csv(p) if ext == ".csv" else _read_mat(p)
+    table = read_csv(p, delimiter) if ext == ".csv" else _read_mat(p)
     kind = "column" if ext == ".csv" else "variable"
 
     x_raw, x_label = _pick("position", position, table, kind)
     u_raw, u_label = _pick("input", input, table, kind)
-    x = _check_column("position", x_label, x_raw)
+    x_logged = _check_column("position", x_label, x_raw)
+    x = x_logged * units.position_scale
     u = _check_column("input", u_label, u_raw)
     if u.size != x.size:
         raise ValueError(f"input: expected {x.size} samples like {x_label}, found {u.size} in {u_label}")
-    if np.array_equal(x, u):
+    if np.array_equal(x_logged, u):
         raise ValueError(f"input: expected the actuator input, found in {u_label} the same data as in {x_label}")
     if float(np.max(np.abs(u))) * abs(gain) > MAX_MAGNITUDE:
         raise ValueError(f"input_gain: expected |input_gain x input| <= {MAX_MAGNITUDE:g} N, found "
                          f"{float(np.max(np.abs(u))) * abs(gain):g} N (input_gain = {gain:g}, {u_label})")
     if time is not None:
         t_raw, t_label = _pick("time", time, table, kind)
-        t = _check_column("time", t_label, t_raw)
+        t_logged = _check_column("time", t_label, t_raw)
+        t = t_logged * units.time_scale
         if t.size != x.size:
             raise ValueError(f"time: expected {x.size} samples like {x_label}, found {t.size} in {t_label}")
-        for other, label in ((x, x_label), (u, u_label)):
-            if np.array_equal(t, other):
+        for other, label in ((x_logged, x_label), (u, u_label)):
+            if np.array_equal(t_logged, other):
                 raise ValueError(f"time: expected the time base, found in {t_label} the same data as in {label}")
         t_step = _check_time(t, t_label)
         if step is not None and abs(t_step - step) > JITTER_TOLERANCE * step:
@@ -446,4 +449,4 @@ def load_trace(path: str | os.PathLike, *, position: str, input: str, time: str 
     else:
         t = np.arange(x.size) * step
     return Trace(t=t, position=x, force=gain * u, sample_time=step, source=p.name,
-                 names={"position": position, "input": input, "time": time}, input_gain=gain)
+                 names={"position": position, "input": input, "time": time}, input_gain=gain, units=units)
