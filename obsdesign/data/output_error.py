@@ -1,0 +1,448 @@
+"""Dynamic friction by output error: pre-sliding ``s``, LuGre/GMS parameters and a sensor delay.
+
+:func:`refine` simulates the plant under the logged force over windows of the record (each from
+its own initial state, :mod:`obsdesign.data.oe_plant`) and fits the chosen parameters to the logged
+position with :func:`scipy.optimize.least_squares`; the rest come from :func:`~obsdesign.data.identify`.
+Intervals come from the Jacobian at the optimum, with the windows as independent clusters of
+correlated residuals; a parameter whose direction the data do not resolve is flagged
+``identifiable = False`` with the reason. See docs/measured-data.md ("Dynamic friction by output error").
+
+Examples
+--------
+>>> sorted(refinable("paper"))
+['Cf', 'delay', 'm', 'offset', 's', 'sigma']
+>>> refinable("lugre")[-4:]
+('sigma0', 'sigma1', 'm', 'delay')
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..friction.registry import FRICTION_MODELS
+from .identify import Identification
+from .oe_plant import PAPER_LAYOUT, select_windows, simulate_windows
+from .trace import Trace
+
+__all__ = ["RefinedParameter", "Refinement", "refine", "refinable", "MODELS", "NEAR_NULL", "TRAVEL", "WINDOW"]
+
+#: Plant friction models the refinement simulates (Dahl is the paper's shape without a memory: not offered).
+MODELS = ("paper", "lugre", "gms")
+#: Default travel [m] after which the friction is taken as saturated (the windows start beyond it).
+TRAVEL = 1e-3
+#: Default time [s] a window starts before its first reversal and runs on after the sliding resumes.
+WINDOW = 0.05
+#: A direction of the scaled Jacobian whose singular value is below this fraction of the largest is null.
+NEAR_NULL = 1e-4
+#: Largest half-width of the 95 % interval of ln(p) for a positive parameter to count as identified.
+MAX_LOG_HALF_WIDTH = 0.5
+_PLANT = {"m": ("kg", "mass"), "delay": ("s", "sensor delay: the position is measured at t - delay")}
+_SKIP = ("Cf_neg", "sigma_neg", "N", "beta")
+
+
+def refinable(model: str) -> tuple[str, ...]:
+    """Names :func:`refine` can fit for a plant friction ``model`` (of :data:`MODELS`)."""
+    info = FRICTION_MODELS[_check_model(model)]
+    names = tuple(n for n in info.scalar_parameters() if n not in _SKIP)
+    if "offset" not in names:
+        names += ("offset",)
+    return names + ("m", "delay")
+
+
+def _check_model(model: object) -> str:
+    if not isinstance(model, str) or model not in MODELS:
+        raise ValueError(f"model: expected one of {', '.join(MODELS)}, found {model!r}")
+    return model
+
+
+@dataclass(frozen=True, kw_only=True)
+class RefinedParameter:
+    """One refined parameter.
+
+    Attributes
+    ----------
+    name, unit : str
+        Its name (of :func:`refinable`) and unit.
+    value, initial : float
+        The estimate and the starting value.
+    std : float
+        Standard error (``inf`` in a near-null direction); for a positive parameter, of ``ln(value)``
+        times ``value``.
+    low, high : float
+        The 95 % interval (``-inf``/``inf`` when not resolved).
+    identifiable : bool
+        Whether the data resolve it (interval narrow enough, not at a bound, not in a null direction).
+    note : str
+        Why not, or ``""``.
+    """
+
+    name: str
+    unit: str
+    value: float
+    initial: float
+    std: float
+    low: float
+    high: float
+    identifiable: bool
+    note: str = ""
+
+
+@dataclass(frozen=True, kw_only=True)
+class Refinement:
+    """Result of :func:`refine`.
+
+    Attributes
+    ----------
+    model : str
+        The plant friction model simulated.
+    parameters : tuple of RefinedParameter
+        The refined parameters, in the order asked.
+    fixed : dict
+        The values held, by name (from the identification and the model's defaults).
+    windows, reversals, samples : int
+        Windows simulated, reversals inside them, residual samples.
+    rms_initial, rms : float
+        RMS of measured minus simulated position [m] before and after the fit.
+    condition_number : float
+        Of the scaled Jacobian of the refined parameters (initial states of the windows projected out).
+    evaluations : int
+        Simulations of all windows (the fit and its Jacobians, the start scan).
+    wall_time : float
+        Seconds.
+    """
+
+    model: str
+    parameters: tuple[RefinedParameter, ...]
+    fixed: dict
+    windows: int
+    reversals: int
+    samples: int
+    rms_initial: float
+    rms: float
+    condition_number: float
+    evaluations: int
+    wall_time: float
+
+    def __getitem__(self, name: str) -> RefinedParameter:
+        for p in self.parameters:
+            if p.name == name:
+                return p
+        raise KeyError(f"{name!r} was not refined; refined: {', '.join(p.name for p in self.parameters)}")
+
+    def to_dict(self) -> dict:
+        """JSON-ready: ``model, windows, reversals, samples, rms_initial, rms, condition_number, evaluations,
+        wall_time`` and ``parameters`` (name -> ``value, initial, std, low, high, unit, identifiable, note``)."""
+        out = {k: getattr(self, k) for k in ("model", "windows", "reversals", "samples", "rms_initial", "rms",
+                                             "condition_number", "evaluations", "wall_time")}
+        out["parameters"] = {p.name: {k: getattr(p, k) for k in ("value", "initial", "std", "low", "high", "unit",
+                                                                 "identifiable", "note")} for p in self.parameters}
+        return out
+
+    def apply(self, ident: Identification) -> Identification:
+        """``ident`` with a refined, identifiable ``s`` (its ``s_note`` saying so); otherwise unchanged."""
+        if "s" not in {p.name for p in self.parameters} or not self["s"].identifiable:
+            return ident
+        p = self["s"]
+        return replace(ident, s=p.value, s_note=f"output error over {self.windows} windows ({self.reversals} "
+                                                f"reversals): 95 % interval {p.low:.4g} to {p.high:.4g} 1/m")
+
+    def __str__(self) -> str:
+        lines = [f"Output-error refinement ({self.model}): {self.windows} windows, {self.reversals} reversals, "
+                 f"{self.samples} samples; RMS position error {self.rms_initial:.3g} -> {self.rms:.3g} m; "
+                 f"condition number {self.condition_number:.3g}"]
+        for p in self.parameters:
+            verdict = "identifiable" if p.identifiable else f"NOT identifiable: {p.note}"
+            lines.append(f"  {p.name:<8} {p.value:.5g} {p.unit}  95 % [{p.low:.4g}, {p.high:.4g}]  "
+                         f"(start {p.initial:.4g})  {verdict}")
+        return "\n".join(lines)
+
+
+class _Problem:
+    """The parameter vector ``[globals..., (dx0, dv0) per window]`` and the residual."""
+
+    def __init__(self, trace, ident, model, names, initial, travel, window, substeps):
+        from scipy import signal
+
+        self.trace, self.model, self.names = trace, model, tuple(names)
+        self.dt = dt = trace.sample_time
+        fs = 1.0 / dt
+        sos = signal.butter(4, 0.1 * fs, fs=fs, output="sos")
+        x_f = signal.sosfiltfilt(sos, trace.position)
+        v_f = np.gradient(x_f, dt)
+        scale = max(ident.noise_rms, ident.quantization / math.sqrt(12.0), 1e-12)
+        n_win = max(1, int(round(window / dt)))
+        skip = int(math.ceil(50.0))
+        self.starts, self.lengths, self.reversals = select_windows(
+            x_f, threshold=max(5.0 * ident.noise_rms, 2.0 * ident.quantization, 1e-9), travel=travel,
+            lead=n_win, tail=n_win, skip=skip)
+        self.x0, self.v0 = x_f[self.starts], v_f[self.starts]
+        self.scale, self.travel, self.substeps = scale, travel, substeps
+        self.values = self._base(ident, initial)
+        self.rows = np.concatenate([np.arange(s, s + n) for s, n in zip(self.starts, self.lengths)]) \
+            if self.starts.size else np.empty(0, np.int64)
+        self.meas = trace.position[self.rows]
+        self.out = np.empty(self.rows.size)
+        self.evaluations = 0
+
+    def _base(self, ident, initial):
+        asym = ident.model == "asymmetric"
+        q = {"m": ident.m, "offset": ident.offset, "delay": 0.0,
+             "Cf": ident.Cf_pos if asym else ident.Cf, "Cf_neg": ident.Cf_neg if asym else ident.Cf,
+             "sigma": ident.sigma_pos if asym else ident.sigma, "sigma_neg": ident.sigma_neg if asym else ident.sigma}
+        if self.model == "paper":
+            q.update(s=ident.s if ident.s is not None else 1.0 / (0.1 * self.travel), beta=0.0, kappa=1.0)
+        else:
+            info = FRICTION_MODELS[self.model]
+            q.update({k: v for k, v in info.defaults().items() if k not in q})
+            q["Fs"] = q["Cf"]  # the static fit has no Stribeck term: start without one
+        for k, v in (initial or {}).items():
+            q[k] = float(v)
+        return q
+
+    # -- parameter transforms ------------------------------------------------------------------
+    def spec(self, name):
+        """``(unit, low, high, log)`` of a refined name."""
+        if name == "m":
+            return "kg", 1e-9, 1e9, True
+        if name == "delay":
+            return "s", 0.0, 10.0 * self.dt, False
+        if name == "offset":
+            return "N", -1e6, 1e6, False
+        info = FRICTION_MODELS[self.model]
+        spec = {p.name: p for p in info.parameters}[name]
+        low = spec.low
+        if name == "s":
+            low = max(low, 1.0 / self.travel)
+        return spec.unit, low, spec.high, low > 0
+
+    def to_theta(self, name, value):
+        return math.log(value) if self.spec(name)[3] else value
+
+    def from_theta(self, name, theta):
+        return math.exp(theta) if self.spec(name)[3] else theta
+
+    def pack(self, q):
+        if self.model == "paper":
+            return np.array([q[k] for k in PAPER_LAYOUT], dtype=np.float64)
+        info = FRICTION_MODELS[self.model]
+        given = {p.name for p in info.parameters}
+        return info.pack({k: v for k, v in q.items() if k in given})
+
+    # -- simulation ----------------------------------------------------------------------------
+    def simulate(self, q, dx0, dv0):
+        self.evaluations += 1
+        code = FRICTION_MODELS.code(self.model)
+        ok = simulate_windows(code, self.pack(q), self.trace.force, self.starts, self.lengths, self.x0 + dx0,
+                              self.v0 + dv0, q["m"], self.dt, self.substeps, self.travel, self.out)
+        x = self.out.copy()
+        delay = q["delay"] / self.dt
+        if delay > 0.0:
+            k, f = int(math.floor(delay)), delay - math.floor(delay)
+            pos = 0
+            for n in self.lengths:
+                seg = x[pos:pos + n].copy()
+                for j in range(n):
+                    a, b = max(j - k, 0), max(j - k - 1, 0)
+                    x[pos + j] = (1.0 - f) * seg[a] + f * seg[b]
+                pos += n
+        return x, ok
+
+    def residual(self, p):
+        g = len(self.names)
+        q = dict(self.values)
+        for name, theta in zip(self.names, p[:g]):
+            q[name] = self.from_theta(name, theta)
+        w = self.starts.size
+        dx0 = p[g:g + w] * self.scale
+        dv0 = p[g + w:g + 2 * w] * self.scale / self.dt
+        x, ok = self.simulate(q, dx0, dv0)
+        r = (self.meas - x) / self.scale
+        return np.where(np.isfinite(r), r, 1e6)
+
+
+def refine(trace: Trace, ident: Identification, *, parameters: tuple[str, ...] = ("s",), model: str = "paper",
+           initial: dict | None = None, travel: float = TRAVEL, window: float = WINDOW,
+           substeps: int = 10) -> Refinement:
+    """Refine dynamic friction parameters (and a sensor delay) by output error against the logged position.
+
+    Parameters
+    ----------
+    trace : Trace
+        The record (open or closed loop: the logged force is the input the plant received).
+    ident : Identification
+        The static fit of the same trace (:func:`obsdesign.data.identify`): mass, viscous and Coulomb
+        friction, offset, noise level; the values not refined are held at it.
+    parameters : tuple of str
+        Names of :func:`refinable` for ``model``.
+    model : {'paper', 'lugre', 'gms'}
+        The plant friction model: the paper's pre-sliding memory (eq:2:3:1-2:3:5, static viscous
+        friction), LuGre or GMS (:mod:`obsdesign.friction`).
+    initial : dict, optional
+        Starting values by name (default: the identification, ``s`` from it or scanned, the model's
+        registry defaults, ``Fs = Cf``, delay 0).
+    travel : float
+        Travel [m] after which the friction is saturated: windows start and end that far into a
+        gross-sliding stroke, and ``s >= 1/travel``.
+    window : float
+        Time [s] a window starts before its reversal and runs on after the friction saturated.
+    substeps : int
+        Heun substeps of the plant per sample.
+
+    Returns
+    -------
+    Refinement
+
+    Raises
+    ------
+    ValueError
+        An unknown model or parameter, a bad travel/window/substeps, a record with no window.
+
+    Notes
+    -----
+    Residual: ``(x_meas - x_sim) / eta`` on every sample of every window, ``eta`` the identification's
+    noise RMS (at least the quantization's ``q / sqrt 12``). Per window the initial displacement and
+    velocity are fitted too (2 nuisance parameters; ``jac_sparsity`` keeps the finite-difference
+    Jacobian at ``len(parameters) + 2`` simulations). Positive parameters are fitted as ``ln p``. A
+    fitted ``s`` starts from the best of a log-spaced scan over ``[1/travel, 1e7]``.
+
+    Covariance of the refined parameters, after projecting out each window's nuisance columns
+    (``J_w``): ``A^-1 B A^-1 G/(G-1)`` with ``A = sum J_w' J_w`` and ``B = sum (J_w' r_w)(J_w' r_w)'``
+    over the ``G`` windows (residuals correlated within a window, independent between windows); the
+    larger of it and the white-noise ``s^2 A^-1`` is used, with Student's t on ``G - 1`` degrees of freedom.
+    """
+    from scipy import optimize, sparse, stats
+
+    t_start = time.perf_counter()
+    if not isinstance(trace, Trace):
+        raise TypeError(f"trace: expected a Trace, found {type(trace).__name__}")
+    if not isinstance(ident, Identification):
+        raise TypeError(f"ident: expected an Identification (obsdesign.data.identify), found {type(ident).__name__}")
+    model = _check_model(model)
+    names = tuple(parameters) if not isinstance(parameters, str) else (parameters,)
+    allowed = refinable(model)
+    if not names or len(set(names)) != len(names) or any(n not in allowed for n in names):
+        raise ValueError(f"parameters: expected distinct names of {', '.join(allowed)} (model {model!r}), "
+                         f"found {', '.join(map(str, names)) or 'none'}")
+    for label, value, high in (("travel", travel, 1.0), ("window", window, 100.0)):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value <= high:
+            raise ValueError(f"{label}: expected a number in (0, {high:g}], found {value!r}")
+    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or not 1 <= substeps <= 1000:
+        raise ValueError(f"substeps: expected an integer in [1, 1000], found {substeps!r}")
+    prob = _Problem(trace, ident, model, names, initial, float(travel), float(window), int(substeps))
+    if prob.starts.size == 0:
+        raise ValueError(f"trace: no window to simulate: expected a reversal between strokes of gross sliding "
+                         f"longer than travel = {travel:g} m, found none in {trace.source!r}")
+    g, w = len(names), prob.starts.size
+    if "s" in names and (initial is None or "s" not in initial):
+        prob.values["s"] = _scan_s(prob, g, w)
+    theta0 = np.array([prob.to_theta(n, prob.values[n]) for n in names] + [0.0] * (2 * w))
+    bounds = [(prob.to_theta(n, prob.spec(n)[1]) if prob.spec(n)[3] else prob.spec(n)[1],
+               prob.to_theta(n, prob.spec(n)[2])) for n in names]
+    lo = np.array([b[0] for b in bounds] + [-np.inf] * (2 * w))
+    hi = np.array([b[1] for b in bounds] + [np.inf] * (2 * w))
+    theta0[:g] = np.clip(theta0[:g], lo[:g] + 1e-9 * (1 + abs(lo[:g])), hi[:g] - 1e-9 * (1 + abs(hi[:g])))
+    pattern = _sparsity(prob, g, w)
+    r0 = prob.residual(theta0)
+    fit = optimize.least_squares(prob.residual, theta0, jac_sparsity=pattern, bounds=(lo, hi), x_scale="jac",
+                                 diff_step=1e-6, method="trf", max_nfev=60 * (g + 2))
+    J = sparse.csr_matrix(fit.jac)
+    r = fit.fun
+    A, B, rss, cond = _moments(prob, J, r, g, w)
+    dof = max(r.size - g - 2 * w, 1)
+    white = rss / dof * _pinv(A)
+    cluster = w / max(w - 1, 1) * _pinv(A) @ B @ _pinv(A)
+    var = np.maximum(np.diag(white), np.diag(cluster))
+    null = _null_loadings(A)
+    tq = float(stats.t.ppf(0.975, max(w - 1, 1)))
+    out = []
+    for i, name in enumerate(names):
+        unit, low, high, log = prob.spec(name)
+        theta = float(fit.x[i])
+        value = prob.from_theta(name, theta)
+        sd = math.sqrt(var[i]) if math.isfinite(var[i]) else math.inf
+        half = tq * sd
+        note = ""
+        at_bound = fit.active_mask[i] != 0
+        if null[i]:
+            note = f"in a near-null direction of the Jacobian (singular value below {NEAR_NULL:g} of the largest)"
+            half = sd = math.inf
+        elif at_bound:
+            note = f"at the bound of its range [{low:g}, {high:g}] {unit}"
+        elif log and half > MAX_LOG_HALF_WIDTH:
+            note = f"95 % interval wider than a factor {math.exp(MAX_LOG_HALF_WIDTH):.2f} either way"
+        elif not log and name == "delay" and half > prob.dt:
+            note = "95 % interval wider than one sample"
+        elif not log and name != "delay" and half > abs(value):
+            note = "95 % interval includes 0"
+        lo_v, hi_v = ((math.exp(theta - half), math.exp(theta + half)) if log else (theta - half, theta + half)) \
+            if math.isfinite(half) else (-math.inf, math.inf)
+        out.append(RefinedParameter(name=name, unit=unit, value=value, initial=float(prob.values[name]),
+                                    std=sd * (value if log else 1.0), low=lo_v, high=hi_v,
+                                    identifiable=not note, note=note))
+    fixed = {k: v for k, v in prob.values.items() if k not in names}
+    return Refinement(model=model, parameters=tuple(out), fixed=fixed, windows=w, reversals=int(prob.reversals),
+                      samples=int(r.size), rms_initial=float(np.sqrt(np.mean(r0**2))) * prob.scale,
+                      rms=float(np.sqrt(np.mean(r**2))) * prob.scale, condition_number=cond,
+                      evaluations=prob.evaluations, wall_time=time.perf_counter() - t_start)
+
+
+def _scan_s(prob: _Problem, g: int, w: int) -> float:
+    """The ``s`` of least cost on a log grid (the others at their start), the start of the fit."""
+    low, high = prob.spec("s")[1:3]
+    best, best_cost = prob.values["s"], math.inf
+    for s in np.geomspace(low * 1.01, high / 1.01, 15):
+        prob.values["s"] = float(s)
+        theta = np.array([prob.to_theta(n, prob.values[n]) for n in prob.names] + [0.0] * (2 * w))
+        cost = float(np.sum(prob.residual(theta) ** 2))
+        if cost < best_cost:
+            best, best_cost = float(s), cost
+    return best
+
+
+def _sparsity(prob: _Problem, g: int, w: int):
+    """Jacobian pattern: every row depends on the globals and on its own window's two initial values."""
+    from scipy import sparse
+
+    n = prob.rows.size
+    win = np.repeat(np.arange(w), prob.lengths)
+    rows = np.concatenate([np.repeat(np.arange(n), g), np.arange(n), np.arange(n)])
+    cols = np.concatenate([np.tile(np.arange(g), n), g + win, g + w + win])
+    return sparse.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(n, g + 2 * w))
+
+
+def _moments(prob: _Problem, J, r, g: int, w: int):
+    """``A``, ``B`` of the refined parameters (nuisance projected out per window), the RSS, the condition."""
+    A = np.zeros((g, g))
+    B = np.zeros((g, g))
+    pos = 0
+    for i, n in enumerate(prob.lengths):
+        block = J[pos:pos + n].toarray()
+        Jg, Jn = block[:, :g], block[:, [g + i, g + w + i]]
+        Jp = Jg - Jn @ np.linalg.lstsq(Jn, Jg, rcond=None)[0]
+        A += Jp.T @ Jp
+        score = Jp.T @ r[pos:pos + n]
+        B += np.outer(score, score)
+        pos += n
+    d = np.sqrt(np.maximum(np.diag(A), 1e-300))
+    sv = np.linalg.svd(A / np.outer(d, d), compute_uv=False)
+    cond = float(math.sqrt(sv[0] / sv[-1])) if sv[-1] > 0 else math.inf
+    return A, B, float(r @ r), cond
+
+
+def _pinv(A: np.ndarray) -> np.ndarray:
+    d = np.sqrt(np.maximum(np.diag(A), 1e-300))
+    return np.linalg.pinv(A / np.outer(d, d), rcond=NEAR_NULL**2) / np.outer(d, d)
+
+
+def _null_loadings(A: np.ndarray) -> np.ndarray:
+    """Per parameter: whether it loads (|component| > 0.3) on a near-null direction of the scaled Jacobian."""
+    d = np.sqrt(np.maximum(np.diag(A), 1e-300))
+    if not np.all(np.diag(A) > 0):
+        return ~(np.diag(A) > 0)
+    u, sv, _ = np.linalg.svd(A / np.outer(d, d))
+    small = np.sqrt(sv) < NEAR_NULL * math.sqrt(sv[0])
+    return np.any(np.abs(u[:, small]) > 0.3, axis=1) if np.any(small) else np.zeros(A.shape[0], bool)
