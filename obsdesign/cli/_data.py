@@ -7,6 +7,7 @@ from pathlib import Path
 
 from ..params import preset_names
 from ..sampled.choices import SCHEDULES
+from ._dynamic import add_refine_flags, refine_from_args
 from ._common import FINITE_ARG, INPUT_FILE, POSITIVE_ARG, UsageError, check_output_file, emit
 
 __all__ = ["add_commands", "add_trace_flags", "load_trace_args"]
@@ -52,11 +53,12 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     check_output_file("identify", "-o/--output", args.output, (".toml",))
     trace = load_trace_args(args, args.data)
     ident = identify(trace, model="asymmetric" if args.asymmetric else "coulomb-viscous")
+    ident, refined = refine_from_args(args, trace, ident)
     if args.output:
         stem = Path(args.data).stem
         name = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in stem) or "identified"
         ident.to_config(name=name).save(args.output)
-    emit(args, ident, ident.to_dict())
+    emit(args, ident, dict(ident.to_dict(), **({"refinement": refined} if refined else {})))
     return 0
 
 
@@ -91,6 +93,7 @@ def add_commands(sub) -> None:
     p.add_argument("data", metavar="DATA", type=INPUT_FILE, help="measured record (.csv with a header row, or .mat)")
     add_trace_flags(p)
     p.add_argument("--asymmetric", action="store_true", help="separate viscous and Coulomb terms per direction")
+    add_refine_flags(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("-o", "--output", metavar="FILE.toml", help="write the identified design config")
     p.set_defaults(run=_cmd_identify)
