@@ -10,7 +10,13 @@ __all__ = ["add_refine_flags", "refine_from_args", "add_commands"]
 
 
 def add_refine_flags(p: argparse.ArgumentParser) -> None:
-    """``--refine NAMES`` and ``--refine-model MODEL`` of ``identify``."""
+    """``--refine NAMES`` and ``--refine-model MODEL`` of ``identify``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The ``identify`` parser.
+    """
     from ..data.output_error import MODELS
 
     p.add_argument("--refine", metavar="NAMES",
@@ -20,7 +26,17 @@ def add_refine_flags(p: argparse.ArgumentParser) -> None:
 
 
 def refine_from_args(args: argparse.Namespace, trace, ident):
-    """``(ident, payload)``: ``ident`` with a refined ``s`` and the refinement's JSON (``None`` without ``--refine``)."""
+    """``(ident, payload)``: ``ident`` with a refined ``s`` and the refinement's JSON (``None`` without ``--refine``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed ``identify`` arguments.
+    trace : Trace
+        The record.
+    ident : Identification
+        Its static fit.
+    """
     if args.refine is None:
         return ident, None
     from ..data.output_error import refinable, refine
@@ -60,7 +76,13 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
 
 
 def add_commands(sub) -> None:
-    """Add ``experiment`` to the subparsers ``sub``."""
+    """Add ``experiment`` to the subparsers ``sub``.
+
+    Parameters
+    ----------
+    sub : argparse subparsers
+        The subcommands of ``obsdesign``.
+    """
     p = sub.add_parser("experiment", help="write a reference trajectory that makes the friction identifiable")
     p.add_argument("--stroke", type=POSITIVE_ARG, required=True, metavar="M", help="usable travel [m]")
     p.add_argument("--speed", type=POSITIVE_ARG, required=True, metavar="V", help="largest speed [m/s]")

@@ -90,7 +90,13 @@ class Experiment:
                 "expected": {k: dict(v) for k, v in self.expected.items()}}
 
     def to_csv(self, path) -> None:
-        """Write ``t, x_ref, v_ref`` (SI units, header row) atomically."""
+        """Write ``t, x_ref, v_ref`` (SI units, header row) atomically.
+
+        Parameters
+        ----------
+        path : str or PathLike
+            The CSV file.
+        """
         t = np.arange(self.x_ref.size) * self.dt
         rows = "\n".join(f"{a:.9g},{b:.12g},{c:.12g}" for a, b, c in zip(t, self.x_ref, self.v_ref))
         atomic_write(path, "t,x_ref,v_ref\n" + rows + "\n")
@@ -98,8 +104,10 @@ class Experiment:
     def c_source(self, name: str = "obsdesign_experiment") -> str:
         """A C source defining ``const double NAME[N]`` (positions [m]) and ``NAME_dt``.
 
-        ``name`` must be a C identifier (:data:`C_NAME`), so no user text reaches the file
-        otherwise.
+        Parameters
+        ----------
+        name : str
+            The array's name: a C identifier (:data:`C_NAME`), so no other user text reaches the file.
 
         Examples
         --------
@@ -121,7 +129,15 @@ class Experiment:
                 f"const double {name}[{self.x_ref.size}] = {{\n{body}\n}};\n")
 
     def to_c(self, path, name: str = "obsdesign_experiment") -> None:
-        """Write :meth:`c_source` atomically."""
+        """Write :meth:`c_source` atomically.
+
+        Parameters
+        ----------
+        path : str or PathLike
+            The C file.
+        name : str
+            The array's name (:meth:`c_source`).
+        """
         atomic_write(path, self.c_source(name))
 
     def __str__(self) -> str:

@@ -111,6 +111,15 @@ def simulate_windows(code, pp, force, starts, lengths, x0, v0, m, dt, n_sub, run
 def extremes(x, threshold):
     """Indices of the start, the alternating turning points of ``x`` and the end.
 
+    Parameters
+    ----------
+    x : ndarray
+        Displacement [m].
+    threshold : float
+        Back-travel [m] that confirms a turning point.
+
+    Notes
+    -----
     A turning point is accepted once ``x`` has come back from it by more than ``threshold``
     (the hysteresis of the observer's ``estimated`` schedule), so noise does not count.
     """
@@ -137,6 +146,21 @@ def select_windows(x_f: np.ndarray, *, threshold: float, travel: float, lead: in
                    skip: int) -> tuple[np.ndarray, np.ndarray, int]:
     """Windows ``(starts, lengths, reversals)`` of a filtered displacement ``x_f``.
 
+    Parameters
+    ----------
+    x_f : ndarray
+        Zero-phase filtered displacement [m].
+    threshold : float
+        Hysteresis [m] of the turning points (:func:`extremes`).
+    travel : float
+        Travel [m] that makes a stroke gross (the friction saturated).
+    lead, tail : int
+        Samples a window starts before its stroke's end, and runs on after the friction saturated again.
+    skip : int
+        Samples left out at both ends of the record.
+
+    Notes
+    -----
     A stroke (between turning points, :func:`extremes`) is *gross* when it travels more than
     ``travel`` [m]. A window starts in a gross stroke that is followed by a reversal, where it has
     travelled ``travel`` and at most ``lead`` samples before its end; it runs through the strokes

@@ -30,8 +30,9 @@ from .trace import Trace
 
 __all__ = ["RefinedParameter", "Refinement", "refine", "refinable", "MODELS", "NEAR_NULL", "TRAVEL", "WINDOW"]
 
-#: Plant friction models the refinement simulates (Dahl is the paper's shape without a memory: not offered).
-MODELS = ("paper", "lugre", "gms")
+#: Plant friction models the refinement simulates: the registry's, less Dahl (the paper's pre-sliding shape
+#: without its Stribeck or memory parameters: nothing the paper model does not already fit).
+MODELS = tuple(name for name in FRICTION_MODELS.names() if name != "dahl")
 #: Default travel [m] after which the friction is taken as saturated (the windows start beyond it).
 TRAVEL = 1e-3
 #: Default time [s] a window starts before its first reversal and runs on after the sliding resumes.
@@ -40,12 +41,20 @@ WINDOW = 0.05
 NEAR_NULL = 1e-4
 #: Largest half-width of the 95 % interval of ln(p) for a positive parameter to count as identified.
 MAX_LOG_HALF_WIDTH = 0.5
+#: Relative finite-difference step of the Jacobian (the branch switches make a much smaller one noisy).
+DIFF_STEP = 1e-4
 _PLANT = {"m": ("kg", "mass"), "delay": ("s", "sensor delay: the position is measured at t - delay")}
 _SKIP = ("Cf_neg", "sigma_neg", "N", "beta")
 
 
 def refinable(model: str) -> tuple[str, ...]:
-    """Names :func:`refine` can fit for a plant friction ``model`` (of :data:`MODELS`)."""
+    """Names :func:`refine` can fit for a plant friction ``model``.
+
+    Parameters
+    ----------
+    model : str
+        A name of :data:`MODELS`.
+    """
     info = FRICTION_MODELS[_check_model(model)]
     names = tuple(n for n in info.scalar_parameters() if n not in _SKIP)
     if "offset" not in names:
@@ -143,7 +152,13 @@ class Refinement:
         return out
 
     def apply(self, ident: Identification) -> Identification:
-        """``ident`` with a refined, identifiable ``s`` (its ``s_note`` saying so); otherwise unchanged."""
+        """``ident`` with a refined, identifiable ``s`` (its ``s_note`` saying so); otherwise unchanged.
+
+        Parameters
+        ----------
+        ident : Identification
+            The static fit the refinement started from.
+        """
         if "s" not in {p.name for p in self.parameters} or not self["s"].identifiable:
             return ident
         p = self["s"]
@@ -225,6 +240,14 @@ class _Problem:
     def from_theta(self, name, theta):
         return math.exp(theta) if self.spec(name)[3] else theta
 
+    def assign(self, q, values):
+        """``q`` with ``values`` set; ``Cf`` and ``sigma`` move their negative-side values in proportion."""
+        for name, value in values.items():
+            if name in ("Cf", "sigma"):
+                q[name + "_neg"] = value * self.values[name + "_neg"] / self.values[name]
+            q[name] = value
+        return q
+
     def pack(self, q):
         if self.model == "paper":
             return np.array([q[k] for k in PAPER_LAYOUT], dtype=np.float64)
@@ -253,9 +276,7 @@ class _Problem:
 
     def residual(self, p):
         g = len(self.names)
-        q = dict(self.values)
-        for name, theta in zip(self.names, p[:g]):
-            q[name] = self.from_theta(name, theta)
+        q = self.assign(dict(self.values), {n: self.from_theta(n, t) for n, t in zip(self.names, p[:g])})
         w = self.starts.size
         dx0 = p[g:g + w] * self.scale
         dv0 = p[g + w:g + 2 * w] * self.scale / self.dt
@@ -278,8 +299,8 @@ def refine(trace: Trace, ident: Identification, *, parameters: tuple[str, ...] =
         friction, offset, noise level; the values not refined are held at it.
     parameters : tuple of str
         Names of :func:`refinable` for ``model``.
-    model : {'paper', 'lugre', 'gms'}
-        The plant friction model: the paper's pre-sliding memory (eq:2:3:1-2:3:5, static viscous
+    model : str
+        A name of :data:`MODELS`, the plant friction model: the paper's pre-sliding memory (eq:2:3:1-2:3:5, static viscous
         friction), LuGre or GMS (:mod:`obsdesign.friction`).
     initial : dict, optional
         Starting values by name (default: the identification, ``s`` from it or scanned, the model's
@@ -307,7 +328,9 @@ def refine(trace: Trace, ident: Identification, *, parameters: tuple[str, ...] =
     noise RMS (at least the quantization's ``q / sqrt 12``). Per window the initial displacement and
     velocity are fitted too (2 nuisance parameters; ``jac_sparsity`` keeps the finite-difference
     Jacobian at ``len(parameters) + 2`` simulations). Positive parameters are fitted as ``ln p``. A
-    fitted ``s`` starts from the best of a log-spaced scan over ``[1/travel, 1e7]``.
+    fitted ``s`` starts from the best of a log-spaced scan over ``[1/travel, 1e7]``. The cost is not
+    convex (a simulated window can slide onto another branch), so the parameters are freed one at a
+    time in the order given, each stage starting from the last optimum: put the best-determined first.
 
     Covariance of the refined parameters, after projecting out each window's nuisance columns
     (``J_w``): ``A^-1 B A^-1 G/(G-1)`` with ``A = sum J_w' J_w`` and ``B = sum (J_w' r_w)(J_w' r_w)'``
@@ -347,8 +370,21 @@ def refine(trace: Trace, ident: Identification, *, parameters: tuple[str, ...] =
     theta0[:g] = np.clip(theta0[:g], lo[:g] + 1e-9 * (1 + abs(lo[:g])), hi[:g] - 1e-9 * (1 + abs(hi[:g])))
     pattern = _sparsity(prob, g, w)
     r0 = prob.residual(theta0)
-    fit = optimize.least_squares(prob.residual, theta0, jac_sparsity=pattern, bounds=(lo, hi), x_scale="jac",
-                                 diff_step=1e-6, method="trf", max_nfev=60 * (g + 2))
+    theta = theta0
+    for k in range(1, g + 1):  # continuation: one more parameter free per stage, each from the last optimum
+        idx = np.r_[np.arange(k), np.arange(g, g + 2 * w)]
+
+        def fun(sub, idx=idx, base=theta):
+            full = base.copy()
+            full[idx] = sub
+            return prob.residual(full)
+
+        fit = optimize.least_squares(fun, theta[idx], jac_sparsity=pattern[:, idx], bounds=(lo[idx], hi[idx]),
+                                     x_scale="jac", diff_step=DIFF_STEP, method="trf", xtol=1e-12,
+                                     max_nfev=60 * (k + 2))
+        theta = theta.copy()
+        theta[idx] = fit.x
+    fit.x = theta
     J = sparse.csr_matrix(fit.jac)
     r = fit.fun
     A, B, rss, cond = _moments(prob, J, r, g, w)
