@@ -101,3 +101,5 @@ def test_simulated_experiment_identifies_what_it_claims():
     assert ref.windows >= 4 and ref.reversals >= 20
     assert ref["s"].identifiable and ref["s"].value == pytest.approx(3000.0, rel=0.10)
     assert ref["m"].identifiable and ref["m"].value == pytest.approx(0.538, rel=0.02)
+    for name, value in (("s", 3000.0), ("m", 0.538)):  # the intervals carry the held parameters' errors
+        assert ref[name].low <= value <= ref[name].high, name

@@ -182,7 +182,7 @@ class _Problem:
     def __init__(self, trace, ident, model, names, initial, travel, window, substeps):
         from scipy import signal
 
-        self.trace, self.model, self.names = trace, model, tuple(names)
+        self.trace, self.ident, self.model, self.names = trace, ident, model, tuple(names)
         self.dt = dt = trace.sample_time
         fs = 1.0 / dt
         sos = signal.butter(4, 0.1 * fs, fs=fs, output="sos")
@@ -326,8 +326,8 @@ def refine(trace: Trace, ident: Identification, *, parameters: tuple[str, ...] =
     -----
     Residual: ``(x_meas - x_sim) / eta`` on every sample of every window, ``eta`` the identification's
     noise RMS (at least the quantization's ``q / sqrt 12``). Per window the initial displacement and
-    velocity are fitted too (2 nuisance parameters; ``jac_sparsity`` keeps the finite-difference
-    Jacobian at ``len(parameters) + 2`` simulations). Positive parameters are fitted as ``ln p``. A
+    velocity are fitted too (2 nuisance parameters; a row depends only on its own window's, so the
+    finite-difference Jacobian costs ``len(parameters) + 2`` simulations). Positive parameters are fitted as ``ln p``. A
     fitted ``s`` starts from the best of a log-spaced scan over ``[1/travel, 1e7]``. The cost is not
     convex (a simulated window can slide onto another branch), so the parameters are freed one at a
     time in the order given, each stage starting from the last optimum: put the best-determined first.
@@ -336,8 +336,10 @@ def refine(trace: Trace, ident: Identification, *, parameters: tuple[str, ...] =
     (``J_w``): ``A^-1 B A^-1 G/(G-1)`` with ``A = sum J_w' J_w`` and ``B = sum (J_w' r_w)(J_w' r_w)'``
     over the ``G`` windows (residuals correlated within a window, independent between windows); the
     larger of it and the white-noise ``s^2 A^-1`` is used, with Student's t on ``G - 1`` degrees of freedom.
+    The held ``m, sigma, Cf, offset`` are uncertain too: their standard errors from ``ident`` are carried
+    into each refined parameter's variance through its sensitivity to them at the optimum.
     """
-    from scipy import optimize, sparse, stats
+    from scipy import optimize, stats
 
     t_start = time.perf_counter()
     if not isinstance(trace, Trace):
@@ -368,30 +370,36 @@ def refine(trace: Trace, ident: Identification, *, parameters: tuple[str, ...] =
     lo = np.array([b[0] for b in bounds] + [-np.inf] * (2 * w))
     hi = np.array([b[1] for b in bounds] + [np.inf] * (2 * w))
     theta0[:g] = np.clip(theta0[:g], lo[:g] + 1e-9 * (1 + abs(lo[:g])), hi[:g] - 1e-9 * (1 + abs(hi[:g])))
-    pattern = _sparsity(prob, g, w)
     r0 = prob.residual(theta0)
     theta = theta0
+    win = np.repeat(np.arange(w), prob.lengths)
     for k in range(1, g + 1):  # continuation: one more parameter free per stage, each from the last optimum
         idx = np.r_[np.arange(k), np.arange(g, g + 2 * w)]
 
-        def fun(sub, idx=idx, base=theta):
+        last: dict = {}
+
+        def fun(sub, idx=idx, base=theta, last=last):
             full = base.copy()
             full[idx] = sub
-            return prob.residual(full)
+            last["x"], last["f"] = sub.copy(), prob.residual(full)
+            return last["f"]
 
-        fit = optimize.least_squares(fun, theta[idx], jac_sparsity=pattern[:, idx], bounds=(lo[idx], hi[idx]),
-                                     x_scale="jac", diff_step=DIFF_STEP, method="trf", xtol=1e-12,
-                                     max_nfev=60 * (k + 2))
+        fit = optimize.least_squares(fun, theta[idx], jac=_grouped_jacobian(fun, last, k, w, win),
+                                     bounds=(lo[idx], hi[idx]), x_scale="jac", method="trf", tr_solver="exact",
+                                     xtol=1e-12, max_nfev=60 * (k + 2))
         theta = theta.copy()
         theta[idx] = fit.x
     fit.x = theta
-    J = sparse.csr_matrix(fit.jac)
+    J = np.asarray(fit.jac)
     r = fit.fun
     A, B, rss, cond = _moments(prob, J, r, g, w)
     dof = max(r.size - g - 2 * w, 1)
     white = rss / dof * _pinv(A)
     cluster = w / max(w - 1, 1) * _pinv(A) @ B @ _pinv(A)
-    var = np.maximum(np.diag(white), np.diag(cluster))
+    cov = np.where(np.diag(white)[:, None] >= np.diag(cluster)[None, :], white, cluster) \
+        if g == 1 else (white if np.trace(white) >= np.trace(cluster) else cluster)
+    held = _held_sensitivity(prob, theta, J, A, g, w)
+    var = np.diag(cov) + held
     null = _null_loadings(A)
     tq = float(stats.t.ppf(0.975, max(w - 1, 1)))
     out = []
@@ -402,7 +410,8 @@ def refine(trace: Trace, ident: Identification, *, parameters: tuple[str, ...] =
         sd = math.sqrt(var[i]) if math.isfinite(var[i]) else math.inf
         half = tq * sd
         note = ""
-        at_bound = fit.active_mask[i] != 0
+        width = hi[i] - lo[i]
+        at_bound = bool(fit.active_mask[i] != 0) or (width < 1e3 and min(theta - lo[i], hi[i] - theta) < 1e-6 * width)
         if null[i]:
             note = f"in a near-null direction of the Jacobian (singular value below {NEAR_NULL:g} of the largest)"
             half = sd = math.inf
@@ -439,15 +448,63 @@ def _scan_s(prob: _Problem, g: int, w: int) -> float:
     return best
 
 
-def _sparsity(prob: _Problem, g: int, w: int):
-    """Jacobian pattern: every row depends on the globals and on its own window's two initial values."""
-    from scipy import sparse
+def _grouped_jacobian(fun, last: dict, g: int, w: int, win: np.ndarray):
+    """Forward-difference Jacobian (dense) in ``g + 2`` evaluations: each refined parameter alone, then every
+    window's initial position at once and every window's initial velocity at once (a row depends only on
+    its own window's), with steps of :data:`DIFF_STEP` relative (at least ``DIFF_STEP``); ``last`` holds the
+    last evaluation of ``fun``."""
+    rows = np.arange(win.size)
 
-    n = prob.rows.size
-    win = np.repeat(np.arange(w), prob.lengths)
-    rows = np.concatenate([np.repeat(np.arange(n), g), np.arange(n), np.arange(n)])
-    cols = np.concatenate([np.tile(np.arange(g), n), g + win, g + w + win])
-    return sparse.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(n, g + 2 * w))
+    def jac(theta):
+        same = "x" in last and np.array_equal(last["x"], theta)
+        f0 = last["f"] if same else fun(theta)  # least_squares asks for J where it last evaluated
+        J = np.zeros((f0.size, theta.size))
+        for j in range(g):
+            h = DIFF_STEP * max(1.0, abs(theta[j]))
+            step = theta.copy()
+            step[j] += h
+            J[:, j] = (fun(step) - f0) / h
+        for block in (g, g + w):
+            h = DIFF_STEP * max(1.0, float(np.max(np.abs(theta[block:block + w]))))
+            step = theta.copy()
+            step[block:block + w] += h
+            J[rows, block + win] = (fun(step) - f0) / h
+        return J
+
+    return jac
+
+
+#: Held parameters whose standard error the static fit gives: their uncertainty is carried into the intervals.
+_HELD_STD = {"m": "m_std", "sigma": "sigma_std", "Cf": "Cf_std", "offset": "offset_std"}
+
+
+def _held_sensitivity(prob: _Problem, theta: np.ndarray, J: np.ndarray, A: np.ndarray, g: int, w: int):
+    """Variance added to each refined parameter by the held ones: ``S diag(std^2) S'`` with
+    ``S = -A^-1 sum_w Jp_w' Jh_w`` (implicit function theorem at the optimum), ``Jh`` the forward-difference
+    columns of the held parameters with the static fit's standard errors, nuisance projected out per window."""
+    held = [n for n in _HELD_STD if n not in prob.names and getattr(prob.ident, _HELD_STD[n]) > 0]
+    if not held:
+        return np.zeros(g)
+    f0 = prob.residual(theta)
+    Jh = np.empty((f0.size, len(held)))
+    for j, name in enumerate(held):
+        value = prob.values[name]
+        h = DIFF_STEP * max(abs(value), 1e-12)
+        prob.values = prob.assign(dict(prob.values), {name: value + h})
+        Jh[:, j] = (prob.residual(theta) - f0) / h
+        prob.values = prob.assign(dict(prob.values), {name: value})
+    C = np.zeros((g, len(held)))
+    pos = 0
+    for i, n in enumerate(prob.lengths):
+        block = J[pos:pos + n]
+        Jn = block[:, [g + i, g + w + i]]
+        proj = np.linalg.lstsq(Jn, np.column_stack([block[:, :g], Jh[pos:pos + n]]), rcond=None)[0]
+        Jg = block[:, :g] - Jn @ proj[:, :g]
+        C += Jg.T @ (Jh[pos:pos + n] - Jn @ proj[:, g:])
+        pos += n
+    S = -_pinv(A) @ C
+    std = np.array([getattr(prob.ident, _HELD_STD[n]) for n in held])
+    return np.sum((S * std) ** 2, axis=1)
 
 
 def _moments(prob: _Problem, J, r, g: int, w: int):
@@ -456,7 +513,7 @@ def _moments(prob: _Problem, J, r, g: int, w: int):
     B = np.zeros((g, g))
     pos = 0
     for i, n in enumerate(prob.lengths):
-        block = J[pos:pos + n].toarray()
+        block = J[pos:pos + n]
         Jg, Jn = block[:, :g], block[:, [g + i, g + w + i]]
         Jp = Jg - Jn @ np.linalg.lstsq(Jn, Jg, rcond=None)[0]
         A += Jp.T @ Jp
