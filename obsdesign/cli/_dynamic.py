@@ -17,12 +17,10 @@ def add_refine_flags(p: argparse.ArgumentParser) -> None:
     p : argparse.ArgumentParser
         The ``identify`` parser.
     """
-    from ..data.output_error import MODELS
-
     p.add_argument("--refine", metavar="NAMES",
                    help="refine these parameters by output error, comma-separated (e.g. s or s,m,Cf,delay)")
-    p.add_argument("--refine-model", choices=MODELS, default="paper",
-                   help="plant friction model of the refinement (default: paper)")
+    p.add_argument("--refine-model", default="paper", metavar="MODEL",  # checked when used: no NumPy in the parser
+                   help="plant friction model of the refinement: paper, lugre or gms (default: paper)")
 
 
 def refine_from_args(args: argparse.Namespace, trace, ident):
@@ -39,8 +37,11 @@ def refine_from_args(args: argparse.Namespace, trace, ident):
     """
     if args.refine is None:
         return ident, None
-    from ..data.output_error import refinable, refine
+    from ..data.output_error import MODELS, refinable, refine
 
+    if args.refine_model not in MODELS:
+        raise UsageError(f"obsdesign {args.command}: argument --refine-model: expected one of {', '.join(MODELS)}, "
+                         f"found {args.refine_model!r}")
     names = tuple(n.strip() for n in args.refine.split(","))
     allowed = refinable(args.refine_model)
     if not all(names) or len(set(names)) != len(names) or any(n not in allowed for n in names):

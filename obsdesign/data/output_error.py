@@ -26,6 +26,7 @@ import numpy as np
 from ..friction.registry import FRICTION_MODELS
 from .identify import Identification
 from .oe_plant import PAPER_LAYOUT, select_windows, simulate_windows
+from .oe_stats import NEAR_NULL, _grouped_jacobian, _held_sensitivity, _moments, _null_loadings, _pinv, _scan_s
 from .trace import Trace
 
 __all__ = ["RefinedParameter", "Refinement", "refine", "refinable", "MODELS", "NEAR_NULL", "TRAVEL", "WINDOW"]
@@ -37,12 +38,8 @@ MODELS = tuple(name for name in FRICTION_MODELS.names() if name != "dahl")
 TRAVEL = 1e-3
 #: Default time [s] a window starts before its first reversal and runs on after the sliding resumes.
 WINDOW = 0.05
-#: A direction of the scaled Jacobian whose singular value is below this fraction of the largest is null.
-NEAR_NULL = 1e-4
 #: Largest half-width of the 95 % interval of ln(p) for a positive parameter to count as identified.
 MAX_LOG_HALF_WIDTH = 0.5
-#: Relative finite-difference step of the Jacobian (the branch switches make a much smaller one noisy).
-DIFF_STEP = 1e-4
 _PLANT = {"m": ("kg", "mass"), "delay": ("s", "sensor delay: the position is measured at t - delay")}
 _SKIP = ("Cf_neg", "sigma_neg", "N", "beta")
 
@@ -433,109 +430,3 @@ def refine(trace: Trace, ident: Identification, *, parameters: tuple[str, ...] =
                       samples=int(r.size), rms_initial=float(np.sqrt(np.mean(r0**2))) * prob.scale,
                       rms=float(np.sqrt(np.mean(r**2))) * prob.scale, condition_number=cond,
                       evaluations=prob.evaluations, wall_time=time.perf_counter() - t_start)
-
-
-def _scan_s(prob: _Problem, g: int, w: int) -> float:
-    """The ``s`` of least cost on a log grid (the others at their start), the start of the fit."""
-    low, high = prob.spec("s")[1:3]
-    best, best_cost = prob.values["s"], math.inf
-    for s in np.geomspace(low * 1.01, high / 1.01, 15):
-        prob.values["s"] = float(s)
-        theta = np.array([prob.to_theta(n, prob.values[n]) for n in prob.names] + [0.0] * (2 * w))
-        cost = float(np.sum(prob.residual(theta) ** 2))
-        if cost < best_cost:
-            best, best_cost = float(s), cost
-    return best
-
-
-def _grouped_jacobian(fun, last: dict, g: int, w: int, win: np.ndarray):
-    """Forward-difference Jacobian (dense) in ``g + 2`` evaluations: each refined parameter alone, then every
-    window's initial position at once and every window's initial velocity at once (a row depends only on
-    its own window's), with steps of :data:`DIFF_STEP` relative (at least ``DIFF_STEP``); ``last`` holds the
-    last evaluation of ``fun``."""
-    rows = np.arange(win.size)
-
-    def jac(theta):
-        same = "x" in last and np.array_equal(last["x"], theta)
-        f0 = last["f"] if same else fun(theta)  # least_squares asks for J where it last evaluated
-        J = np.zeros((f0.size, theta.size))
-        for j in range(g):
-            h = DIFF_STEP * max(1.0, abs(theta[j]))
-            step = theta.copy()
-            step[j] += h
-            J[:, j] = (fun(step) - f0) / h
-        for block in (g, g + w):
-            h = DIFF_STEP * max(1.0, float(np.max(np.abs(theta[block:block + w]))))
-            step = theta.copy()
-            step[block:block + w] += h
-            J[rows, block + win] = (fun(step) - f0) / h
-        return J
-
-    return jac
-
-
-#: Held parameters whose standard error the static fit gives: their uncertainty is carried into the intervals.
-_HELD_STD = {"m": "m_std", "sigma": "sigma_std", "Cf": "Cf_std", "offset": "offset_std"}
-
-
-def _held_sensitivity(prob: _Problem, theta: np.ndarray, J: np.ndarray, A: np.ndarray, g: int, w: int):
-    """Variance added to each refined parameter by the held ones: ``S diag(std^2) S'`` with
-    ``S = -A^-1 sum_w Jp_w' Jh_w`` (implicit function theorem at the optimum), ``Jh`` the forward-difference
-    columns of the held parameters with the static fit's standard errors, nuisance projected out per window."""
-    held = [n for n in _HELD_STD if n not in prob.names and getattr(prob.ident, _HELD_STD[n]) > 0]
-    if not held:
-        return np.zeros(g)
-    f0 = prob.residual(theta)
-    Jh = np.empty((f0.size, len(held)))
-    for j, name in enumerate(held):
-        value = prob.values[name]
-        h = DIFF_STEP * max(abs(value), 1e-12)
-        prob.values = prob.assign(dict(prob.values), {name: value + h})
-        Jh[:, j] = (prob.residual(theta) - f0) / h
-        prob.values = prob.assign(dict(prob.values), {name: value})
-    C = np.zeros((g, len(held)))
-    pos = 0
-    for i, n in enumerate(prob.lengths):
-        block = J[pos:pos + n]
-        Jn = block[:, [g + i, g + w + i]]
-        proj = np.linalg.lstsq(Jn, np.column_stack([block[:, :g], Jh[pos:pos + n]]), rcond=None)[0]
-        Jg = block[:, :g] - Jn @ proj[:, :g]
-        C += Jg.T @ (Jh[pos:pos + n] - Jn @ proj[:, g:])
-        pos += n
-    S = -_pinv(A) @ C
-    std = np.array([getattr(prob.ident, _HELD_STD[n]) for n in held])
-    return np.sum((S * std) ** 2, axis=1)
-
-
-def _moments(prob: _Problem, J, r, g: int, w: int):
-    """``A``, ``B`` of the refined parameters (nuisance projected out per window), the RSS, the condition."""
-    A = np.zeros((g, g))
-    B = np.zeros((g, g))
-    pos = 0
-    for i, n in enumerate(prob.lengths):
-        block = J[pos:pos + n]
-        Jg, Jn = block[:, :g], block[:, [g + i, g + w + i]]
-        Jp = Jg - Jn @ np.linalg.lstsq(Jn, Jg, rcond=None)[0]
-        A += Jp.T @ Jp
-        score = Jp.T @ r[pos:pos + n]
-        B += np.outer(score, score)
-        pos += n
-    d = np.sqrt(np.maximum(np.diag(A), 1e-300))
-    sv = np.linalg.svd(A / np.outer(d, d), compute_uv=False)
-    cond = float(math.sqrt(sv[0] / sv[-1])) if sv[-1] > 0 else math.inf
-    return A, B, float(r @ r), cond
-
-
-def _pinv(A: np.ndarray) -> np.ndarray:
-    d = np.sqrt(np.maximum(np.diag(A), 1e-300))
-    return np.linalg.pinv(A / np.outer(d, d), rcond=NEAR_NULL**2) / np.outer(d, d)
-
-
-def _null_loadings(A: np.ndarray) -> np.ndarray:
-    """Per parameter: whether it loads (|component| > 0.3) on a near-null direction of the scaled Jacobian."""
-    d = np.sqrt(np.maximum(np.diag(A), 1e-300))
-    if not np.all(np.diag(A) > 0):
-        return ~(np.diag(A) > 0)
-    u, sv, _ = np.linalg.svd(A / np.outer(d, d))
-    small = np.sqrt(sv) < NEAR_NULL * math.sqrt(sv[0])
-    return np.any(np.abs(u[:, small]) > 0.3, axis=1) if np.any(small) else np.zeros(A.shape[0], bool)
