@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +33,21 @@ def test_window_plant_is_the_simulators_plant():
     ok = simulate_windows(0, pp, res.u, np.array([0]), np.array([n]), np.zeros(1), np.zeros(1), cfg.plant.m,
                           cfg.observer.dt, loop.n_sub, 1e-3, out)
     assert ok
+    np.testing.assert_allclose(out, res.x, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("model", ["lugre", "gms"])
+def test_window_plant_of_a_friction_model_is_the_simulators(model):
+    from obsdesign.plant_spec import PlantFrictionSpec
+    from obsdesign.sim.simulate import plant_friction_arrays
+
+    cfg = od.load_preset("vcm").override(noise_rms=0.0, quantization=0.0, G=0.0)
+    cfg = dataclasses.replace(cfg, plant_friction=PlantFrictionSpec(model=model, parameters={}))
+    res, loop = _open_loop(cfg)
+    code, pp = plant_friction_arrays(cfg)
+    out = np.empty(res.x.size)
+    assert simulate_windows(code, pp, res.u, np.array([0]), np.array([res.x.size]), np.zeros(1), np.zeros(1),
+                            cfg.plant.m, cfg.observer.dt, loop.n_sub, 1e-3, out)
     np.testing.assert_allclose(out, res.x, rtol=0, atol=1e-12)
 
 
@@ -69,3 +85,38 @@ def test_emps_what_is_identifiable():
     assert joint["Cf"].identifiable and joint["offset"].identifiable and joint["Cf"].high < ident.Cf
     asym = refine(tr, identify(tr, model="asymmetric"), parameters=("s", "Cf", "offset"))
     assert asym["s"].identifiable and 2e4 < asym["s"].value < 6e4
+
+
+LOG = Path(od.__file__).parent / "datasets" / "example_log.csv"
+
+
+@pytest.mark.parametrize("extra, flag", [
+    (["--refine", "s,bogus"], "--refine"), (["--refine", "s,,m"], "--refine"), (["--refine", "s,s"], "--refine"),
+    (["--refine", "s", "--refine-model", "dahl"], "--refine-model"),
+])
+def test_cli_refine_bad_input(extra, flag, tmp_path, capsys):
+    from obsdesign.cli import main
+
+    out = tmp_path / "axis.toml"
+    args = ["identify", str(LOG), "--position", "x", "--input", "u", "--time", "t", "-o", str(out)]
+    assert main(args + extra) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"argument {flag}:" in err[0], err
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(not EMPS.exists(), reason="EMPS data not present")
+def test_cli_refine_json_and_config(tmp_path, capsys):
+    import json
+
+    from obsdesign.cli import main
+
+    out = tmp_path / "emps.toml"
+    args = ["identify", str(EMPS), "--position", "qm", "--input", "vir", "--time", "t", "--input-gain",
+            "35.15065188", "--asymmetric", "--refine", "s,Cf,offset", "--json", "-o", str(out)]
+    assert main(args) == 0
+    data = json.loads(capsys.readouterr().out)
+    s = data["refinement"]["parameters"]["s"]
+    assert s["identifiable"] and s["low"] < s["value"] < s["high"]
+    assert data["s"] == pytest.approx(s["value"]) and "output error" in data["s_note"]
+    assert od.load_config(out).friction.s == pytest.approx(s["value"])
