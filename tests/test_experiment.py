@@ -64,7 +64,11 @@ def test_c_array_and_csv(tmp_path, capsys):
 
 @pytest.mark.parametrize("extra, flag", [
     (["--name", "x;y"], "--name"), (["--speed", "nan"], "--speed"), (["--levels", "30"], "--levels"),
-    (["--stroke", "0.001"], "--stroke"), (["--csv", "out.txt"], "--csv"),
+    (["--stroke", "0.001"], "--stroke"), (["--csv", "out.txt"], "--csv"), (["--force", "0"], "--force"),
+    (["--mass", "-1"], "--mass"), (["--dt", "2"], "--dt"), (["--travel", "abc"], "--travel"),
+    (["--resolution", "0.01"], "--resolution"), (["--blocks", "0"], "--blocks"), (["--blocks", "200"], "--blocks"),
+    (["--dwell", "inf"], "--dwell"), (["--ramp", "0"], "--ramp"), (["--c", "out.txt"], "--c"),
+    (["--csv", "missing/e.csv"], "--csv"),
 ])
 def test_cli_bad_input(extra, flag, tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
