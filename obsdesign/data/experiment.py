@@ -292,9 +292,10 @@ def design_experiment(*, stroke: float, speed: float, force: float, mass: float,
     x, v = b.arrays()
     if float(np.max(np.abs(x))) > half * (1 + 1e-9):
         raise ValueError(f"stroke: the experiment needs {float(np.max(np.abs(x))) * 2:.4g} m, found {stroke:g}")
+    acc = min(acc, float(np.max(np.abs(np.diff(v)))) / dt)
     resolved = resolution == 0 or amps[0] >= 20 * resolution
     expected = {
-        "m": {"identifiable": True, "why": f"{2 * levels + 2} speed ramps at up to {acc:.3g} m/s^2"},
+        "m": {"identifiable": True, "why": f"{2 * levels + 2} speed ramps in gross sliding, peak acceleration {acc:.3g} m/s^2"},
         "sigma": {"identifiable": True, "why": f"speeds {speeds[0]:.3g} to {speeds[-1]:.3g} m/s "
                                                f"(ratio {speeds[-1] / speeds[0]:.3g}) in both directions"},
         "Cf": {"identifiable": True, "why": f"{levels} constant-speed strokes per direction"},
@@ -305,7 +306,6 @@ def design_experiment(*, stroke: float, speed: float, force: float, mass: float,
                      + ("" if resolved else f"; the smallest spans fewer than 20 encoder steps of {resolution:g} m")
                      + ")"},
     }
-    acc = min(acc, float(np.max(np.abs(np.diff(v)))) / dt)
     limits = {"stroke": stroke, "speed": speed, "force": force, "mass": mass, "acceleration": acc, "ramp": ramp,
               "travel": travel, "dwell": dwell, "resolution": float(resolution)}
     return Experiment(dt=dt, x_ref=x, v_ref=v, staircase_end=staircase_end, levels=speeds, amplitudes=amps,
