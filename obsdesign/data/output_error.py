@@ -242,6 +242,8 @@ class _Problem:
         for name, value in values.items():
             if name in ("Cf", "sigma"):
                 q[name + "_neg"] = value * self.values[name + "_neg"] / self.values[name]
+            if name == "Cf" and "Fs" in q and "Fs" not in self.names:  # a held stiction level keeps its ratio
+                q["Fs"] = value * self.values["Fs"] / self.values["Cf"]
             q[name] = value
         return q
 
@@ -277,7 +279,10 @@ class _Problem:
         w = self.starts.size
         dx0 = p[g:g + w] * self.scale
         dv0 = p[g + w:g + 2 * w] * self.scale / self.dt
-        x, ok = self.simulate(q, dx0, dv0)
+        try:
+            x, ok = self.simulate(q, dx0, dv0)
+        except ValueError:  # a combination the model refuses (Fs below Cf): as bad as a diverged run
+            return np.full(self.meas.size, 1e6)
         r = (self.meas - x) / self.scale
         return np.where(np.isfinite(r), r, 1e6)
 
