@@ -120,3 +120,15 @@ def test_cli_refine_json_and_config(tmp_path, capsys):
     assert s["identifiable"] and s["low"] < s["value"] < s["high"]
     assert data["s"] == pytest.approx(s["value"]) and "output error" in data["s_note"]
     assert od.load_config(out).friction.s == pytest.approx(s["value"])
+
+
+@pytest.mark.skipif(not EMPS.exists(), reason="EMPS data not present")
+def test_emps_lugre_stiffness_with_the_coulomb_level_free():
+    """A refined Cf moves the held Fs with it (Fs >= Cf); sigma0 is resolved, sigma1 with it is not."""
+    tr = load_trace(EMPS, position="qm", input="vir", time="t", input_gain=35.15065188)
+    ident = identify(tr, model="asymmetric")
+    ref = refine(tr, ident, parameters=("sigma0", "Cf", "offset"), model="lugre")
+    assert ref["sigma0"].identifiable and 1e6 < ref["sigma0"].value < 5e6
+    assert ref.fixed["Fs"] == pytest.approx(ident.Cf_pos)   # the start; the fit moved it with Cf
+    both = refine(tr, ident, parameters=("sigma0", "sigma1", "Cf", "offset"), model="lugre")
+    assert not both["sigma0"].identifiable and not both["sigma1"].identifiable
