@@ -40,7 +40,6 @@ TRAVEL = 1e-3
 WINDOW = 0.05
 #: Largest half-width of the 95 % interval of ln(p) for a positive parameter to count as identified.
 MAX_LOG_HALF_WIDTH = 0.5
-_PLANT = {"m": ("kg", "mass"), "delay": ("s", "sensor delay: the position is measured at t - delay")}
 _SKIP = ("Cf_neg", "sigma_neg", "N", "beta")
 
 
@@ -187,7 +186,7 @@ class _Problem:
         v_f = np.gradient(x_f, dt)
         scale = max(ident.noise_rms, ident.quantization / math.sqrt(12.0), 1e-12)
         n_win = max(1, int(round(window / dt)))
-        skip = int(math.ceil(50.0))
+        skip = 50  # samples of the zero-phase filter's transients at both ends (5 periods of its cut-off)
         self.starts, self.lengths, self.reversals = select_windows(
             x_f, threshold=max(5.0 * ident.noise_rms, 2.0 * ident.quantization, 1e-9), travel=travel,
             lead=n_win, tail=n_win, skip=skip)
