@@ -33,7 +33,7 @@ import warnings
 from typing import Sequence
 
 from .. import __version__
-from . import _compare, _config, _data, _design, _loop, _output, _sim
+from . import _compare, _config, _data, _design, _dynamic, _loop, _output, _sim
 from ._common import Parser, UsageError
 from ._errors import BAD_INPUT, describe, exit_status, plain
 
@@ -52,6 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
     _loop.add_commands(sub)
     _config.add_commands(sub)
     _compare.add_commands(sub)
+    _dynamic.add_commands(sub)
     return parser
 
 

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from ..params import preset_names
 from ..sampled.choices import SCHEDULES
+from ._dynamic import add_refine_flags, refine_from_args
 from ._common import (FINITE_ARG, INPUT_FILE, POSITIVE_ARG, UsageError, check_output_file, emit,
                       integer, print_warnings)
 
@@ -138,7 +139,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     ident = identify(trace, model="asymmetric" if args.asymmetric else "coulomb-viscous", stribeck=args.stribeck,
                      fix=fix, bounds=bounds, min_speed=args.min_speed, window=args.window, n_boot=args.bootstrap,
                      seed=args.seed, input_timing=args.input_timing)
-    payload = ident.to_dict()
+    ident, refined = refine_from_args(args, trace, ident)
+    payload = dict(ident.to_dict(), **({"refinement": refined} if refined else {}))
     text = str(ident)
     try:
         rules = design_rules(ident, u_max=args.u_max)
@@ -217,6 +219,7 @@ def add_commands(sub) -> None:
     p.add_argument("--input-timing", choices=INPUT_TIMINGS, default="sample",
                    help="hold: the logged input is held until the next sample (a sampled controller's output); "
                         "default sample: as logged")
+    add_refine_flags(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("-o", "--output", metavar="FILE.toml", help="write the identified design config")
     p.set_defaults(run=_cmd_identify)

@@ -1,0 +1,105 @@
+"""``identify --refine`` (dynamic friction by output error) and ``experiment`` (an identification experiment)."""
+
+from __future__ import annotations
+
+import argparse
+
+from ._common import POSITIVE_ARG, UsageError, check_output_file, emit, integer
+
+__all__ = ["add_refine_flags", "refine_from_args", "add_commands"]
+
+
+def add_refine_flags(p: argparse.ArgumentParser) -> None:
+    """``--refine NAMES`` and ``--refine-model MODEL`` of ``identify``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The ``identify`` parser.
+    """
+    p.add_argument("--refine", metavar="NAMES",
+                   help="refine these parameters by output error, comma-separated (e.g. s or s,m,Cf,delay)")
+    p.add_argument("--refine-model", default="paper", metavar="MODEL",  # checked when used: no NumPy in the parser
+                   help="plant friction model of the refinement: paper, lugre or gms (default: paper)")
+
+
+def refine_from_args(args: argparse.Namespace, trace, ident):
+    """``(ident, payload)``: ``ident`` with a refined ``s`` and the refinement's JSON (``None`` without ``--refine``).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed ``identify`` arguments.
+    trace : Trace
+        The record.
+    ident : Identification
+        Its static fit.
+    """
+    if args.refine is None:
+        return ident, None
+    from ..data.output_error import MODELS, refinable, refine
+
+    if args.refine_model not in MODELS:
+        raise UsageError(f"obsdesign {args.command}: argument --refine-model: expected one of {', '.join(MODELS)}, "
+                         f"found {args.refine_model!r}")
+    names = tuple(n.strip() for n in args.refine.split(","))
+    allowed = refinable(args.refine_model)
+    if not all(names) or len(set(names)) != len(names) or any(n not in allowed for n in names):
+        raise UsageError(f"obsdesign {args.command}: argument --refine: expected distinct names of "
+                         f"{','.join(allowed)} separated by commas, found {args.refine!r}")
+    result = refine(trace, ident, parameters=names, model=args.refine_model)
+    if not args.json:
+        print(result)
+    return result.apply(ident), result.to_dict()
+
+
+def _cmd_experiment(args: argparse.Namespace) -> int:
+    from ..data.experiment import C_NAME, design_experiment
+
+    check_output_file("experiment", "--csv", args.csv, (".csv",))
+    check_output_file("experiment", "--c", args.c, (".c", ".h"))
+    if not C_NAME.match(args.name):
+        raise UsageError(f"obsdesign experiment: argument --name: expected a C identifier (a letter or _, then "
+                         f"letters, digits or _, at most 63), found {args.name!r}")
+    try:
+        exp = design_experiment(stroke=args.stroke, speed=args.speed, force=args.force, mass=args.mass, dt=args.dt,
+                                travel=args.travel, resolution=args.resolution, levels=args.levels,
+                                blocks=args.blocks, dwell=args.dwell, ramp=args.ramp)
+    except ValueError as e:  # the API names its parameter: the flag of the same name
+        name, _, rest = str(e).partition(": ")
+        raise UsageError(f"obsdesign experiment: argument --{name.replace('_', '-')}: {rest}") from None
+    if args.csv:
+        exp.to_csv(args.csv)
+    if args.c:
+        exp.to_c(args.c, args.name)
+    emit(args, exp, exp.to_dict())
+    return 0
+
+
+def add_commands(sub) -> None:
+    """Add ``experiment`` to the subparsers ``sub``.
+
+    Parameters
+    ----------
+    sub : argparse subparsers
+        The subcommands of ``obsdesign``.
+    """
+    p = sub.add_parser("experiment", help="write a reference trajectory that makes the friction identifiable")
+    p.add_argument("--stroke", type=POSITIVE_ARG, required=True, metavar="M", help="usable travel [m]")
+    p.add_argument("--speed", type=POSITIVE_ARG, required=True, metavar="V", help="largest speed [m/s]")
+    p.add_argument("--force", type=POSITIVE_ARG, required=True, metavar="F", help="actuator force limit [N]")
+    p.add_argument("--mass", type=POSITIVE_ARG, required=True, metavar="KG", help="rough moving mass [kg]")
+    p.add_argument("--dt", type=POSITIVE_ARG, required=True, metavar="DT", help="sample time [s]")
+    p.add_argument("--travel", type=POSITIVE_ARG, default=1e-3, metavar="M",
+                   help="largest expected pre-sliding travel 1/s [m] (default 1e-3)")
+    p.add_argument("--resolution", type=POSITIVE_ARG, default=None, metavar="M", help="encoder resolution [m]")
+    p.add_argument("--levels", type=integer(2), default=6, metavar="N", help="speed levels (2 to 20, default 6)")
+    p.add_argument("--blocks", type=integer(1), default=5, metavar="N",
+                   help="pre-sliding blocks of 5 dwelling reversals (default 5)")
+    p.add_argument("--dwell", type=POSITIVE_ARG, default=0.1, metavar="S", help="dwell after each reversal [s]")
+    p.add_argument("--ramp", type=POSITIVE_ARG, default=0.05, metavar="S", help="shortest speed ramp [s]")
+    p.add_argument("--csv", metavar="FILE.csv", help="write t, x_ref, v_ref")
+    p.add_argument("--c", metavar="FILE.c", help="write the position reference as a C array")
+    p.add_argument("--name", default="obsdesign_experiment", metavar="IDENT", help="name of the C array")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(run=_cmd_experiment, resolution=0.0)

@@ -1,0 +1,312 @@
+"""An identification experiment: a reference trajectory that makes the friction parameters identifiable.
+
+:func:`design_experiment` builds, from the axis's stroke, speed and force limits, a rough mass and
+the sample time, a position reference in two parts:
+
+1. a **velocity staircase**: ``levels`` constant speeds, run level to level in one stroke, log-spaced from
+   the largest of ``speed / 300``, ``3 travel`` in 5 s and 20 encoder steps per second, to
+   ``speed``, forwards and then back (both directions, so the Coulomb level, the viscous
+   slope, the offset and, below the Stribeck speed, the Stribeck drop are seen); the ramps between
+   levels excite the mass in gross sliding, away from the pre-sliding transients;
+2. **pre-sliding blocks**: a gross move of ``2 travel`` (the friction saturates), then small
+   reversals of amplitudes from ``0.1 travel`` to ``travel`` with a dwell after each, then a gross
+   move back. Each block is one window of :func:`obsdesign.data.output_error.refine`.
+
+Every move is a raised-cosine velocity ramp whose peak acceleration is ``force_fraction * force /
+mass``. The result writes itself as CSV (``t, x_ref, v_ref``) and as a C array (atomic writes; the
+array's name is checked as a C identifier and the comment holds numbers only).
+
+Examples
+--------
+>>> exp = design_experiment(stroke=0.04, speed=0.1, force=5.0, mass=0.5, dt=1e-3, travel=1e-3, blocks=2)
+>>> exp.reversals_dwelling, bool(abs(exp.x_ref).max() <= 0.02)
+(10, True)
+>>> sorted(exp.expected)
+['Cf', 'm', 'offset', 's', 'sigma']
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._io import atomic_write
+
+__all__ = ["Experiment", "design_experiment", "C_NAME"]
+
+#: What a C array name may be (an identifier, ASCII, at most 63 characters).
+C_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,62}$")
+_REVERSALS_PER_BLOCK = 5
+
+
+@dataclass(frozen=True, kw_only=True)
+class Experiment:
+    """A designed reference trajectory (:func:`design_experiment`).
+
+    Attributes
+    ----------
+    dt : float
+        Sample time [s].
+    x_ref, v_ref : ndarray
+        Position [m] and velocity [m/s] reference per sample.
+    staircase_end : int
+        First sample after the staircase: identify the static model (:func:`~obsdesign.data.identify`)
+        on the samples before it (gross sliding), refine ``s`` over the whole record.
+    levels : tuple of float
+        Speeds of the staircase [m/s].
+    amplitudes : tuple of float
+        Amplitudes of the small reversals [m].
+    reversals_dwelling : int
+        Small reversals followed by a dwell.
+    expected : dict
+        Per parameter (``m, sigma, Cf, offset, s``): ``{"identifiable": bool, "why": str}``.
+    limits : dict
+        The inputs: stroke, speed, force, mass, acceleration, travel, dwell.
+    """
+
+    dt: float
+    x_ref: np.ndarray = field(repr=False)
+    v_ref: np.ndarray = field(repr=False)
+    staircase_end: int
+    levels: tuple[float, ...]
+    amplitudes: tuple[float, ...]
+    reversals_dwelling: int
+    expected: dict
+    limits: dict
+
+    @property
+    def duration(self) -> float:
+        """Length [s]."""
+        return self.x_ref.size * self.dt
+
+    def to_dict(self) -> dict:
+        """JSON-ready: ``samples, dt, duration, levels, amplitudes, reversals_dwelling, limits, expected``."""
+        return {"samples": int(self.x_ref.size), "dt": self.dt, "duration": self.duration,
+                "levels": list(self.levels), "amplitudes": list(self.amplitudes),
+                "reversals_dwelling": self.reversals_dwelling, "limits": dict(self.limits),
+                "expected": {k: dict(v) for k, v in self.expected.items()}}
+
+    def to_csv(self, path) -> None:
+        """Write ``t, x_ref, v_ref`` (SI units, header row) atomically.
+
+        Parameters
+        ----------
+        path : str or PathLike
+            The CSV file.
+        """
+        t = np.arange(self.x_ref.size) * self.dt
+        rows = "\n".join(f"{a:.9g},{b:.12g},{c:.12g}" for a, b, c in zip(t, self.x_ref, self.v_ref))
+        atomic_write(path, "t,x_ref,v_ref\n" + rows + "\n")
+
+    def c_source(self, name: str = "obsdesign_experiment") -> str:
+        """A C source defining ``const double NAME[N]`` (positions [m]) and ``NAME_dt``.
+
+        Parameters
+        ----------
+        name : str
+            The array's name: a C identifier (:data:`C_NAME`), so no other user text reaches the file.
+
+        Examples
+        --------
+        >>> exp = design_experiment(stroke=0.04, speed=0.1, force=5.0, mass=0.5, dt=1e-3, blocks=1)
+        >>> exp.c_source("x;y")
+        Traceback (most recent call last):
+        ...
+        ValueError: name: expected a C identifier (a letter or _, then letters, digits or _, at most 63), found 'x;y'
+        """
+        if not isinstance(name, str) or not C_NAME.match(name):
+            raise ValueError(f"name: expected a C identifier (a letter or _, then letters, digits or _, at most 63), "
+                             f"found {name!r}")
+        body = ",\n".join("  " + ", ".join(f"{v:.12g}" for v in self.x_ref[i:i + 6])
+                          for i in range(0, self.x_ref.size, 6))
+        return (f"/* identification experiment: {self.x_ref.size} samples at dt = {self.dt:.9g} s, "
+                f"position reference [m] */\n"
+                f"const double {name}_dt = {self.dt:.12g};\n"
+                f"const unsigned long {name}_n = {self.x_ref.size}UL;\n"
+                f"const double {name}[{self.x_ref.size}] = {{\n{body}\n}};\n")
+
+    def to_c(self, path, name: str = "obsdesign_experiment") -> None:
+        """Write :meth:`c_source` atomically.
+
+        Parameters
+        ----------
+        path : str or PathLike
+            The C file.
+        name : str
+            The array's name (:meth:`c_source`).
+        """
+        atomic_write(path, self.c_source(name))
+
+    def __str__(self) -> str:
+        lines = [f"Identification experiment: {self.x_ref.size} samples, {self.duration:.4g} s at dt = {self.dt:g} s",
+                 f"  staircase speeds [m/s]: {', '.join(f'{v:.3g}' for v in self.levels)} (both directions)",
+                 f"  small reversals [m]: {', '.join(f'{a:.3g}' for a in self.amplitudes)}; "
+                 f"{self.reversals_dwelling} with a dwell of {self.limits['dwell']:g} s",
+                 f"  peak acceleration {self.limits['acceleration']:.3g} m/s^2, stroke used "
+                 f"{float(np.ptp(self.x_ref)):.4g} of {self.limits['stroke']:g} m",
+                 "  expected identifiability:"]
+        for k, v in self.expected.items():
+            lines.append(f"    {k:<7} {'yes' if v['identifiable'] else 'no '}  {v['why']}")
+        return "\n".join(lines)
+
+
+def _positive(name: str, value, high: float = math.inf) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) or not 0 < value <= high \
+            or not math.isfinite(value):
+        bound = f" and <= {high:g}" if math.isfinite(high) else ""
+        raise ValueError(f"{name}: expected a finite number > 0{bound}, found {value!r}")
+    return float(value)
+
+
+class _Builder:
+    """Velocity segments appended sample by sample; the position is their running integral."""
+
+    def __init__(self, dt: float, acceleration: float, ramp: float):
+        self.dt, self.acc, self.t_ramp, self.v = dt, acceleration, ramp, [0.0]
+
+    def hold(self, seconds: float) -> None:
+        self.v.extend([0.0] * max(1, int(round(seconds / self.dt))))
+
+    def cruise(self, seconds: float) -> None:
+        self.v.extend([self.v[-1]] * max(1, int(round(seconds / self.dt))))
+
+    def ramp(self, v1: float) -> None:
+        v0 = self.v[-1]
+        n = max(10, int(math.ceil(max(math.pi * abs(v1 - v0) / (2.0 * self.acc), self.t_ramp) / self.dt)))
+        self.v.extend((v0 + (v1 - v0) * 0.5 * (1.0 - np.cos(np.pi * np.arange(1, n + 1) / n))).tolist())
+
+    def move(self, distance: float, speed: float) -> None:
+        """From rest to rest over ``distance`` [m] (signed): raised-cosine ramps to a peak of at most
+        ``speed`` and an acceleration of at most the limit, the profile scaled to the exact distance."""
+        d = abs(distance)
+        peak = min(speed, math.sqrt(2.0 * self.acc * d / math.pi), d / self.t_ramp)
+        n_r = max(10, int(math.ceil(max(math.pi * peak / (2.0 * self.acc), self.t_ramp) / self.dt)))
+        up = 0.5 * (1.0 - np.cos(np.pi * np.arange(1, n_r + 1) / n_r))
+        n_h = max(0, int(round((d - peak * n_r * self.dt) / (peak * self.dt))))
+        shape = np.concatenate([up, np.ones(n_h), up[::-1][1:], [0.0]])
+        prev = np.concatenate([[0.0], shape[:-1]])
+        covered = float(np.sum(0.5 * (shape + prev))) * self.dt
+        self.v.extend((shape * (distance / covered)).tolist())
+
+    def position(self) -> float:
+        v = np.asarray(self.v)
+        return float(np.sum(0.5 * (v[1:] + v[:-1]))) * self.dt
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        v = np.asarray(self.v)
+        x = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1])) * self.dt])
+        return x, v
+
+
+def design_experiment(*, stroke: float, speed: float, force: float, mass: float, dt: float,
+                      travel: float = 1e-3, resolution: float = 0.0, levels: int = 6, blocks: int = 5,
+                      dwell: float = 0.1, force_fraction: float = 0.5, ramp: float = 0.05) -> Experiment:
+    """Design the reference of an identification experiment for an axis.
+
+    Parameters
+    ----------
+    stroke : float
+        Usable travel [m]; the reference stays within ``[-stroke/2, stroke/2]`` of the start.
+    speed : float
+        Largest speed [m/s].
+    force : float
+        Actuator force limit [N].
+    mass : float
+        A rough moving mass [kg] (for the acceleration limit ``force_fraction * force / mass``).
+    dt : float
+        Sample time [s] of the controller that will run the reference.
+    travel : float
+        Largest expected pre-sliding travel [m] (``1/s``); the gross moves are ``2 travel``, the small
+        reversals ``0.1 travel`` to ``travel``. The ``travel`` of :func:`~obsdesign.data.output_error.refine`.
+    resolution : float
+        Encoder resolution [m] (0: unknown); the smallest reversal must span 20 of its steps.
+    levels : int
+        Speeds of the staircase (2 to 20).
+    blocks : int
+        Pre-sliding blocks (1 to 100), each with 5 dwelling reversals.
+    dwell : float
+        Rest [s] after each small reversal.
+    force_fraction : float
+        Share of the force limit used to accelerate (the rest is left to friction and the controller).
+    ramp : float
+        Shortest speed ramp [s]: the acceleration stays within the bandwidth of the position loop
+        (which must follow it) and of the identification's low-pass filter.
+
+    Returns
+    -------
+    Experiment
+    """
+    stroke, speed, force, mass = (_positive(n, v) for n, v in
+                                  (("stroke", stroke), ("speed", speed), ("force", force), ("mass", mass)))
+    dt = _positive("dt", dt, 1.0)
+    travel, dwell, ramp = _positive("travel", travel), _positive("dwell", dwell), _positive("ramp", ramp)
+    force_fraction = _positive("force_fraction", force_fraction, 1.0)
+    if isinstance(resolution, bool) or not isinstance(resolution, (int, float)) or not 0 <= resolution < travel:
+        raise ValueError(f"resolution: expected a number >= 0 and below travel = {travel:g} m, found {resolution!r}")
+    for name, value, low, high in (("levels", levels, 2, 20), ("blocks", blocks, 1, 100)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
+            raise ValueError(f"{name}: expected an integer in [{low}, {high}], found {value!r}")
+    if stroke < 6.0 * travel:
+        raise ValueError(f"stroke: expected at least 6 travel = {6 * travel:g} m (the pre-sliding blocks), "
+                         f"found {stroke!r}")
+    acc = force_fraction * force / mass
+    half = 0.5 * stroke
+    b = _Builder(dt, acc, ramp)
+    b.move(-0.4 * stroke, speed)
+    b.hold(dwell)
+    low = min(speed, max(speed / 300.0, 3.0 * travel / 5.0, 20.0 * resolution))
+    speeds = tuple(float(v) for v in np.geomspace(low, speed, levels))
+    lo_h, hi_h = 0.0, 1.0  # each level held up to 1 s and over at least 3 travel; one direction within 0.6 stroke
+    for _ in range(60):
+        mid = 0.5 * (lo_h + hi_h)
+        lo_h, hi_h = (mid, hi_h) if sum(max(v * mid, 3.0 * travel) for v in speeds) <= 0.6 * stroke else (lo_h, mid)
+    reach = [max(v * lo_h, 3.0 * travel) for v in speeds]
+    if sum(reach) > 0.6 * stroke * (1 + 1e-9):
+        raise ValueError(f"stroke: expected at least {sum(reach) / 0.6:.4g} m for {levels} speed levels of at least "
+                         f"3 travel each (travel = {travel:g} m), found {stroke:g}; use fewer levels or a smaller travel")
+    for sign in (1.0, -1.0):  # the staircase: level to level while sliding (the mass accelerates in gross sliding)
+        for v, d in zip(speeds, reach):
+            b.ramp(sign * v)
+            b.cruise(d / v)
+        b.ramp(0.0)
+        b.hold(dwell)
+    staircase_end = len(b.v)
+    b.move(-b.position() - travel, speed)  # the blocks run from -travel to +travel
+    b.hold(dwell)
+    amps = tuple(float(a) for a in np.geomspace(max(0.1 * travel, 20.0 * resolution), travel, _REVERSALS_PER_BLOCK))
+    slow = min(speed, 10.0 * travel)  # pre-sliding moves: at most 10 travel per second
+    for _ in range(blocks):
+        centre = b.position()
+        b.move(2.0 * travel, slow)
+        b.hold(dwell)
+        sign = -1.0
+        for a in amps:
+            b.move(sign * a, slow)
+            b.hold(dwell)
+            sign = -sign
+        b.move(centre - b.position(), slow)
+        b.hold(dwell)
+    x, v = b.arrays()
+    if float(np.max(np.abs(x))) > half * (1 + 1e-9):
+        raise ValueError(f"stroke: the experiment needs {float(np.max(np.abs(x))) * 2:.4g} m, found {stroke:g}")
+    acc = min(acc, float(np.max(np.abs(np.diff(v)))) / dt)
+    resolved = resolution == 0 or amps[0] >= 20 * resolution
+    expected = {
+        "m": {"identifiable": True, "why": f"{2 * levels + 2} speed ramps in gross sliding, peak acceleration {acc:.3g} m/s^2"},
+        "sigma": {"identifiable": True, "why": f"speeds {speeds[0]:.3g} to {speeds[-1]:.3g} m/s "
+                                               f"(ratio {speeds[-1] / speeds[0]:.3g}) in both directions"},
+        "Cf": {"identifiable": True, "why": f"{levels} constant-speed strokes per direction"},
+        "offset": {"identifiable": True, "why": "the same speeds in both directions"},
+        "s": {"identifiable": bool(resolved and blocks * _REVERSALS_PER_BLOCK >= 20),
+              "why": f"{blocks * _REVERSALS_PER_BLOCK} dwelling reversals of {amps[0]:.3g} to {amps[-1]:.3g} m "
+                     f"(1/s between {amps[0]:.3g} and {travel:.3g} m resolved; 20 needed"
+                     + ("" if resolved else f"; the smallest spans fewer than 20 encoder steps of {resolution:g} m")
+                     + ")"},
+    }
+    limits = {"stroke": stroke, "speed": speed, "force": force, "mass": mass, "acceleration": acc, "ramp": ramp,
+              "travel": travel, "dwell": dwell, "resolution": float(resolution)}
+    return Experiment(dt=dt, x_ref=x, v_ref=v, staircase_end=staircase_end, levels=speeds, amplitudes=amps,
+                      reversals_dwelling=blocks * _REVERSALS_PER_BLOCK, expected=expected, limits=limits)

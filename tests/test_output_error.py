@@ -1,0 +1,134 @@
+"""Output-error refinement of dynamic friction (obsdesign.data.output_error, obsdesign.data.oe_plant)."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import obsdesign as od
+from obsdesign.data import Trace, identify, load_trace
+from obsdesign.data.oe_plant import simulate_windows
+from obsdesign.data.output_error import refinable, refine
+from obsdesign.sim import prepare, run
+
+EMPS = Path(__file__).resolve().parents[2] / "shared" / "data" / "emps" / "DATA_EMPS.mat"
+
+
+def _open_loop(cfg, seconds=2.0, seed=1):
+    loop = prepare(cfg, od.sim.Excitation(force_rms=3.0), duration=seconds, seed=seed)
+    return run(loop), loop
+
+
+def test_window_plant_is_the_simulators_plant():
+    """One window from rest over a whole open-loop run reproduces run_loop's plant displacement."""
+    cfg = od.load_preset("vcm").override(noise_rms=0.0, quantization=0.0, G=0.0)
+    res, loop = _open_loop(cfg)
+    n = res.x.size
+    pp = np.array([0.35, 0.35, 21.1, 21.1, 0.0, 3000.0, 0.0, 8000.0])
+    out = np.empty(n)
+    # from rest: the window's branch starts saturated in no direction (v0 = 0), as run_loop's does
+    ok = simulate_windows(0, pp, res.u, np.array([0]), np.array([n]), np.zeros(1), np.zeros(1), cfg.plant.m,
+                          cfg.observer.dt, loop.n_sub, 1e-3, out)
+    assert ok
+    np.testing.assert_allclose(out, res.x, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("model", ["lugre", "gms"])
+def test_window_plant_of_a_friction_model_is_the_simulators(model):
+    from obsdesign.plant_spec import PlantFrictionSpec
+    from obsdesign.sim.simulate import plant_friction_arrays
+
+    cfg = od.load_preset("vcm").override(noise_rms=0.0, quantization=0.0, G=0.0)
+    cfg = dataclasses.replace(cfg, plant_friction=PlantFrictionSpec(model=model, parameters={}))
+    res, loop = _open_loop(cfg)
+    code, pp = plant_friction_arrays(cfg)
+    out = np.empty(res.x.size)
+    assert simulate_windows(code, pp, res.u, np.array([0]), np.array([res.x.size]), np.zeros(1), np.zeros(1),
+                            cfg.plant.m, cfg.observer.dt, loop.n_sub, 1e-3, out)
+    np.testing.assert_allclose(out, res.x, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("kw, exc, match", [
+    (dict(parameters=("s", "nope")), ValueError, "parameters: expected distinct names of"),
+    (dict(parameters=("s", "s")), ValueError, "parameters: expected distinct names"),
+    (dict(model="dahl"), ValueError, "model: expected one of paper, lugre, gms"),
+    (dict(travel=0.0), ValueError, r"travel: expected a number in \(0, 1\]"),
+    (dict(substeps=0), ValueError, r"substeps: expected an integer in \[1, 1000\]"),
+])
+def test_bad_input(kw, exc, match):
+    cfg = od.load_preset("vcm").override(G=0.0)
+    res, _ = _open_loop(cfg)
+    tr = Trace(t=res.t, position=res.x_meas, force=res.u, sample_time=cfg.observer.dt)
+    with pytest.raises(exc, match=match):
+        refine(tr, identify(tr), **kw)
+
+
+def test_refinable_names_come_from_the_registry():
+    from obsdesign.friction.registry import FRICTION_MODELS
+
+    lugre = set(FRICTION_MODELS["lugre"].scalar_parameters()) - {"Cf_neg", "sigma_neg"}
+    assert set(refinable("lugre")) == lugre | {"m", "delay"}
+
+
+@pytest.mark.skipif(not EMPS.exists(), reason="EMPS data not present")
+def test_emps_what_is_identifiable():
+    """docs/measured-data.md, "On EMPS": s alone is not; with the Coulomb level and the offset (asymmetric fit) it is."""
+    tr = load_trace(EMPS, position="qm", input="vir", time="t", input_gain=35.15065188)
+    ident = identify(tr)
+    alone = refine(tr, ident, parameters=("s",))
+    assert not alone["s"].identifiable and alone["s"].high / alone["s"].low > 100
+    joint = refine(tr, ident, parameters=("s", "Cf", "offset"))
+    assert joint.rms < 0.25 * alone.rms          # the Coulomb level at the reversals explains the windows, not s
+    assert joint["Cf"].identifiable and joint["offset"].identifiable and joint["Cf"].high < ident.Cf
+    asym = refine(tr, identify(tr, model="asymmetric"), parameters=("s", "Cf", "offset"))
+    assert asym["s"].identifiable and 2e4 < asym["s"].value < 6e4
+
+
+LOG = Path(od.__file__).parent / "datasets" / "example_log.csv"
+
+
+@pytest.mark.parametrize("extra, flag", [
+    (["--refine", "s,bogus"], "--refine"), (["--refine", "s,,m"], "--refine"), (["--refine", "s,s"], "--refine"),
+    (["--refine", "s", "--refine-model", "dahl"], "--refine-model"),
+])
+def test_cli_refine_bad_input(extra, flag, tmp_path, capsys):
+    from obsdesign.cli import main
+
+    out = tmp_path / "axis.toml"
+    args = ["identify", str(LOG), "--position", "x", "--input", "u", "--time", "t", "-o", str(out)]
+    assert main(args + extra) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"argument {flag}:" in err[0], err
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(not EMPS.exists(), reason="EMPS data not present")
+def test_cli_refine_json_and_config(tmp_path, capsys):
+    import json
+
+    from obsdesign.cli import main
+
+    out = tmp_path / "emps.toml"
+    args = ["identify", str(EMPS), "--position", "qm", "--input", "vir", "--time", "t", "--input-gain",
+            "35.15065188", "--asymmetric", "--refine", "s,Cf,offset", "--json", "-o", str(out)]
+    assert main(args) == 0
+    data = json.loads(capsys.readouterr().out)
+    s = data["refinement"]["parameters"]["s"]
+    assert s["identifiable"] and s["low"] < s["value"] < s["high"]
+    assert data["s"] == pytest.approx(s["value"]) and "output error" in data["s_note"]
+    assert od.load_config(out).friction.s == pytest.approx(s["value"])
+
+
+@pytest.mark.skipif(not EMPS.exists(), reason="EMPS data not present")
+def test_emps_lugre_stiffness_with_the_coulomb_level_free():
+    """A refined Cf moves the held Fs with it (Fs >= Cf); sigma0 is resolved, sigma1 with it is not."""
+    tr = load_trace(EMPS, position="qm", input="vir", time="t", input_gain=35.15065188)
+    ident = identify(tr, model="asymmetric")
+    ref = refine(tr, ident, parameters=("sigma0", "Cf", "offset"), model="lugre")
+    assert ref["sigma0"].identifiable and 1e6 < ref["sigma0"].value < 5e6
+    assert ref.fixed["Fs"] == pytest.approx(ident.Cf_pos)   # the start; the fit moved it with Cf
+    both = refine(tr, ident, parameters=("sigma0", "sigma1", "Cf", "offset"), model="lugre")
+    assert not both["sigma0"].identifiable and not both["sigma1"].identifiable
