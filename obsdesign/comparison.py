@@ -82,6 +82,13 @@ NOT_TUNED = "not tuned: "
 def not_tuned_row(row: dict[str, Any], error: Exception) -> dict[str, Any]:
     """``row`` with no metrics and the status :data:`NOT_TUNED` followed by the first line of ``error``.
 
+    Parameters
+    ----------
+    row : dict
+        The row's keys (``plant``, ``estimator``, ``scenario``, ``seed``).
+    error : Exception
+        Why the tuning rule failed.
+
     >>> not_tuned_row({"estimator": "dob"}, ValueError("noise rule: no knob reaches the target"))["status"]
     'not tuned: noise rule: no knob reaches the target'
     """
@@ -95,10 +102,15 @@ def not_tuned(rows: list[dict[str, Any]]) -> dict[str, str]:
 
     An estimator of the measured rows (plant ``data:<source>``) is named with its plant.
 
-    >>> not_tuned([{"plant": "paper", "estimator": "dob", "status": "not tuned: no knob"},
-    ...            {"plant": "data:a.csv", "estimator": "dob", "status": "not tuned: no noise"},
-    ...            {"plant": "paper", "estimator": "eso", "status": "ok"}])
-    {'dob': 'no knob', 'dob (data:a.csv)': 'no noise'}
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of :func:`compare` or :func:`obsdesign.comparison_data.compare_data` (or of ``compare.csv``).
+
+    >>> not_tuned([{"plant": "lugre", "estimator": "b1", "status": "not tuned: no knob"},
+    ...            {"plant": "data:a.csv", "estimator": "b1", "status": "not tuned: no noise"},
+    ...            {"plant": "lugre", "estimator": "b2", "status": "ok"}])
+    {'b1': 'no knob', 'b1 (data:a.csv)': 'no noise'}
     """
     return {r["estimator"] + (f" ({r['plant']})" if str(r["plant"]).startswith("data:") else ""):
             r["status"][len(NOT_TUNED):] for r in rows if str(r["status"]).startswith(NOT_TUNED)}
