@@ -176,7 +176,18 @@ def _finite(obj):
 
 
 def explorer_json(data: dict) -> str:
-    """``data`` as JSON safe inside a ``<script>`` element (no ``<``, ``>``, ``&``, line separators)."""
+    """``data`` as JSON safe inside a ``<script>`` element (no ``<``, ``>``, ``&``, line separators).
+
+    Parameters
+    ----------
+    data : dict
+        JSON-ready numbers and strings; non-finite floats become ``null``.
+
+    Examples
+    --------
+    >>> print(explorer_json({"name": "</script>", "x": float("inf")}))
+    {"name": "\\u003c/script\\u003e", "x": null}
+    """
     text = json.dumps(_finite(data), allow_nan=False)
     for ch, esc in (("<", "\\u003c"), (">", "\\u003e"), ("&", "\\u0026"), ("\u2028", "\\u2028"), ("\u2029", "\\u2029")):
         text = text.replace(ch, esc)
