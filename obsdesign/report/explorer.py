@@ -74,6 +74,11 @@ def _observer_arrays_js(variant: str) -> str:
 def preview_inputs(cfg: Config):
     """The simulator's inputs of the live step: ``prepare`` of the config without random noise.
 
+    Parameters
+    ----------
+    cfg : Config
+        The design (with the sliders' values, to compare with the page).
+
     Returns
     -------
     LoopInputs
