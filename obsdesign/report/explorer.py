@@ -142,6 +142,17 @@ def explorer_context(cfg: Config, certificate=None) -> dict:
     ctrl_js, consts = _controller_js(loop)
     plant = loop.kernel_args()[3]
     pp = plant.plant_params
+    paper_plant = bool(plant.mode == kernel.PLANT_PHYSICAL and plant.friction_code == kernel.FRICTION_PAPER
+                       and float(pp[kernel.PP_CF_NEG]) == float(pp[kernel.PP_CF])
+                       and float(pp[kernel.PP_SIGMA_NEG]) == float(pp[kernel.PP_SIGMA])
+                       and float(pp[kernel.PP_OFFSET]) == 0.0)
+    fr = cfg.friction
+    if paper_plant:
+        levels = {n: float(pp[i]) for n, i in (("Cf", kernel.PP_CF), ("s", kernel.PP_S), ("sigma", kernel.PP_SIGMA),
+                                                ("beta", kernel.PP_BETA))}
+    else:  # the page's plant is the paper's at the config's levels (the page says so)
+        levels = {"Cf": fr.Cf, "s": fr.s, "sigma": fr.sigma,
+                  "beta": fr.beta if cfg.observer.variant == "lag" and fr.beta else 0.0}
     sliders = explorer_params(cfg)
     rho_row = sliders[0]
     x_ref = np.asarray(loop.x_ref)
@@ -156,13 +167,8 @@ def explorer_context(cfg: Config, certificate=None) -> dict:
         "certificate_rhos": _certificate_table(cfg, np.geomspace(rho_row["min"], rho_row["max"], CERTIFICATE_RHOS)),
         "preview": {
             "n": int(loop.n_samples), "n_up": n_up, "n_down": n_up + int(np.argmax(x_ref[n_up:] == 0.0)), "step": 1e-3,
-            "n_sub": int(plant.n_sub), "K": float(plant.K), "G": float(plant.G), "Cf": float(pp[kernel.PP_CF]),
-            "s": float(pp[kernel.PP_S]), "sigma": float(pp[kernel.PP_SIGMA]), "beta": float(pp[kernel.PP_BETA]),
-            "quantization": float(loop.quantization), "constants": consts,
-            "paper_plant": bool(plant.mode == kernel.PLANT_PHYSICAL and plant.friction_code == kernel.FRICTION_PAPER
-                                and float(pp[kernel.PP_CF_NEG]) == float(pp[kernel.PP_CF])
-                                and float(pp[kernel.PP_SIGMA_NEG]) == float(pp[kernel.PP_SIGMA])
-                                and float(pp[kernel.PP_OFFSET]) == 0.0),
+            "n_sub": int(plant.n_sub), "K": float(plant.K), "G": float(plant.G), **levels,
+            "quantization": float(loop.quantization), "constants": consts, "paper_plant": paper_plant,
         },
     }
     formulas = re.sub(r"^export ", "", js_module(variant), flags=re.M) + _observer_arrays_js(variant)
