@@ -250,3 +250,26 @@ def test_cli_reports_the_untuned_baseline_and_exits_0_unless_nothing_ran(tmp_pat
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "no estimator could be tuned, found dob: noise rule" in err
     assert not out2.exists()
+
+
+def test_data_rows_name_a_baseline_that_cannot_be_tuned(tmp_path, monkeypatch):
+    """compare_data: a tuning failure (injected for the DOB) is that estimator's row with its reason; the Kalman
+    row is the one computed without the DOB in the list."""
+    import obsdesign.comparison_data as cd
+    from obsdesign.comparison import NOT_TUNED
+    from obsdesign.data import load_trace
+
+    trace = load_trace(_synthetic_trace(tmp_path), position="x", input="u_volt", time="t", input_gain=4.0)
+    alone = cd.compare_data(trace, estimators=("kalman",))
+    real_tune = cd.tune
+
+    def tune(name, cfg, **kw):
+        if name == "dob":
+            raise ValueError("noise rule: no knob in [0.001, 100000] reaches the target")
+        return real_tune(name, cfg, **kw)
+
+    monkeypatch.setattr(cd, "tune", tune)
+    rows = cd.compare_data(trace, estimators=("dob", "kalman"))
+    assert rows[0]["status"] == NOT_TUNED + "noise rule: no knob in [0.001, 100000] reaches the target"
+    assert all(rows[0][c] is None for c in COLUMNS[4:-1]) and rows[0]["plant"] == f"data:{trace.source}"
+    assert rows[1] == alone[0] and alone[0]["status"] == "ok"
