@@ -53,7 +53,8 @@ from .sim.step_metrics import step_metrics
 from .sweeps.pool import Executor
 
 __all__ = ["COLUMNS", "SCENARIOS", "TRANSIENT", "SETTLE_BAND", "JUDGED", "TIE", "ComparisonResult", "compare",
-           "compare_one", "summarize", "check_comparison_runs", "plant_config"]
+           "compare_one", "summarize", "check_comparison_runs", "plant_config", "NOT_TUNED", "not_tuned_row",
+           "not_tuned"]
 
 #: Columns of ``compare.csv``, in order.
 COLUMNS = ("plant", "estimator", "scenario", "seed", "friction_rms_error", "velocity_rms_error", "settling_time",
@@ -74,6 +75,45 @@ SETTLE_BAND = 2e-6
 #: estimate everywhere, and the control result where there is a controller.
 JUDGED = {"excitation": ("friction_rms_error",), "positioning": ("friction_rms_error", "settling_time"),
           "tracking": ("friction_rms_error", "tracking_rms_error"), "data": ("friction_rms_error",)}
+#: Start of the ``status`` of a row whose baseline the tuning rule could not tune (the reason follows).
+NOT_TUNED = "not tuned: "
+
+
+def not_tuned_row(row: dict[str, Any], error: Exception) -> dict[str, Any]:
+    """``row`` with no metrics and the status :data:`NOT_TUNED` followed by the first line of ``error``.
+
+    Parameters
+    ----------
+    row : dict
+        The row's keys (``plant``, ``estimator``, ``scenario``, ``seed``).
+    error : Exception
+        Why the tuning rule failed.
+
+    >>> not_tuned_row({"estimator": "dob"}, ValueError("noise rule: no knob reaches the target"))["status"]
+    'not tuned: noise rule: no knob reaches the target'
+    """
+    metrics = ("friction_rms_error", "velocity_rms_error", "settling_time", "overshoot", "tracking_rms_error",
+               "friction_noise_rms")
+    return {**row, **dict.fromkeys(metrics), "status": NOT_TUNED + (str(error).splitlines() or [""])[0]}
+
+
+def not_tuned(rows: list[dict[str, Any]]) -> dict[str, str]:
+    """Estimator -> reason, for every estimator with a row the tuning rule could not tune (:data:`NOT_TUNED`).
+
+    An estimator of the measured rows (plant ``data:<source>``) is named with its plant.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of :func:`compare` or :func:`obsdesign.comparison_data.compare_data` (or of ``compare.csv``).
+
+    >>> not_tuned([{"plant": "lugre", "estimator": "b1", "status": "not tuned: no knob"},
+    ...            {"plant": "data:a.csv", "estimator": "b1", "status": "not tuned: no noise"},
+    ...            {"plant": "lugre", "estimator": "b2", "status": "ok"}])
+    {'b1': 'no knob', 'b1 (data:a.csv)': 'no noise'}
+    """
+    return {r["estimator"] + (f" ({r['plant']})" if str(r["plant"]).startswith("data:") else ""):
+            r["status"][len(NOT_TUNED):] for r in rows if str(r["status"]).startswith(NOT_TUNED)}
 
 
 def plant_config(cfg: Config, model: str) -> Config:
@@ -312,8 +352,13 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
     ------
     ValueError
         An unknown plant, estimator or scenario name; ``seeds < 1``; more than
-        :data:`obsdesign.sweeps.plan.MAX_RUNS` runs (plants x estimators x scenarios x seeds); a baseline the fair rule
-        cannot tune (e.g. no sensor noise and no quantization).
+        :data:`obsdesign.sweeps.plan.MAX_RUNS` runs (plants x estimators x scenarios x seeds).
+
+    Notes
+    -----
+    A baseline the rule cannot tune (no sensor noise and no quantization; no knob in its range reaches
+    the target) does not stop the comparison: each of its rows has no metrics and the status
+    ``"not tuned: <reason>"`` (:data:`NOT_TUNED`, :func:`not_tuned`), and the other estimators run.
     """
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
@@ -332,10 +377,15 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
             tuned[name] = name
             noise[name] = reference_noise_rms(cfg) if eta > 0 else 0.0
         else:
-            tuned[name] = tune(name, cfg, rule=rule)
+            try:
+                tuned[name] = tune(name, cfg, rule=rule)
+            except ValueError as e:  # a row with its reason, and the others run (issue 17 item 8)
+                tuned[name] = e
+                continue
             noise[name] = friction_noise_rms(tuned[name], eta, band)
+    cases = [(p, e, s, seed) for p in plants for e in estimators for s in scenarios for seed in range(seeds)]
     tasks = [(cfg, plant_config(cfg, p), tuned[e], s, seed, noise[e])
-             for p in plants for e in estimators for s in scenarios for seed in range(seeds)]
+             for p, e, s, seed in cases if not isinstance(tuned[e], Exception)]
     pool = Executor(executor, workers)
     done: dict[int, dict] = {}
     indexed = list(enumerate(tasks))
@@ -346,7 +396,9 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
         pool.abort()
         raise
     pool.close()
-    rows = [done[i] for i in range(len(tasks))]
+    ran = iter(done[i] for i in range(len(tasks)))
+    rows = [not_tuned_row({"plant": p, "estimator": e, "scenario": s, "seed": seed}, tuned[e])
+            if isinstance(tuned[e], Exception) else next(ran) for p, e, s, seed in cases]
     return ComparisonResult(rows=rows, config=cfg, seeds=seeds, wall_s=time.perf_counter() - t0, rule=rule)
 
 

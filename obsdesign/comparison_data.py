@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from .comparison import not_tuned_row
 from .data import Trace, identify, observe
 from .data.trace import zero_phase_velocity
 from .estimators import friction_noise_rms, noise_level, reference_noise_rms, tune
@@ -52,7 +53,8 @@ def compare_data(trace: Trace, *, estimators=tuple(ESTIMATORS), cutoff_hz: float
     Returns
     -------
     list of dict
-        Rows with the columns of :data:`obsdesign.comparison.COLUMNS`.
+        Rows with the columns of :data:`obsdesign.comparison.COLUMNS`; a baseline the rule cannot tune for
+        the identified config has the status ``"not tuned: <reason>"`` (:func:`obsdesign.comparison.not_tuned_row`).
     """
     if not isinstance(trace, Trace):
         raise TypeError(f"trace: expected an obsdesign.data.Trace, found {type(trace).__name__}")
@@ -71,7 +73,12 @@ def compare_data(trace: Trace, *, estimators=tuple(ESTIMATORS), cutoff_hz: float
         row: dict[str, Any] = {"plant": f"data:{trace.source}", "estimator": name, "scenario": "data", "seed": 0,
                                "settling_time": None, "overshoot": None, "tracking_rms_error": None}
         try:
-            ctrl = sampled_controller(cfg, estimator=tune(name, cfg, rule=rule) if ESTIMATORS[name].baseline else name)
+            estimator = tune(name, cfg, rule=rule) if ESTIMATORS[name].baseline else name
+        except ValueError as e:  # a row with its reason, and the others run (issue 17 item 8)
+            rows.append(not_tuned_row(row, e))
+            continue
+        try:
+            ctrl = sampled_controller(cfg, estimator=estimator)
             result = observe(ctrl, trace)
             # the compensation signal, as in the closed loop: the paper entries' low-pass output,
             # a baseline's own estimate

@@ -193,3 +193,83 @@ def test_rule_rate_tunes_the_baselines_to_the_papers_slowest_pole(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "obsdesign", "compare", "--rule", "min", "--out", str(out)],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) <= 2 and "--rule" in bad.stderr
+
+
+def _untunable_dob():
+    """vcm with a 4 kHz low-pass: the paper's filtered estimate is noisier than the DOB at the top of its
+    knob range, so the noise rule cannot tune the DOB; the ESO and the Kalman filter still reach it."""
+    return od.load_preset("vcm").override(omega_co=2 * np.pi * 4000)
+
+
+def test_a_baseline_that_cannot_be_tuned_is_a_row_and_the_others_run():
+    from obsdesign.comparison import NOT_TUNED, not_tuned
+    from obsdesign.estimators import tune
+
+    cfg = _untunable_dob()
+    with pytest.raises(ValueError, match="noise rule: no knob"):
+        tune("dob", cfg)
+    kw = dict(plants=("paper",), scenarios=("excitation",), seeds=1, workers=1)
+    res = compare(cfg, estimators=("paper", "dob", "eso"), **kw)
+    assert [r["estimator"] for r in res.rows] == ["paper", "dob", "eso"]
+    dob = res.rows[1]
+    assert dob["status"].startswith(NOT_TUNED + "noise rule: no knob in [")
+    assert all(dob[c] is None for c in COLUMNS[4:-1]) and set(dob) == set(COLUMNS)
+    assert not_tuned(res.rows) == {"dob": dob["status"][len(NOT_TUNED):]}
+    # the others ran as they do without the DOB in the list
+    alone = compare(cfg, estimators=("paper", "eso"), **kw)
+    assert [res.rows[0], res.rows[2]] == alone.rows and {r["status"] for r in alone.rows} == {"ok"}
+    (s,) = summarize(res.rows)
+    assert {s["best"], s["runner_up"]} == {"paper", "eso"}
+
+
+def test_cli_reports_the_untuned_baseline_and_exits_0_unless_nothing_ran(tmp_path, capsys):
+    from jinja2 import Environment, PackageLoader
+
+    path = tmp_path / "axis.toml"
+    _untunable_dob().save(path)
+    out = tmp_path / "cmp"
+    argv = ["compare", "--config", str(path), "--plants", "paper", "--scenarios", "excitation", "--seeds", "1",
+            "--workers", "1"]
+    assert main([*argv, "--estimators", "paper,dob", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "dob    not tuned, not run: noise rule: no knob" in text
+    with open(out / "compare.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["status"][:10] for r in rows] == ["ok", "not tuned:"] and rows[1]["friction_rms_error"] == ""
+    payload = json.loads((out / "summary.json").read_text())
+    assert list(payload["not_tuned"]) == ["dob"] and payload["not_tuned"]["dob"].startswith("noise rule: no knob")
+    section = comparison_section(out)
+    assert section["runs"] == 1 and section["not_tuned"] == payload["not_tuned"]
+    env = Environment(loader=PackageLoader("obsdesign.report", "templates"), autoescape=True)
+    env.filters["num"] = str
+    html = env.get_template("_comparison.html.j2").render(comparison=section)
+    assert "<tr><td>dob</td><td>noise rule: no knob in [" in html
+    # nothing could run: one line, exit 2, no folder
+    out2 = tmp_path / "cmp2"
+    assert main([*argv, "--estimators", "dob", "--out", str(out2)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "no estimator could be tuned, found dob: noise rule" in err
+    assert not out2.exists()
+
+
+def test_data_rows_name_a_baseline_that_cannot_be_tuned(tmp_path, monkeypatch):
+    """compare_data: a tuning failure (injected for the DOB) is that estimator's row with its reason; the Kalman
+    row is the one computed without the DOB in the list."""
+    import obsdesign.comparison_data as cd
+    from obsdesign.comparison import NOT_TUNED
+    from obsdesign.data import load_trace
+
+    trace = load_trace(_synthetic_trace(tmp_path), position="x", input="u_volt", time="t", input_gain=4.0)
+    alone = cd.compare_data(trace, estimators=("kalman",))
+    real_tune = cd.tune
+
+    def tune(name, cfg, **kw):
+        if name == "dob":
+            raise ValueError("noise rule: no knob in [0.001, 100000] reaches the target")
+        return real_tune(name, cfg, **kw)
+
+    monkeypatch.setattr(cd, "tune", tune)
+    rows = cd.compare_data(trace, estimators=("dob", "kalman"))
+    assert rows[0]["status"] == NOT_TUNED + "noise rule: no knob in [0.001, 100000] reaches the target"
+    assert all(rows[0][c] is None for c in COLUMNS[4:-1]) and rows[0]["plant"] == f"data:{trace.source}"
+    assert rows[1] == alone[0] and alone[0]["status"] == "ok"

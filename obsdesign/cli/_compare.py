@@ -128,18 +128,36 @@ def _cmd_compare(args: argparse.Namespace) -> int:
         from ..comparison_data import compare_data
 
         rows += compare_data(trace, estimators=estimators, rule=rule)
+    skipped = _not_tuned_or_fail(rows)
     summary = summarize(rows)
     out.mkdir(exist_ok=True)
     atomic_write(out / "compare.csv", csv_text(list(COLUMNS), rows))
     payload = {"config": cfg.name, "seeds": res.seeds, "runs": len(rows), "wall_s": res.wall_s,
-               "rule": args.rule, "summary": summary}
+               "rule": args.rule, "summary": summary, "not_tuned": skipped}
     atomic_write(out / "summary.json", json.dumps(jsonable(payload), indent=1, allow_nan=False))
     save_figure(comparison_figure(rows), out / "compare.svg")
     if args.json:
         print(json.dumps(jsonable(payload), allow_nan=False))
     else:
         print(summary_text(summary, res.seeds))
+        for name, reason in skipped.items():
+            print(f"{name:6} not tuned, not run: {reason}")
     return 0
+
+
+def _not_tuned_or_fail(rows: list[dict]) -> dict[str, str]:
+    """The baselines the rule could not tune (estimator -> reason); exit status 2 when no row could run.
+
+    The rule of ``compare``'s exit status: 0 when at least one row ran (whatever its status), 2 (one line
+    naming each estimator and its reason, nothing written) when every estimator's tuning failed.
+    """
+    from ..comparison import NOT_TUNED, not_tuned
+
+    skipped = not_tuned(rows)
+    if all(str(r["status"]).startswith(NOT_TUNED) for r in rows):
+        raise UsageError("obsdesign compare: argument --estimators: no estimator could be tuned, found "
+                         + "; ".join(f"{name}: {reason}" for name, reason in skipped.items()))
+    return skipped
 
 
 def add_commands(sub) -> None:

@@ -7,10 +7,10 @@ from pathlib import Path
 
 from ..export import FORMATS as EXPORT_FORMATS
 from ..export import WHAT as EXPORT_WHAT
-from ..params import VARIANTS
+from ..params import PARAMETERS, VARIANTS
 from ..sampled.choices import CONTROLLERS, ESTIMATORS, SCHEDULES
-from ._common import (INPUT_DIR, INPUT_FILE, POSITIVE_ARG, UsageError, add_config_flags, check_output_dir,
-                      check_output_file, load, print_warnings, warn_unstable)
+from ._common import (DESIGN_FLAGS, INPUT_DIR, INPUT_FILE, POSITIVE_ARG, UsageError, add_config_flags,
+                      add_design_flags, check_output_dir, check_output_file, load, print_warnings, warn_unstable)
 from ._data import add_trace_flags, load_trace_args
 
 __all__ = ["add_commands"]
@@ -50,11 +50,16 @@ def _cmd_report(args: argparse.Namespace) -> int:
     if not args.data and (args.position or args.input or args.time or args.sample_time):
         raise UsageError("obsdesign report: the column flags (--position, --input, --time, --sample-time) "
                          "need --data FILE")
+    if args.moving_speed is not None and not args.data:
+        raise UsageError(f"obsdesign report: argument --moving-speed: needs --data FILE, found --moving-speed "
+                         f"{args.moving_speed:g} without it")
     cfg = load(args)
     trace = load_trace_args(args, args.data) if args.data else None
-    label = f"config file {args.config}" if args.config else f"preset {cfg.name}"
+    label = f"config file {args.config}" if args.config else f"preset {args.preset or args.default_preset}"
+    flags = {f"{PARAMETERS[flag]}.{flag}": f"--{flag}" for flag in DESIGN_FLAGS if getattr(args, flag) is not None}
     write_report(cfg, out, source_label=label, progress=not args.quiet, sweep_dir=args.sweep, data=trace,
-                 compare_dir=args.compare)
+                 compare_dir=args.compare, paper_studies=args.paper_studies, flags=flags,
+                 moving_speed=args.moving_speed)
     print(args.output)
     return 0
 
@@ -89,4 +94,10 @@ def add_commands(sub) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--data", metavar="FILE", type=INPUT_FILE, help="add 'Validation on measured data' for a record (.csv or .mat)")
     add_trace_flags(p, required=False)
+    p.add_argument("--moving-speed", type=POSITIVE_ARG, metavar="V",
+                   help="--data: speed [m/s] above which the axis counts as moving in the friction check "
+                        "(default 5 %% of the record's peak speed; standstill is reported separately)")
+    p.add_argument("--paper-studies", action=argparse.BooleanOptionalAction, default=None,
+                   help="add the paper's reproduction studies and claims (default: for the paper's presets only)")
+    add_design_flags(p, json_flag=None)
     p.set_defaults(run=_cmd_report)

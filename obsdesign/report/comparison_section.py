@@ -99,5 +99,9 @@ def comparison_section(folder) -> dict | None:
     if not isinstance(summary, dict) or not isinstance(summary.get("summary"), list):
         raise ValueError(f"compare: {str(folder / 'summary.json')!r} is not a summary written by obsdesign compare "
                          "(expected an object with a 'summary' list)")
-    return {"rows": rows, "summary": summary["summary"], "seeds": summary.get("seeds"),
+    from ..comparison import NOT_TUNED, not_tuned
+
+    ran = [r for r in rows if not str(r["status"]).startswith(NOT_TUNED)]
+    return {"rows": rows, "runs": len(ran), "not_tuned": not_tuned(rows), "summary": summary["summary"],
+            "seeds": summary.get("seeds"),
             "svg_src": svg_data_url(folder / "compare.svg", "compare"), "folder": str(folder)}

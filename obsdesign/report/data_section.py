@@ -14,7 +14,12 @@ import numpy as np
 
 from .figures import figure_svg, plt
 
-__all__ = ["observation_figure", "fit_figure", "data_section"]
+__all__ = ["observation_figure", "fit_figure", "data_section", "MOVING_FRACTION", "moving_mask"]
+
+#: Default speed threshold of the data check, as a fraction of the record's peak speed: where the
+#: zero-phase filtered speed is above it the axis moves and the model's ``Cf sign(v)`` is defined; below it
+#: (standstill, reversals) the sign of a noisy velocity flips and the model chatters by +-Cf.
+MOVING_FRACTION = 0.05
 
 
 def observation_figure(obs, model_w3=None):
@@ -112,20 +117,63 @@ def _svg(fig) -> str:
     return re.sub(r"<metadata>.*?</metadata>", "", text[text.index("<svg"):], flags=re.S)
 
 
-def data_section(trace) -> dict:
+def moving_mask(v: np.ndarray, moving_speed: float | None = None) -> tuple[np.ndarray, float]:
+    """Where the axis moves, ``|v| > threshold``, and the threshold [m/s].
+
+    Parameters
+    ----------
+    v : ndarray
+        Velocity [m/s] per sample (the zero-phase filtered one of the record).
+    moving_speed : float, optional
+        The threshold [m/s] (> 0); default :data:`MOVING_FRACTION` of ``max |v|``.
+
+    Examples
+    --------
+    >>> mask, threshold = moving_mask(np.array([0.0, 0.01, -0.5, 1.0]))
+    >>> mask.tolist(), threshold
+    ([False, False, True, True], 0.05)
+    >>> moving_mask(np.zeros(3), moving_speed=-1.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: moving_speed: expected a finite number > 0 [m/s], found -1.0
+    """
+    from ..estimators.base import check_positive
+
+    if moving_speed is None:
+        threshold = MOVING_FRACTION * float(np.max(np.abs(v)))
+    else:
+        threshold = check_positive("moving_speed", moving_speed, "m/s")
+    return np.abs(v) > threshold, threshold
+
+
+def _rms(x: np.ndarray) -> float | None:
+    return float(np.sqrt(np.mean(x ** 2))) if x.size else None
+
+
+def data_section(trace, *, moving_speed: float | None = None) -> dict:
     """Everything the report's section "Validation on measured data" shows.
+
+    The friction check is split by speed: the observer's estimate against the identified model where
+    the axis moves (:func:`moving_mask`), and separately at standstill, where the model's
+    ``Cf sign(v)`` of a velocity near zero flips between +-Cf and the difference measures that, not the
+    observer.
 
     Parameters
     ----------
     trace : Trace
         The measured trace (``obsdesign report --data FILE``).
+    moving_speed : float, optional
+        The speed [m/s] above which the axis counts as moving (default :data:`MOVING_FRACTION` of the
+        record's peak zero-phase speed).
 
     Returns
     -------
     dict
         ``source``, ``names`` (the column names), ``samples``, ``sample_time``,
         ``parameters`` (rows ``(name, value, std, unit)``), ``nrmse_percent``,
-        ``condition_number``, ``s_note``, ``rms_error`` and ``rms_residual`` [N],
+        ``condition_number``, ``s_note``, ``rms_error`` (whole record), ``rms_error_moving`` and
+        ``rms_error_standstill`` [N] (None where no sample is in that class), ``moving_speed`` [m/s],
+        ``moving_fraction`` (of the samples), ``rms_residual`` [N],
         ``observer`` (the :class:`~obsdesign.data.Observation`), ``fit_svg`` and ``observe_svg``.
         Strings are user text: the template escapes them.
     """
@@ -135,13 +183,20 @@ def data_section(trace) -> dict:
     cfg = ident.to_config(name="identified")
     obs = observe(cfg, trace)
     w3 = model_friction_state(ident, trace, cfg)
+    from ..data.trace import zero_phase_velocity
+
+    moving, threshold = moving_mask(zero_phase_velocity(trace.position, trace.sample_time, ident.filter_hz),
+                                    moving_speed)
+    error = obs.f_hat - w3
     measured, model = _model_force(ident, trace)
     params = [("m", ident.m, ident.m_std, "kg"), ("sigma", ident.sigma, ident.sigma_std, "N s/m"),
               ("Cf", ident.Cf, ident.Cf_std, "N"), ("offset", ident.offset, ident.offset_std, "N")]
     return {"source": trace.source, "names": dict(trace.names), "samples": trace.samples,
             "sample_time": trace.sample_time, "parameters": params, "nrmse_percent": ident.nrmse_percent,
             "condition_number": ident.condition_number, "s_note": ident.s_note,
-            "rms_error": float(np.sqrt(np.mean((obs.f_hat - w3) ** 2))),
+            "rms_error": _rms(error), "rms_error_moving": _rms(error[moving]),
+            "rms_error_standstill": _rms(error[~moving]), "moving_speed": threshold, "moving_speed_given": moving_speed is not None,
+            "moving_fraction": float(np.mean(moving)),
             "rms_residual": float(np.sqrt(np.mean((measured - model) ** 2))),
             "observer": obs, "fit_svg": _svg(fit_figure(ident, trace)),
             "observe_svg": _svg(observation_figure(obs, w3))}

@@ -33,25 +33,17 @@ from .. import __version__, studies
 from .._format import with_unit
 from .._io import atomic_write
 from ..design import check_stability, noise_analysis, pid_from_config
-from ..export.codegen import js_module
 from ..params import Config
 from ..sweeps.summary import check_summary
 from ..symbolic import derive
 from ..symbolic.printing import derivation_html
 from .data_section import data_section
+from .explorer import explorer_context, explorer_json
 from .figures import figure_svg
 from .folder_files import read_json, svg_data_url
 from .study_figures import convergence_figure, experiments_figure, friction_loops_figure
 
 __all__ = ["render_report", "write_report", "ReportContentError"]
-
-
-def _source(row, cfg: Config, source_label: str) -> str:
-    """Where a parameter's value comes from: the config's ``[sources]``, the default, or the config."""
-    known = cfg.source_of(row.name)
-    if known is not None:
-        return known
-    return "obsdesign default" if row.is_default else source_label
 
 
 def _svg(fig) -> str:
@@ -105,21 +97,6 @@ def _quantity(value, unit: str = "") -> str:
         text = f"{value.real:.4g}{value.imag:+.4g}j" if value.imag else f"{value.real:.4g}"
         return f"{text} {unit}" if unit else text
     return with_unit(value, unit, 4)
-
-
-def _explorer_params(cfg: Config, variant: str) -> list[dict]:
-    m, fr, rho = cfg.plant.m, cfg.friction, cfg.observer.rho
-    rows = [
-        {"name": "rho", "label": "rho", "value": rho, "min": 0.5, "max": max(5.0, 2 * rho), "log": False},
-        {"name": "kappa", "label": "kappa [N/m]", "value": fr.kappa, "min": fr.kappa / 100, "max": fr.kappa * 100, "log": True},
-        {"name": "m", "label": "m [kg]", "value": m, "min": m / 10, "max": m * 10, "log": True},
-    ]
-    if variant == "lag":
-        rows += [
-            {"name": "sigma", "label": "sigma [N s/m]", "value": fr.sigma, "min": fr.sigma / 10, "max": fr.sigma * 10, "log": True},
-            {"name": "beta", "label": "beta [s]", "value": fr.beta, "min": fr.beta / 100, "max": fr.beta * 100, "log": True},
-        ]
-    return rows
 
 
 def _sweep_section(sweep_dir) -> dict | None:
@@ -199,8 +176,14 @@ def _with_csp(html: str) -> str:
 
 
 def render_report(cfg: Config, *, source_label: str | None = None, progress: bool = False,
-                  sweep_dir=None, data=None, compare_dir=None) -> str:
+                  sweep_dir=None, data=None, compare_dir=None, paper_studies: bool | None = None,
+                  flags=None, moving_speed: float | None = None) -> str:
     """Render the report of a config as one HTML string.
+
+    The design is judged by the stated criteria of :mod:`obsdesign.criteria`. The paper's reproduction
+    studies (Table 1 convergence, the published PID gains, the noise study) and its claims table are
+    added for the paper's presets (a config equal to one, :func:`obsdesign.provenance.matching_preset`)
+    or with ``paper_studies=True``; never for a user's design unless asked.
 
     Parameters
     ----------
@@ -216,17 +199,30 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
         (:func:`obsdesign.report.data_section.data_section`).
     compare_dir : path, optional
         A folder written by ``obsdesign compare``; shown in "Comparison with standard estimators".
+    paper_studies : bool, optional
+        Add the paper's studies and claims (default: only for a config equal to a shipped preset).
+    flags : mapping, optional
+        Parameters set by command-line flags (``{"observer.rho": "--rho"}``), for the source column
+        (:func:`obsdesign.provenance.parameter_sources`).
+    moving_speed : float, optional
+        ``data``: the speed [m/s] above which the axis counts as moving in the data check (default
+        :data:`obsdesign.report.data_section.MOVING_FRACTION` of the record's peak speed).
     """
     from tqdm import tqdm
 
+    from ..criteria import judge_design
+    from ..provenance import matching_preset, parameter_sources
     from .comparison_section import comparison_section
 
     source_label = source_label or f"preset {cfg.name}"
     sweep_section = _sweep_section(sweep_dir)
     compare_section = comparison_section(compare_dir)
     variant = cfg.observer.variant
+    paper = matching_preset(cfg) is not None if paper_studies is None else bool(paper_studies)
     steps = ["derivation", "stability", "PID and loop", "noise", "convergence (Table 1)", "experiments", "friction loops",
              "noise study", "render"]
+    if not paper:
+        steps = [s for s in steps if s not in ("convergence (Table 1)", "noise study")]
     bar = tqdm(steps, desc="obsdesign report", disable=not progress, leave=False)
     ctx: dict = {"cfg": cfg, "version": __version__, "source_label": source_label,
                  "date": datetime.date.today().isoformat()}
@@ -234,7 +230,8 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     bar.set_postfix_str(steps[0])
     d = derive(variant)
     ctx["derivation_html"] = derivation_html(d)
-    ctx["params"] = [(r.name, r.value, r.unit, r.doc, _source(r, cfg, source_label)) for r in cfg.describe_fields()]
+    sources = parameter_sources(cfg, source_label, flags=flags)
+    ctx["params"] = [(r.name, r.value, r.unit, r.doc, sources[r.name]) for r in cfg.describe_fields()]
     bar.update()
 
     bar.set_postfix_str(steps[1])
@@ -263,38 +260,41 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
                                          ylabel="gain [N/m]"))
     bar.update()
 
-    claims = list(studies.derivation_claims()) + list(studies.pid_claims())
-    bar.set_postfix_str(steps[4])
-    conv = studies.convergence_study(seeds=3)
-    claims += conv.claims
-    ctx["convergence_svg"] = _svg(convergence_figure(conv))
-    bar.update()
+    claims = []
+    ctx["paper"] = paper
+    if paper:
+        claims = list(studies.derivation_claims()) + list(studies.pid_claims())
+        bar.set_postfix_str("convergence (Table 1)")
+        conv = studies.convergence_study(seeds=3)
+        claims += conv.claims
+        ctx["convergence_svg"] = _svg(convergence_figure(conv))
+        bar.update()
 
-    bar.set_postfix_str(steps[5])
+    bar.set_postfix_str("experiments")
     exp = studies.experiments_study(cfg)
     claims += exp.claims
     ctx["experiments"] = exp
     ctx["experiments_svg"] = _svg(experiments_figure(exp))
     bar.update()
 
-    bar.set_postfix_str(steps[6])
+    bar.set_postfix_str("friction loops")
     loops = studies.friction_loops_study(cfg)
     claims += loops.claims
     ctx["loops_svg"] = _svg(friction_loops_figure(loops))
     bar.update()
 
-    bar.set_postfix_str(steps[7])
-    claims += studies.noise_study().claims
-    ctx["claims"] = claims
-    bar.update()
+    if paper:
+        bar.set_postfix_str("noise study")
+        claims += studies.noise_study().claims
+        bar.update()
+    ctx["claims"] = claims if paper else []
+    ctx["criteria"] = judge_design(cfg, sampled_loop=ctx["loop_view"].sampled, experiments=exp, noise=na,
+                                   stability=rep)
 
-    bar.set_postfix_str(steps[8])
-    module = js_module(variant)
-    ctx["explorer_js"] = re.sub(r"^export ", "", module, flags=re.M)
-    ctx["explorer_params"] = _explorer_params(cfg, variant)
-    ctx["explorer_fixed"] = {"sigma": cfg.friction.sigma, "beta": cfg.friction.beta}
+    bar.set_postfix_str("render")
+    ctx.update(explorer_context(cfg, certificate=rep.certificate))
     ctx["sweep"] = sweep_section
-    ctx["data"] = data_section(data) if data is not None else None
+    ctx["data"] = data_section(data, moving_speed=moving_speed) if data is not None else None
     ctx["comparison"] = compare_section
     ctx["elapsed"] = time.perf_counter() - t0
     env = Environment(loader=PackageLoader("obsdesign.report", "templates"), undefined=StrictUndefined,
@@ -302,6 +302,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     env.filters["num"] = _quantity  # one number format in the whole report: 4 significant digits
     env.filters["qty"] = _quantity
     env.filters["log10"] = math.log10
+    env.filters["explorer_json"] = explorer_json
     html = _with_csp(env.get_template("report.html.j2").render(csp=_CSP_MARK, **ctx))
     bar.update()
     bar.close()
@@ -309,7 +310,8 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
 
 
 def write_report(cfg: Config, path: str | os.PathLike, *, source_label: str | None = None,
-                 progress: bool = False, sweep_dir=None, data=None, compare_dir=None) -> None:
+                 progress: bool = False, sweep_dir=None, data=None, compare_dir=None,
+                 paper_studies: bool | None = None, flags=None, moving_speed: float | None = None) -> None:
     """Render and write the report atomically (temporary file, then rename).
 
     Parameters
@@ -318,8 +320,9 @@ def write_report(cfg: Config, path: str | os.PathLike, *, source_label: str | No
         The design.
     path : str or os.PathLike
         Output HTML file.
-    source_label, progress, sweep_dir, data, compare_dir : optional
+    source_label, progress, sweep_dir, data, compare_dir, paper_studies, flags, moving_speed : optional
         As for :func:`render_report`.
     """
     atomic_write(path, render_report(cfg, source_label=source_label, progress=progress, sweep_dir=sweep_dir,
-                                     data=data, compare_dir=compare_dir))
+                                     data=data, compare_dir=compare_dir, paper_studies=paper_studies,
+                                     flags=flags, moving_speed=moving_speed))
