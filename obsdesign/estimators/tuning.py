@@ -22,6 +22,11 @@ Rules (``rule``):
     The slowest error pole equals the paper's dominant pole ``-sqrt(kappa/m)(rho - 1)`` at
     ``k = 0``: ``omega_o = omega_q = sqrt(kappa/m)(rho - 1)``; for the Kalman filter
     ``q`` is solved so that the largest discrete pole radius is ``exp(p_dom dt)``.
+``"min-error"``
+    The knob minimises the predicted error of the compensated estimate
+    (:func:`obsdesign.estimators.prediction.predict_error`: noise propagation plus tracking lag
+    of Coulomb reversals), independently of the paper's observer: a log grid of 33 points over
+    the knob's range, then a bounded ``minimize_scalar`` between the best point's neighbours.
 
 Both rules are independent of ``eta`` (every RMS is proportional to it; the Kalman gain
 depends on ``q / eta^2`` and its knob scales with ``eta^2``), but depend on ``B`` and ``dt``.
@@ -290,6 +295,26 @@ def _solve_log(fun, lo: float, hi: float, what: str) -> float:
     return math.exp(scipy.optimize.brentq(fun, a, b, xtol=_XTOL, rtol=_XTOL, maxiter=200))
 
 
+def _min_error(make, cfg: Config, lo: float, hi: float) -> float:
+    """The knob in ``[lo, hi]`` of least :func:`~obsdesign.estimators.prediction.predict_error` (total)."""
+    from .prediction import predict_error
+
+    def cost(log_knob: float) -> float:
+        try:
+            return predict_error(make(math.exp(log_knob)), cfg).total
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError):
+            return math.inf
+
+    grid = np.linspace(math.log(lo), math.log(hi), 33)
+    values = [cost(x) for x in grid]
+    i = int(np.argmin(values))
+    if not math.isfinite(values[i]):
+        raise ValueError(f"min-error rule: no knob in [{lo:g}, {hi:g}] gives a stable estimator")
+    a, b = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
+    res = scipy.optimize.minimize_scalar(cost, bounds=(a, b), method="bounded", options={"xatol": 1e-4})
+    return math.exp(float(res.x)) if res.fun < values[i] else math.exp(float(grid[i]))
+
+
 def tune(name: str, cfg: Config, *, rule: str = "noise", sigma_model: float | None = None) -> DiscreteEstimator:
     """An estimator of the registry with its knob set by the fair tuning rule.
 
@@ -305,7 +330,7 @@ def tune(name: str, cfg: Config, *, rule: str = "noise", sigma_model: float | No
         The design.
     rule : str
         One of :data:`RULES`: equal friction-noise RMS with the paper's filtered estimate
-        (``"noise"``), or equal slowest pole (``"rate"``).
+        (``"noise"``), equal slowest pole (``"rate"``), or least predicted error (``"min-error"``).
     sigma_model : float, optional
         Viscous coefficient of the baselines' model (default: ``sigma`` for ``static``, 0 for ``lag``).
 
@@ -321,7 +346,7 @@ def tune(name: str, cfg: Config, *, rule: str = "noise", sigma_model: float | No
     cfg = check_config(cfg)
     if not info.baseline:
         return info.build(cfg, sigma_model=sigma_model)
-    pole = _check_paper_stable(cfg)
+    pole = _check_paper_stable(cfg) if rule != "min-error" else math.nan
     knob, (lo, hi), build = info.knob, info.knob_range, info.build
 
     def make(value: float) -> DiscreteEstimator:
@@ -335,6 +360,8 @@ def tune(name: str, cfg: Config, *, rule: str = "noise", sigma_model: float | No
         for _ in range(info.knob_noise_power):   # lo eta^p / eta_range^p, in this order of operations
             lo, hi = lo * eta, hi * eta
         lo, hi = lo / _RANGE_ETA ** info.knob_noise_power, hi / _RANGE_ETA ** info.knob_noise_power
+    if rule == "min-error":
+        return make(_min_error(make, cfg, lo, hi))
     if rule == "rate":
         target = pole * cfg.observer.dt          # log of the target pole radius
 
