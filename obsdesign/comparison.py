@@ -53,7 +53,7 @@ from .sim.step_metrics import step_metrics
 from .sweeps.pool import Executor
 
 __all__ = ["COLUMNS", "SCENARIOS", "TRANSIENT", "SETTLE_BAND", "JUDGED", "TIE", "ComparisonResult", "compare",
-           "compare_one", "summarize", "check_comparison_runs", "plant_config"]
+           "compare_one", "summarize", "check_comparison_runs", "plant_config", "paper_design"]
 
 #: Columns of ``compare.csv``, in order.
 COLUMNS = ("plant", "estimator", "scenario", "seed", "friction_rms_error", "velocity_rms_error", "settling_time",
@@ -301,8 +301,10 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
         A ``concurrent.futures.Executor`` or ``dask.distributed.Client`` (as :func:`obsdesign.sweep`).
     rule : str
         How the baselines are tuned against the paper's observer, a name of
-        :data:`obsdesign.estimators.RULES`: ``noise`` (equal friction-noise RMS, the default) or
-        ``rate`` (equal slowest error pole). The paper's observer keeps its design either way.
+        :data:`obsdesign.estimators.RULES`: ``noise`` (equal friction-noise RMS, the default),
+        ``rate`` (equal slowest error pole): the paper's observer keeps its design; or ``min-error``:
+        every estimator, the paper's rho and omega_co included, tuned for the least predicted
+        friction-estimate error (docs/tune.md).
 
     Returns
     -------
@@ -327,14 +329,16 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
     tuned: dict[str, Any] = {}
     eta, band = noise_level(cfg)
     noise: dict[str, float] = {}
+    design = {name: cfg for name in estimators}  # the design each estimator's controller is built from
     for name in estimators:
         if not ESTIMATORS[name].baseline:  # the paper's observer: run by name, the kernel schedules it
+            design[name] = paper_design(cfg, rule)
             tuned[name] = name
-            noise[name] = reference_noise_rms(cfg) if eta > 0 else 0.0
+            noise[name] = reference_noise_rms(design[name]) if eta > 0 else 0.0
         else:
             tuned[name] = tune(name, cfg, rule=rule)
             noise[name] = friction_noise_rms(tuned[name], eta, band)
-    tasks = [(cfg, plant_config(cfg, p), tuned[e], s, seed, noise[e])
+    tasks = [(design[e], plant_config(cfg, p), tuned[e], s, seed, noise[e])
              for p in plants for e in estimators for s in scenarios for seed in range(seeds)]
     pool = Executor(executor, workers)
     done: dict[int, dict] = {}
@@ -348,6 +352,25 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
     pool.close()
     rows = [done[i] for i in range(len(tasks))]
     return ComparisonResult(rows=rows, config=cfg, seeds=seeds, wall_s=time.perf_counter() - t0, rule=rule)
+
+
+def paper_design(cfg: Config, rule: str) -> Config:
+    """The paper observer's design under ``rule``: ``cfg`` itself, or for ``min-error`` its rho and omega_co
+    tuned by the same objective as the baselines (:func:`obsdesign.design.tune`, ``estimate-error``, the
+    compensation gain kept, the certificate required).
+
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+    rule : str
+        A name of :data:`obsdesign.estimators.RULES`.
+    """
+    if rule != "min-error":
+        return cfg
+    from .design.tune import tune as tune_design
+
+    return tune_design(cfg, objective="estimate-error", tune_gain=False).config
 
 
 def _run_batch(batch: list[tuple]) -> list[tuple[int, dict]]:

@@ -26,6 +26,7 @@ from .friction.presliding import coulomb_along
 from .sampled.choices import ESTIMATORS
 from .sampled.controller import sampled_controller
 from .sim.metrics import rms
+from .comparison import paper_design
 
 __all__ = ["compare_data", "TRANSIENT_SAMPLES_S"]
 
@@ -71,13 +72,14 @@ def compare_data(trace: Trace, *, estimators=tuple(ESTIMATORS), cutoff_hz: float
         row: dict[str, Any] = {"plant": f"data:{trace.source}", "estimator": name, "scenario": "data", "seed": 0,
                                "settling_time": None, "overshoot": None, "tracking_rms_error": None}
         try:
-            ctrl = sampled_controller(cfg, estimator=tune(name, cfg, rule=rule) if ESTIMATORS[name].baseline else name)
+            own = cfg if ESTIMATORS[name].baseline else paper_design(cfg, rule)
+            ctrl = sampled_controller(own, estimator=tune(name, cfg, rule=rule) if ESTIMATORS[name].baseline else name)
             result = observe(ctrl, trace)
             # the compensation signal, as in the closed loop: the paper entries' low-pass output,
             # a baseline's own estimate
             v_hat, f_hat = result.v_hat, result.f_hat_filtered
             if ctrl.baseline is None:
-                noise = reference_noise_rms(cfg) if eta > 0 else 0.0
+                noise = reference_noise_rms(own) if eta > 0 else 0.0
             else:
                 noise = friction_noise_rms(ctrl.baseline, eta, band)
         except (ValueError, TypeError, ArithmeticError) as e:

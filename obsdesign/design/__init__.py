@@ -36,6 +36,6 @@ _LAZY = {
     'tune': '.tune',
     'TuneResult': '.tune',
     'Constraints': '.tune',
-    'OBJECTIVES': '.tune',
+    'OBJECTIVES': '.objectives',
 }
 __getattr__, __dir__ = lazy_names(__name__, _LAZY)

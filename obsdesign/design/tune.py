@@ -30,9 +30,11 @@ worse than it when it is feasible.
 Examples
 --------
 >>> import obsdesign as od
->>> res = tune(od.load_preset("vcm"))
->>> res.objective, res.after < res.before, res.feasible
-('estimate-error', True, True)
+>>> e = evaluate(od.load_preset("vcm"))   # the start of a tuning: objective and constraint values
+>>> round(e.objective, 5), round(e.parts["noise_part"], 6), e.certified, round(e.phase_margin_deg, 2)
+(0.06539, 0.001232, True, 20.12)
+
+See docs/tune.md for a whole tuning.
 """
 
 from __future__ import annotations
@@ -43,18 +45,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._display import ResultDisplay
-from .._registry import Entry, Registry
 from .._validate import check_choice
 from ..params import Config
+from .objectives import OBJECTIVES, TRACKING_SCENARIOS
 
-__all__ = ["OBJECTIVES", "Constraints", "TuneResult", "tune", "evaluate", "GRID"]
+__all__ = ["OBJECTIVES", "TRACKING_SCENARIOS", "Constraints", "Evaluation", "TuneResult", "tune", "evaluate", "GRID"]
 
-#: The tuning objectives (lower is better).
-OBJECTIVES = Registry("objective", [
-    Entry("estimate-error", 0, "predicted RMS error of the compensated friction estimate under the config's noise "
-          "(noise propagation + tracking lag of Coulomb reversals) [N]"),
-    Entry("tracking", 1, "RMS tracking error of a comparison scenario by simulation [m]"),
-])
 #: Grid points per variable (rho, omega_co, gain) of the coarse search, per objective.
 GRID = {"estimate-error": (7, 7, 3), "tracking": (4, 4, 2)}
 #: Search box: rho, omega_co as multiples of the Nyquist rate, gain.
@@ -322,10 +318,6 @@ def _tracking_error(cfg: Config, scenario: str) -> float:
     return value if value is not None and math.isfinite(value) else math.inf
 
 
-#: Scenarios the ``tracking`` objective accepts (closed loop: every comparison scenario but ``excitation``).
-TRACKING_SCENARIOS = ("tracking", "positioning")
-
-
 def evaluate(cfg: Config, *, objective: str = "estimate-error", scenario: str = "tracking",
              reversal_rate: float | None = None) -> Evaluation:
     """Objective and constraint values of ``cfg`` as it is (see :func:`tune`).
@@ -342,7 +334,7 @@ def evaluate(cfg: Config, *, objective: str = "estimate-error", scenario: str = 
     >>> import obsdesign as od
     >>> e = evaluate(od.load_preset("vcm"))
     >>> e.certified, e.stable_loop, round(e.objective, 5)
-    (True, True, 0.0654)
+    (True, True, 0.06539)
     """
     from ..estimators.prediction import REVERSAL_RATE
 

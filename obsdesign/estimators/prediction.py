@@ -9,18 +9,21 @@ of the friction ``f``. Its error ``f - g f_hat`` has two independent parts:
 * **lag**: the friction itself through the plant and the estimator. The friction is modelled as the
   Coulomb level switching sign at reversals that come at random (a random telegraph signal of
   amplitude ``Cf`` and rate ``lambda`` reversals per second: autocorrelation ``Cf^2 exp(-2 lambda
-  |tau|)``), held over each sample; it moves the plant ``m x'' = -f - sigma_model v`` (the
-  estimator's own model, ``u = 0``; ZOH, :func:`control.c2d`), and the estimate follows it through
-  ``Gy(z)`` (:meth:`~obsdesign.estimators.DiscreteEstimator.transfer_from_measurement`). With
-  ``T(z) = -Gy(z) P(z)`` the error spectrum is ``|1 - g T|^2 S(theta)``,
+  |tau|)``), held over each sample; it moves the physical plant at ``u = 0`` (ZOH, :func:`control.c2d`):
+  ``static``: ``m v' = -Fc - sigma v`` and the friction to estimate is ``f = Fc``; ``lag``:
+  ``m v' = -Fc - Fv``, ``beta Fv' = sigma v - Fv`` and ``f = Fc + Fv = F(z) Fc``. The estimate follows
+  through ``Gy(z)`` (:meth:`~obsdesign.estimators.DiscreteEstimator.transfer_from_measurement`): with
+  ``T(z) = Gy(z) X(z)`` (``X``: ``Fc -> x``) the error spectrum is ``|F - g T|^2 S(theta)``,
   ``S = Cf^2 (1 - r^2) / |1 - r e^{j theta}|^2``, ``r = exp(-2 lambda dt)``, so::
 
-      lag^2 = Cf^2 - 2 g B + g^2 C,   B = (1/pi) int_0^pi Re(T) S,   C = (1/pi) int_0^pi |T|^2 S
+      lag^2 = A - 2 g B + g^2 C,   A = (1/pi) int_0^pi |F|^2 S,   B = (1/pi) int_0^pi Re(conj(F) T) S,
+      C = (1/pi) int_0^pi |T|^2 S
 
-and ``total = sqrt(lag^2 + noise^2)`` (the two are uncorrelated). ``B`` and ``C`` are integrated on
+  (``A = Cf^2`` for ``static``, ``F = 1``)
+and ``total = sqrt(lag^2 + noise^2)`` (the two are uncorrelated). The moments are integrated on
 ``log theta`` by 16-point Gauss-Legendre rules over half decades, split at the estimator's pole
-frequencies and the reversal corner (``theta >= 1e-9 pi``: below it the error vanishes as
-``|1 - T| -> 0``), vectorised. At ``k = 0`` (gross sliding), as the noise analysis of section 3.4.
+frequencies and the reversal corner (``theta >= 1e-8 pi``: below it the error vanishes as
+``|F - T| -> 0``), vectorised. At ``k = 0`` (gross sliding), as the noise analysis of section 3.4.
 
 Examples
 --------
@@ -29,7 +32,7 @@ Examples
 >>> cfg = od.load_preset("vcm")
 >>> p = predict_error(reference_estimator(cfg), cfg)
 >>> round(p.total, 5), round(p.noise, 6), round(p.lag, 5)
-(0.04191, 0.000367, 0.04191)
+(0.06539, 0.001232, 0.06538)
 >>> p.gain, p.reversal_rate
 (1.0, 1.0)
 """
@@ -45,7 +48,6 @@ from .._display import ResultDisplay
 from ..params import Config
 from .base import DiscreteEstimator, check_config
 from .kalman import noise_level
-from .paper import model_sigma
 
 __all__ = ["ErrorPrediction", "predict_error", "lag_moments", "REVERSAL_RATE"]
 
@@ -99,8 +101,43 @@ def _response(sys, z: np.ndarray) -> np.ndarray:
     return (C @ x)[:, 0, 0] + D[0, 0]
 
 
-def lag_moments(est: DiscreteEstimator, cfg: Config, *, reversal_rate: float = REVERSAL_RATE) -> tuple[float, float]:
-    """``(B, C)`` of the module's lag formula [N^2], for the friction level ``cfg.friction.Cf``.
+def _factored(sys):
+    """``z -> sys(z)`` of a discrete SISO system from its zeros, poles and gain (exact near a pole at 1)."""
+    import control as ct
+
+    tf = ct.tf(sys)
+    zeros, poles = tf.zeros(), tf.poles()
+    num, den = np.trim_zeros(np.squeeze(tf.num[0][0]), "f"), np.squeeze(tf.den[0][0])
+    gain = float(num[0] / den[0]) if num.size else 0.0
+
+    def response(z: np.ndarray) -> np.ndarray:
+        top = np.prod(z[:, None] - zeros[None, :], axis=1) if zeros.size else np.ones_like(z)
+        return gain * top / np.prod(z[:, None] - poles[None, :], axis=1)
+
+    return response
+
+
+def _plant(cfg: Config, dt: float):
+    """The physical plant driven by the Coulomb friction ``Fc`` (``u = 0``, ZOH): ``(Fc -> x, Fc -> Fv)``.
+
+    ``static``: ``m v' = -Fc - sigma v``, the estimated friction is ``Fc`` (``Fv`` is none). ``lag``:
+    ``m v' = -Fc - Fv``, ``beta Fv' = sigma v - Fv``, the estimated friction is ``Fc + Fv``.
+    """
+    import control as ct
+
+    m, fr = cfg.plant.m, cfg.friction
+    if cfg.observer.variant == "static" or fr.beta is None:
+        sysc = ct.ss([[0.0, 1.0], [0.0, -fr.sigma / m]], [[0.0], [-1.0 / m]], [[1.0, 0.0]], [[0.0]])
+        sysd = ct.c2d(sysc, dt, "zoh")
+        return _factored(sysd), (lambda z: np.zeros_like(z))
+    A = [[0.0, 1.0, 0.0], [0.0, 0.0, -1.0 / m], [0.0, fr.sigma / fr.beta, -1.0 / fr.beta]]
+    sysd = ct.c2d(ct.ss(A, [[0.0], [-1.0 / m], [0.0]], [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]], [[0.0], [0.0]]), dt, "zoh")
+    return _factored(sysd[0, 0]), _factored(sysd[1, 0])
+
+
+def lag_moments(est: DiscreteEstimator, cfg: Config, *,
+                reversal_rate: float = REVERSAL_RATE) -> tuple[float, float, float]:
+    """``(A, B, C)`` of the module's lag formula [N^2], for the friction level ``cfg.friction.Cf``.
 
     Parameters
     ----------
@@ -113,7 +150,8 @@ def lag_moments(est: DiscreteEstimator, cfg: Config, *, reversal_rate: float = R
 
     Returns
     -------
-    (float, float)
+    (float, float, float)
+        ``lag^2 = A - 2 g B + g^2 C`` (``A = Cf^2`` for ``static``).
     """
     import control as ct
 
@@ -122,14 +160,14 @@ def lag_moments(est: DiscreteEstimator, cfg: Config, *, reversal_rate: float = R
     if not (math.isfinite(lam) and lam > 0.0):
         raise ValueError(f"reversal_rate: expected a finite number > 0 [1/s], found {reversal_rate!r}")
     dt, m = est.dt, cfg.plant.m
-    P = ct.ss(ct.c2d(ct.tf([1.0], [m, model_sigma(cfg, None), 0.0]), dt, "zoh"))
+    x_of_f, fv_of_f = _plant(cfg, dt)
     Gy = est.transfer_from_measurement()[1, 0]
     r = math.exp(-2.0 * lam * dt)
     level = cfg.friction.Cf ** 2
     poles = [abs(np.log(p)) for p in np.linalg.eigvals(est.Phi) if p != 0]
-    lo, hi = math.log(1e-9 * math.pi), math.log(math.pi)
+    lo, hi = math.log(1e-8 * math.pi), math.log(math.pi)
     edges = {lo, hi, *np.arange(lo, hi, math.log(10.0) / 2)}
-    edges |= {math.log(c) for c in (*poles, 2.0 * lam * dt) if 1e-9 * math.pi < c < math.pi}
+    edges |= {math.log(c) for c in (*poles, 2.0 * lam * dt) if 1e-8 * math.pi < c < math.pi}
     edges = np.array(sorted(edges))
     x, w = np.polynomial.legendre.leggauss(_NODES)
     half = np.diff(edges)[:, None] / 2.0
@@ -137,10 +175,12 @@ def lag_moments(est: DiscreteEstimator, cfg: Config, *, reversal_rate: float = R
     weights = (half * w[None, :]).ravel()
     theta = np.exp(u)
     z = np.exp(1j * theta)
-    T = -_response(Gy, z) * _response(P, z)
+    T = _response(Gy, z) * x_of_f(z)
+    F = 1.0 + fv_of_f(z)                   # the friction the estimate follows, per unit of Coulomb level
     S = level * (1.0 - r * r) / np.abs(1.0 - r * z) ** 2
     common = weights * theta * S / math.pi
-    total = (float(np.sum(common * T.real)), float(np.sum(common * np.abs(T) ** 2)))
+    total = (float(np.sum(common * np.abs(F) ** 2)), float(np.sum(common * (np.conj(F) * T).real)),
+             float(np.sum(common * np.abs(T) ** 2)))
     return total
 
 
@@ -174,7 +214,7 @@ def predict_error(est: DiscreteEstimator, cfg: Config, *, gain: float | None = N
     if not float(np.max(np.abs(est.poles()))) < 1.0:
         return ErrorPrediction(total=math.inf, noise=math.inf, lag=math.inf, gain=g, reversal_rate=reversal_rate)
     noise = g * friction_noise_rms(est, *noise_level(cfg))
-    B, C = lag_moments(est, cfg, reversal_rate=reversal_rate)
-    lag = math.sqrt(max(cfg.friction.Cf ** 2 - 2.0 * g * B + g * g * C, 0.0))
+    A, B, C = lag_moments(est, cfg, reversal_rate=reversal_rate)
+    lag = math.sqrt(max(A - 2.0 * g * B + g * g * C, 0.0))
     return ErrorPrediction(total=math.hypot(lag, noise), noise=noise, lag=lag, gain=g,
                            reversal_rate=float(reversal_rate))
