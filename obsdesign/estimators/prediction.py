@@ -39,6 +39,7 @@ Examples
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -96,6 +97,8 @@ def _response(sys, z: np.ndarray) -> np.ndarray:
     """``D + C (zI - A)^-1 B`` of a SISO state-space system at every point of ``z``."""
     A, B, C, D = (np.asarray(m, float) for m in (sys.A, sys.B, sys.C, sys.D))
     n = A.shape[0]
+    if n == 0:
+        return np.full(z.shape, D[0, 0], dtype=complex)
     M = z[:, None, None] * np.eye(n)[None] - A[None]
     x = np.linalg.solve(M, np.broadcast_to(B.astype(complex), (z.size, n, 1)))
     return (C @ x)[:, 0, 0] + D[0, 0]
@@ -118,6 +121,13 @@ def _factored(sys):
 
 
 def _plant(cfg: Config, dt: float):
+    """:func:`_plant_of` of a config (cached per plant and sample time)."""
+    fr = cfg.friction
+    return _plant_of(cfg.plant.m, fr.sigma, fr.beta, cfg.observer.variant, dt)
+
+
+@functools.lru_cache(maxsize=64)
+def _plant_of(m: float, sigma: float, beta: float | None, variant: str, dt: float):
     """The physical plant driven by the Coulomb friction ``Fc`` (``u = 0``, ZOH): ``(Fc -> x, Fc -> Fv)``.
 
     ``static``: ``m v' = -Fc - sigma v``, the estimated friction is ``Fc`` (``Fv`` is none). ``lag``:
@@ -125,12 +135,11 @@ def _plant(cfg: Config, dt: float):
     """
     import control as ct
 
-    m, fr = cfg.plant.m, cfg.friction
-    if cfg.observer.variant == "static" or fr.beta is None:
-        sysc = ct.ss([[0.0, 1.0], [0.0, -fr.sigma / m]], [[0.0], [-1.0 / m]], [[1.0, 0.0]], [[0.0]])
+    if variant == "static" or beta is None:
+        sysc = ct.ss([[0.0, 1.0], [0.0, -sigma / m]], [[0.0], [-1.0 / m]], [[1.0, 0.0]], [[0.0]])
         sysd = ct.c2d(sysc, dt, "zoh")
         return _factored(sysd), (lambda z: np.zeros_like(z))
-    A = [[0.0, 1.0, 0.0], [0.0, 0.0, -1.0 / m], [0.0, fr.sigma / fr.beta, -1.0 / fr.beta]]
+    A = [[0.0, 1.0, 0.0], [0.0, 0.0, -1.0 / m], [0.0, sigma / beta, -1.0 / beta]]
     sysd = ct.c2d(ct.ss(A, [[0.0], [-1.0 / m], [0.0]], [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]], [[0.0], [0.0]]), dt, "zoh")
     return _factored(sysd[0, 0]), _factored(sysd[1, 0])
 
