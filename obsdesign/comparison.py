@@ -47,7 +47,7 @@ from .friction.registry import FRICTION_MODELS
 from .params import Config
 from .plant_spec import PlantFrictionSpec
 from .sim.metrics import rms
-from .sim.scenarios import Chirp, Excitation, Positioning
+from .sim.cases import CASES, TRANSIENT
 from .sim.simulate import simulate
 from .sim.step_metrics import step_metrics
 from .sweeps.pool import Executor
@@ -58,16 +58,10 @@ __all__ = ["COLUMNS", "SCENARIOS", "TRANSIENT", "SETTLE_BAND", "JUDGED", "TIE", 
 #: Columns of ``compare.csv``, in order.
 COLUMNS = ("plant", "estimator", "scenario", "seed", "friction_rms_error", "velocity_rms_error", "settling_time",
            "overshoot", "tracking_rms_error", "friction_noise_rms", "status")
-#: Scenario name -> (spec, duration [s]) of the comparison.
-SCENARIOS = {
-    "excitation": (Excitation(force_rms=1.0, bandwidth=5.0), 5.0),
-    "positioning": (Positioning(step_size=1e-3, step_up=0.5, step_down=3.0), 4.0),
-    "tracking": (Chirp(f0=0.5, f1=3.0), 8.0),
-}
+#: Scenario name -> (spec, duration [s]) of the comparison (:data:`obsdesign.sim.cases.CASES`).
+SCENARIOS = CASES
 #: Relative difference below which two estimators tie, whatever the spread (deterministic runs).
 TIE = 0.01
-#: Start-up interval [s] left out of the RMS errors.
-TRANSIENT = 0.5
 #: Settling band [m] of the positioning rows: 2 um, the simulator's default ``settle_tol``.
 SETTLE_BAND = 2e-6
 #: The metrics each scenario is judged by in the summary (lower is better): the friction

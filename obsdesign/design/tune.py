@@ -8,8 +8,8 @@ Objectives (:data:`OBJECTIVES`, lower is better):
     (:func:`obsdesign.estimators.prediction.predict_error`, the paper's observer at ``k = 0``
     with its low-pass eq:3:4:5).
 ``tracking``
-    The RMS tracking error [m] of a scenario of :data:`obsdesign.comparison.SCENARIOS`
-    (default ``tracking``), by simulation (seed 0, after :data:`obsdesign.comparison.TRANSIENT`).
+    The RMS tracking error [m] of a scenario of :data:`obsdesign.sim.cases.CASES` (the comparison's;
+    default ``tracking``), by simulation (seed 0, after :data:`obsdesign.sim.cases.TRANSIENT`).
 
 Constraints (:class:`Constraints`):
 
@@ -39,7 +39,6 @@ See docs/tune.md for a whole tuning.
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, field
 
@@ -48,6 +47,7 @@ import numpy as np
 from .._display import ResultDisplay
 from .._validate import check_choice
 from ..params import Config
+from .compensated_loop import compensated_loop as _loop
 from .objectives import OBJECTIVES, TRACKING_SCENARIOS
 
 __all__ = ["OBJECTIVES", "TRACKING_SCENARIOS", "Constraints", "Evaluation", "TuneResult", "tune", "evaluate", "GRID"]
@@ -89,7 +89,27 @@ class Constraints:
 
 @dataclass(frozen=True, kw_only=True)
 class Evaluation:
-    """Objective and constraint values of one design."""
+    """Objective and constraint values of one design.
+
+    Attributes
+    ----------
+    rho, omega_co, gain : float
+        The design: gain parameter [-], low-pass cutoff [rad/s], compensation gain [-].
+    objective : float
+        The objective's value (``inf``: no value, e.g. an unstable observer or a diverged run).
+    certified : bool
+        The certificate holds (True without computing it where the search skipped it).
+    decay_rate : float or None
+        The certified decay rate [1/s].
+    phase_margin_deg : float
+        Phase margin [deg] of the sampled loop with the compensation (``-inf``: unstable loop).
+    stable_loop : bool
+        The closed sampled loop with the compensation is stable.
+    command_noise : float
+        RMS [V] of the command from the sensor noise.
+    parts : dict
+        The objective's parts (``estimate-error``: ``noise_part``, ``lag_part`` [N]).
+    """
 
     rho: float
     omega_co: float
@@ -103,7 +123,13 @@ class Evaluation:
     parts: dict = field(default_factory=dict)
 
     def violations(self, c: Constraints) -> dict[str, float]:
-        """Constraint name -> how far it is violated (> 0), for the violated ones."""
+        """Constraint name -> how far it is violated (> 0), for the violated ones.
+
+        Parameters
+        ----------
+        c : Constraints
+            The constraints.
+        """
         out = {}
         if c.certificate and not self.certified:
             out["certificate"] = 1.0
@@ -196,74 +222,6 @@ class TuneResult(ResultDisplay):
         return rows
 
 
-def _loop(cfg: Config, est, gain: float) -> tuple[float, bool, float]:
-    """``(phase margin [deg], closed loop stable, command noise RMS [V])`` of the compensated sampled loop.
-
-    The margin is the smallest ``180 + arg L`` (wrapped to (-180, 180]) over the gain crossovers on a
-    log grid of :data:`LOOP_POINTS` frequencies up to Nyquist, each crossover located by linear
-    interpolation of ``log |L|``; the stability from the closed loop's poles (python-control).
-    """
-    import control as ct
-
-    from ..estimators import noise_level
-
-    dt, d, K = cfg.observer.dt, cfg.pid.delay_samples, cfg.plant.K
-    C, H = _pid_and_plant(cfg.phi, cfg.pid.tau, cfg.pid.max_S, cfg.pid.phase_margin_deg, cfg.pid.derivative_N, dt)
-    Gy = est.transfer_from_measurement()[1, 0]
-    Gu = est.transfer_from_input()[1, 0]
-    delay = ct.ss(ct.tf([1.0], [1.0] + [0.0] * d, dt)) if d else ct.ss([], [], [], [[1.0]], dt)
-    L = delay * ((C - (gain / K) * Gy) * H - gain * Gu)  # one copy of the plant's states
-    if not float(np.max(np.abs(ct.feedback(L, 1).poles()))) < 1.0:
-        return -math.inf, False, math.inf
-
-    def loop(theta):
-        z = np.exp(1j * theta)
-        r = {name: _freq(sys, z) for name, sys in (("C", C), ("H", H), ("Gy", Gy), ("Gu", Gu))}
-        zd = z ** (-d)
-        Lz = zd * (r["C"] * r["H"] - (gain / K) * r["Gy"] * r["H"] - gain * r["Gu"])
-        return Lz, zd * (-r["C"] + (gain / K) * r["Gy"]) / (1.0 + Lz)
-
-    theta = np.geomspace(1e-7 * math.pi, math.pi, LOOP_POINTS)
-    Lz, _ = loop(theta)
-    mag = np.log(np.abs(Lz))
-    pms = []
-    for i in np.flatnonzero(np.sign(mag[:-1]) != np.sign(mag[1:])):
-        f = mag[i] / (mag[i] - mag[i + 1])
-        th = math.exp(math.log(theta[i]) + f * (math.log(theta[i + 1]) - math.log(theta[i])))
-        pms.append((math.degrees(np.angle(loop(np.array([th]))[0][0])) + 360.0) % 360.0 - 180.0)
-    pm = min(pms) if pms else math.inf
-    eta, band = noise_level(cfg)
-    top = min(2.0 * math.pi * band * dt, math.pi)
-    theta = np.linspace(0.0, top, 2049)[1:]
-    _, Tn = loop(theta)
-    power = np.trapezoid(np.abs(Tn) ** 2, theta) / top
-    return float(pm), True, float(eta * math.sqrt(power))
-
-
-@functools.lru_cache(maxsize=16)
-def _pid_and_plant(phi, tau, max_S, phase_margin_deg, derivative_N, dt):
-    """The kernel's discrete PID and the ZOH plant of :mod:`obsdesign.design.sampled_loop`, as state space."""
-    import control as ct
-
-    from .pid import pid_gains
-    from .sampled_loop import discrete_pid, zoh_plant
-
-    _, _, kp, ki, kd = pid_gains(phi=phi, tau=tau, max_S=max_S, phase_margin_deg=phase_margin_deg)
-    return (ct.ss(discrete_pid(kp=kp, ki=ki, kd=kd, tau_d=kd / kp / derivative_N, dt=dt)),
-            ct.ss(zoh_plant(phi=phi, tau=tau, dt=dt)))
-
-
-#: Frequencies of the margin search (log grid from 1e-7 of Nyquist to Nyquist).
-LOOP_POINTS = 2000
-
-
-def _freq(sys, z: np.ndarray) -> np.ndarray:
-    """Frequency response of a SISO state-space system at the points ``z``."""
-    from ..estimators.prediction import _response
-
-    return _response(sys, z)
-
-
 def _paper_estimator(cfg: Config):
     from ..estimators import reference_estimator
 
@@ -313,11 +271,11 @@ class _Evaluator:
 
 
 def _tracking_error(cfg: Config, scenario: str) -> float:
-    from ..comparison import SCENARIOS, TRANSIENT
+    from ..sim.cases import CASES, TRANSIENT
     from ..sim.metrics import rms
     from ..sim.simulate import simulate
 
-    spec, duration = SCENARIOS[scenario]
+    spec, duration = CASES[scenario]
     try:
         res = simulate(cfg, spec, duration=duration, seed=0)
     except (ValueError, ArithmeticError):

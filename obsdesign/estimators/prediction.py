@@ -49,6 +49,7 @@ from .._display import ResultDisplay
 from ..params import Config
 from .base import DiscreteEstimator, check_config
 from .kalman import noise_level
+from .noise_rms import friction_noise_rms
 
 __all__ = ["ErrorPrediction", "predict_error", "lag_moments", "REVERSAL_RATE"]
 
@@ -214,8 +215,6 @@ def predict_error(est: DiscreteEstimator, cfg: Config, *, gain: float | None = N
     ErrorPrediction
         ``inf`` parts for an estimator with a pole on or outside the unit circle.
     """
-    from .tuning import friction_noise_rms
-
     cfg = check_config(cfg)
     g = cfg.compensation.gain if gain is None else float(gain)
     if not (math.isfinite(g) and 0.0 < g <= 1.0):
