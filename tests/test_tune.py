@@ -14,6 +14,7 @@ import scipy.signal
 import obsdesign as od
 from obsdesign.cli import main
 from obsdesign.design.sampled_loop import sampled_loop
+from obsdesign.design import certify
 from obsdesign.design.compensated_loop import compensated_loop as _loop
 from obsdesign.design.tune import Constraints, evaluate, tune
 from obsdesign.estimators import build, friction_noise_rms, noise_level, reference_estimator, run_offline
@@ -92,7 +93,7 @@ def test_min_error_rule_is_a_minimum():
 
 def _check_tuned(res, min_pm):
     cfg = res.config
-    assert od.certify(od.design_observer(cfg)).certified
+    assert certify(od.design_observer(cfg)).certified
     pm, stable, _ = _loop(cfg, reference_estimator(cfg), cfg.compensation.gain)
     assert stable and pm >= min_pm - 1e-9
     assert res.after <= res.before
@@ -150,3 +151,28 @@ def test_sweep_integer_axis():
         check_axes({"delay_samples": (0, 1, 3)}, {}, 1)
     with pytest.raises(ValueError, match="uncertain delay_samples: an integer field cannot be drawn"):
         check_axes({}, {"delay_samples": (0, 2)}, 1)
+
+
+@pytest.mark.slow
+def test_compare_min_error_tunes_every_estimator(tmp_path):
+    import json
+
+    from obsdesign.comparison import compare, paper_design
+    from obsdesign.estimators import reference_noise_rms
+
+    cfg = od.load_preset("vcm")
+    res = compare(cfg, plants=("paper",), estimators=("paper", "dob"), scenarios=("excitation",), seeds=1,
+                  workers=1, rule="min-error")
+    tuned = paper_design(cfg, "min-error")
+    assert tuned.observer.rho != cfg.observer.rho and tuned.compensation.gain == cfg.compensation.gain
+    assert tuned.observer.rho == tune(cfg, tune_gain=False).config.observer.rho
+    paper, dob = res.rows
+    # the paper row ran the tuned design (its noise column is that design's), the DOB the min-error knob
+    assert paper["friction_noise_rms"] == pytest.approx(reference_noise_rms(tuned), rel=1e-12)
+    est = tune_estimator("dob", cfg, rule="min-error")
+    assert dob["friction_noise_rms"] == pytest.approx(friction_noise_rms(est, *noise_level(cfg)), rel=1e-12)
+    assert predict_error(reference_estimator(tuned), tuned).total < predict_error(reference_estimator(cfg), cfg).total
+    out = tmp_path / "cmp"
+    assert main(["compare", "--plants", "paper", "--estimators", "paper,dob", "--scenarios", "excitation",
+                 "--seeds", "1", "--workers", "1", "--rule", "min-error", "--out", str(out)]) == 0
+    assert json.loads((out / "summary.json").read_text())["rule"] == "min-error"
