@@ -46,8 +46,8 @@ from .estimators.registry import ESTIMATORS, RULES
 from .friction.registry import FRICTION_MODELS
 from .params import Config
 from .plant_spec import PlantFrictionSpec
-from .sim.metrics import rms
 from .sim.cases import CASES, TRANSIENT
+from .sim.metrics import rms
 from .sim.simulate import simulate
 from .sim.step_metrics import step_metrics
 from .sweeps.pool import Executor

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from .comparison import paper_design
 from .data import Trace, identify, observe
 from .data.trace import zero_phase_velocity
 from .estimators import friction_noise_rms, noise_level, reference_noise_rms, tune
@@ -26,7 +27,6 @@ from .friction.presliding import coulomb_along
 from .sampled.choices import ESTIMATORS
 from .sampled.controller import sampled_controller
 from .sim.metrics import rms
-from .comparison import paper_design
 
 __all__ = ["compare_data", "TRANSIENT_SAMPLES_S"]
 

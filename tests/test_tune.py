@@ -13,9 +13,9 @@ import scipy.signal
 
 import obsdesign as od
 from obsdesign.cli import main
-from obsdesign.design.sampled_loop import sampled_loop
 from obsdesign.design import certify
 from obsdesign.design.compensated_loop import compensated_loop as _loop
+from obsdesign.design.sampled_loop import sampled_loop
 from obsdesign.design.tune import Constraints, evaluate, tune
 from obsdesign.estimators import build, friction_noise_rms, noise_level, reference_estimator, run_offline
 from obsdesign.estimators import tune as tune_estimator

@@ -163,13 +163,11 @@ def lag_moments(est: DiscreteEstimator, cfg: Config, *,
     (float, float, float)
         ``lag^2 = A - 2 g B + g^2 C`` (``A = Cf^2`` for ``static``).
     """
-    import control as ct
-
     cfg = check_config(cfg)
     lam = float(reversal_rate)
     if not (math.isfinite(lam) and lam > 0.0):
         raise ValueError(f"reversal_rate: expected a finite number > 0 [1/s], found {reversal_rate!r}")
-    dt, m = est.dt, cfg.plant.m
+    dt = est.dt
     x_of_f, fv_of_f = _plant(cfg, dt)
     Gy = est.transfer_from_measurement()[1, 0]
     r = math.exp(-2.0 * lam * dt)

@@ -13,12 +13,11 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from dataclasses import dataclass
 
 import numpy as np
-
-import dataclasses
 
 from .._validate import FINITE, Integer, check_integer
 from ..params import PARAMETERS, SECTIONS
