@@ -215,9 +215,16 @@ class TuneResult(ResultDisplay):
         rows = [("objective", f"{self.objective}: {self.before:.6g} -> {self.after:.6g}"),
                 ("rho", f"{s.rho:.6g} -> {d.rho:.6g}"), ("omega_co [rad/s]", f"{s.omega_co:.6g} -> {d.omega_co:.6g}"),
                 ("compensation gain", f"{s.gain:.4g} -> {d.gain:.4g}")]
+        for key in d.parts:
+            rows.append((f"  {key.replace('_', ' ')}", f"{s.parts.get(key, math.nan):.6g} -> {d.parts[key]:.6g}"))
+        def show(x):
+            return f"{x:.4g}" if isinstance(x, float) else str(x)
+
         for r in self.constraint_rows():
-            margin = "" if r["margin"] is None else f" (margin {r['margin']:.4g})"
-            rows.append((r["constraint"], f"bound {r['bound']}: start {r['start']}, chosen {r['chosen']}{margin}"))
+            label = "decay rate [1/s]" if r["constraint"] == "certificate" else "margin"
+            margin = "" if r["margin"] is None else f" ({label} {r['margin']:.4g})"
+            rows.append((r["constraint"], f"bound {show(r['bound'])}: start {show(r['start'])}, "
+                                          f"chosen {show(r['chosen'])}{margin}"))
         rows.append(("evaluations", f"{self.evaluations} in {self.wall_s:.1f} s"))
         return rows
 
