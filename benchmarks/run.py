@@ -23,6 +23,7 @@ import bench_derive  # noqa: E402
 import bench_identify  # noqa: E402
 import bench_sim  # noqa: E402
 import bench_sweep  # noqa: E402
+import bench_tune  # noqa: E402
 
 SUITES = {
     "Symbolic derivation (issue 2)": bench_derive.run,
@@ -33,6 +34,7 @@ SUITES = {
     "Command-line start-up (issue 13)": bench_cli.run,
     "Estimator comparison (issue 11)": bench_compare.run,
     "Stability certificate (issue 18)": bench_certificate.run,
+    "Tuning (issue 18)": bench_tune.run,
 }
 
 

@@ -46,29 +46,23 @@ from .estimators.registry import ESTIMATORS, RULES
 from .friction.registry import FRICTION_MODELS
 from .params import Config
 from .plant_spec import PlantFrictionSpec
+from .sim.cases import CASES, TRANSIENT
 from .sim.metrics import rms
-from .sim.scenarios import Chirp, Excitation, Positioning
 from .sim.simulate import simulate
 from .sim.step_metrics import step_metrics
 from .sweeps.pool import Executor
 
 __all__ = ["COLUMNS", "SCENARIOS", "TRANSIENT", "SETTLE_BAND", "JUDGED", "TIE", "ComparisonResult", "compare",
            "compare_one", "summarize", "check_comparison_runs", "plant_config", "NOT_TUNED", "not_tuned_row",
-           "not_tuned"]
+           "not_tuned", "paper_design"]
 
 #: Columns of ``compare.csv``, in order.
 COLUMNS = ("plant", "estimator", "scenario", "seed", "friction_rms_error", "velocity_rms_error", "settling_time",
            "overshoot", "tracking_rms_error", "friction_noise_rms", "status")
-#: Scenario name -> (spec, duration [s]) of the comparison.
-SCENARIOS = {
-    "excitation": (Excitation(force_rms=1.0, bandwidth=5.0), 5.0),
-    "positioning": (Positioning(step_size=1e-3, step_up=0.5, step_down=3.0), 4.0),
-    "tracking": (Chirp(f0=0.5, f1=3.0), 8.0),
-}
+#: Scenario name -> (spec, duration [s]) of the comparison (:data:`obsdesign.sim.cases.CASES`).
+SCENARIOS = CASES
 #: Relative difference below which two estimators tie, whatever the spread (deterministic runs).
 TIE = 0.01
-#: Start-up interval [s] left out of the RMS errors.
-TRANSIENT = 0.5
 #: Settling band [m] of the positioning rows: 2 um, the simulator's default ``settle_tol``.
 SETTLE_BAND = 2e-6
 #: The metrics each scenario is judged by in the summary (lower is better): the friction
@@ -341,8 +335,10 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
         A ``concurrent.futures.Executor`` or ``dask.distributed.Client`` (as :func:`obsdesign.sweep`).
     rule : str
         How the baselines are tuned against the paper's observer, a name of
-        :data:`obsdesign.estimators.RULES`: ``noise`` (equal friction-noise RMS, the default) or
-        ``rate`` (equal slowest error pole). The paper's observer keeps its design either way.
+        :data:`obsdesign.estimators.RULES`: ``noise`` (equal friction-noise RMS, the default),
+        ``rate`` (equal slowest error pole): the paper's observer keeps its design; or ``min-error``:
+        every estimator, the paper's rho and omega_co included, tuned for the least predicted
+        friction-estimate error (docs/tune.md).
 
     Returns
     -------
@@ -372,10 +368,12 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
     tuned: dict[str, Any] = {}
     eta, band = noise_level(cfg)
     noise: dict[str, float] = {}
+    design = {name: cfg for name in estimators}  # the design each estimator's controller is built from
     for name in estimators:
         if not ESTIMATORS[name].baseline:  # the paper's observer: run by name, the kernel schedules it
+            design[name] = paper_design(cfg, rule)
             tuned[name] = name
-            noise[name] = reference_noise_rms(cfg) if eta > 0 else 0.0
+            noise[name] = reference_noise_rms(design[name]) if eta > 0 else 0.0
         else:
             try:
                 tuned[name] = tune(name, cfg, rule=rule)
@@ -384,7 +382,7 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
                 continue
             noise[name] = friction_noise_rms(tuned[name], eta, band)
     cases = [(p, e, s, seed) for p in plants for e in estimators for s in scenarios for seed in range(seeds)]
-    tasks = [(cfg, plant_config(cfg, p), tuned[e], s, seed, noise[e])
+    tasks = [(design[e], plant_config(cfg, p), tuned[e], s, seed, noise[e])
              for p, e, s, seed in cases if not isinstance(tuned[e], Exception)]
     pool = Executor(executor, workers)
     done: dict[int, dict] = {}
@@ -400,6 +398,25 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
     rows = [not_tuned_row({"plant": p, "estimator": e, "scenario": s, "seed": seed}, tuned[e])
             if isinstance(tuned[e], Exception) else next(ran) for p, e, s, seed in cases]
     return ComparisonResult(rows=rows, config=cfg, seeds=seeds, wall_s=time.perf_counter() - t0, rule=rule)
+
+
+def paper_design(cfg: Config, rule: str) -> Config:
+    """The paper observer's design under ``rule``: ``cfg`` itself, or for ``min-error`` its rho and omega_co
+    tuned by the same objective as the baselines (:func:`obsdesign.design.tune`, ``estimate-error``, the
+    compensation gain kept, the certificate required).
+
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+    rule : str
+        A name of :data:`obsdesign.estimators.RULES`.
+    """
+    if rule != "min-error":
+        return cfg
+    from .design.tune import tune as tune_design
+
+    return tune_design(cfg, objective="estimate-error", tune_gain=False).config
 
 
 def _run_batch(batch: list[tuple]) -> list[tuple[int, dict]]:

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from .comparison import not_tuned_row
+from .comparison import not_tuned_row, paper_design
 from .data import Trace, identify, observe
 from .data.trace import zero_phase_velocity
 from .estimators import friction_noise_rms, noise_level, reference_noise_rms, tune
@@ -74,17 +74,18 @@ def compare_data(trace: Trace, *, estimators=tuple(ESTIMATORS), cutoff_hz: float
                                "settling_time": None, "overshoot": None, "tracking_rms_error": None}
         try:
             estimator = tune(name, cfg, rule=rule) if ESTIMATORS[name].baseline else name
+            own = cfg if ESTIMATORS[name].baseline else paper_design(cfg, rule)
         except ValueError as e:  # a row with its reason, and the others run (issue 17 item 8)
             rows.append(not_tuned_row(row, e))
             continue
         try:
-            ctrl = sampled_controller(cfg, estimator=estimator)
+            ctrl = sampled_controller(own, estimator=estimator)
             result = observe(ctrl, trace)
             # the compensation signal, as in the closed loop: the paper entries' low-pass output,
             # a baseline's own estimate
             v_hat, f_hat = result.v_hat, result.f_hat_filtered
             if ctrl.baseline is None:
-                noise = reference_noise_rms(cfg) if eta > 0 else 0.0
+                noise = reference_noise_rms(own) if eta > 0 else 0.0
             else:
                 noise = friction_noise_rms(ctrl.baseline, eta, band)
         except (ValueError, TypeError, ArithmeticError) as e:

@@ -182,7 +182,7 @@ def test_rule_rate_tunes_the_baselines_to_the_papers_slowest_pole(tmp_path):
     assert res.rows[0]["friction_noise_rms"] == pytest.approx(friction_noise_rms(rate, eta, band), rel=1e-12)
     assert res.rows[0]["friction_noise_rms"] != pytest.approx(friction_noise_rms(tune("eso", cfg), eta, band),
                                                               rel=1e-3)
-    with pytest.raises(ValueError, match="rule: expected one of noise, rate, found 'fast'"):
+    with pytest.raises(ValueError, match="rule: expected one of noise, rate, min-error, found 'fast'"):
         compare(cfg, plants=("paper",), estimators=("eso",), scenarios=("positioning",), seeds=1, rule="fast")
     out = tmp_path / "cmp"
     run = subprocess.run([sys.executable, "-m", "obsdesign", "compare", "--plants", "paper", "--estimators", "eso",

@@ -431,7 +431,7 @@ def test_noise_rms_of_an_unstable_estimator_is_unbounded():
 @pytest.mark.parametrize("call, match", [
     (lambda c: tune("luenberger", c), r"name: expected one of paper, paper-k0, eso, kalman, dob, found 'luenberger'"),
     (lambda c: build("ekf", c), r"name: expected one of .*found 'ekf'"),
-    (lambda c: tune("eso", c, rule="speed"), r"rule: expected one of noise, rate, found 'speed'"),
+    (lambda c: tune("eso", c, rule="speed"), r"rule: expected one of noise, rate, min-error, found 'speed'"),
     (lambda c: build("eso", c, omega_o=0.0), r"omega_o: expected a finite number > 0 \[rad/s\], found 0.0"),
     (lambda c: build("eso", c, omega_o=float("nan")), r"omega_o: expected a finite number > 0 \[rad/s\], found nan"),
     (lambda c: build("kalman", c, q=-1.0), r"q: expected a finite number > 0 \[N\^2/s\], found -1.0"),

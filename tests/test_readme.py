@@ -29,6 +29,7 @@ LONG = {
     "sweep": "long: 200 closed-loop runs",
     "report --sweep": "needs the sweep's folder",
     "compare": "long: every estimator on every plant",
+    "tune": "long: a search over some 250 designs",
 }
 NOT_RUN = {"make": "make targets build .venv and run the suite (this test is part of it)"}
 

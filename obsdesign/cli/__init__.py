@@ -6,7 +6,7 @@ commands: :mod:`~obsdesign.cli._design` (derive, check, pid, noise),
 :mod:`~obsdesign.cli._sim` (simulate, sweep), :mod:`~obsdesign.cli._output`
 (export, report), :mod:`~obsdesign.cli._data` (identify, observe), :mod:`~obsdesign.cli._loop` (loop),
 :mod:`~obsdesign.cli._config` (config),
-:mod:`~obsdesign.cli._compare` (compare); shared argument types in :mod:`~obsdesign.cli._common`. Building the
+:mod:`~obsdesign.cli._compare` (compare), :mod:`~obsdesign.cli._tune` (tune); shared argument types in :mod:`~obsdesign.cli._common`. Building the
 parser imports no numerical library: the heavy modules load inside the commands.
 
 Exit statuses: 0 success, 1 a check failed (``check`` only), 2 bad input or an
@@ -33,7 +33,7 @@ import warnings
 from typing import Sequence
 
 from .. import __version__
-from . import _compare, _config, _data, _design, _dynamic, _loop, _output, _sim
+from . import _compare, _config, _data, _design, _dynamic, _loop, _output, _sim, _tune
 from ._common import Parser, UsageError
 from ._errors import BAD_INPUT, describe, exit_status, plain
 
@@ -53,6 +53,7 @@ def build_parser() -> argparse.ArgumentParser:
     _config.add_commands(sub)
     _compare.add_commands(sub)
     _dynamic.add_commands(sub)
+    _tune.add_commands(sub)
     return parser
 
 

@@ -6,16 +6,12 @@ import argparse
 import json
 from pathlib import Path
 
-from ..estimators.registry import ESTIMATORS, RULES
+from ..estimators.registry import ESTIMATORS, RULE_FLAGS
 from ..friction.registry import FRICTION_MODELS
 from ._common import (FINITE_ARG, INPUT_FILE, POSITIVE_ARG, UsageError, add_config_flags, check_output_dir, integer,
                       load, workers_arg)
 
 __all__ = ["add_commands", "parse_list", "summary_text"]
-
-
-#: The --rule names (issue 18's contract) -> the tuning rules of obsdesign.estimators.RULES.
-RULE_FLAGS = dict(zip(("equal-noise", "rate"), RULES))
 
 
 def _scenarios() -> tuple[str, ...]:
@@ -172,8 +168,9 @@ def add_commands(sub) -> None:
                    "(default: all of them; docs/comparison.md)")
     p.add_argument("--seeds", type=integer(1), default=2, help="seeds per case (default 2)")
     p.add_argument("--rule", choices=tuple(RULE_FLAGS), default="equal-noise",
-                   help="how the baselines are tuned against the paper's observer: equal friction-noise RMS "
-                        "(default) or equal slowest error pole")
+                   help="how the estimators are tuned: the baselines to the paper observer's friction-noise RMS "
+                        "(equal-noise, default) or slowest error pole (rate), or every estimator, the paper's rho and "
+                        "omega_co included, for the least predicted friction-estimate error (min-error, docs/tune.md)")
     p.add_argument("--workers", type=workers_arg, help="local processes (default: all cores)")
     p.add_argument("--data", metavar="FILE", type=INPUT_FILE, help="measured trace (.csv/.mat): adds offline rows, friction error "
                    "against the model identified from it (docs/comparison.md)")

@@ -8,6 +8,7 @@ __all__ = [
     "FrozenSystems", "ObserverArrays", "ObserverDesign", "is_stable", "StabilityReport", "check_stability", "design_observer",
     "PIDDesign", "design_pid", "pid_from_config", "pid_from_gains", "Condition",
     "design_warnings", "certified_rho_range", "certify", "StabilityCertificate",
+    "tune", "TuneResult", "Constraints", "OBJECTIVES",
 ]
 
 #: Public name -> module it comes from; loaded on first use (obsdesign._lazy).
@@ -32,5 +33,9 @@ _LAZY = {
     'certified_rho_range': '.advisories',
     'certify': '.certificate',
     'StabilityCertificate': '.certificate',
+    'tune': '.tune',
+    'TuneResult': '.tune',
+    'Constraints': '.tune',
+    'OBJECTIVES': '.objectives',
 }
 __getattr__, __dir__ = lazy_names(__name__, _LAZY)

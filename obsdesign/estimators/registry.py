@@ -43,10 +43,14 @@ if TYPE_CHECKING:
     from ..params import Config
     from .base import DiscreteEstimator
 
-__all__ = ["EstimatorInfo", "ESTIMATORS", "RULES", "FIRST_BASELINE_CODE", "build", "estimator_names"]
+__all__ = ["EstimatorInfo", "ESTIMATORS", "RULES", "RULE_FLAGS", "FIRST_BASELINE_CODE", "build", "estimator_names"]
 
-#: Fair tuning rules (:func:`obsdesign.estimators.tune`): equal friction-noise RMS, equal slowest pole.
-RULES = ("noise", "rate")
+#: Fair tuning rules (:func:`obsdesign.estimators.tune`): equal friction-noise RMS, equal slowest pole,
+#: least predicted friction-estimate error (:func:`obsdesign.estimators.prediction.predict_error`;
+#: in :func:`obsdesign.comparison.compare` the paper's rho and omega_co too, :func:`obsdesign.design.tune`).
+RULES = ("noise", "rate", "min-error")
+#: The names ``compare --rule`` takes -> the rules above (the one list of the command line's choices).
+RULE_FLAGS = dict(zip(("equal-noise", "rate", "min-error"), RULES))
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -13,15 +13,16 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import FINITE, check_integer
-from ..params import PARAMETERS
+from .._validate import FINITE, Integer, check_integer
+from ..params import PARAMETERS, SECTIONS
 
-__all__ = ["RunSpec", "make_plan", "check_names", "check_axes", "MAX_RUNS"]
+__all__ = ["RunSpec", "make_plan", "check_names", "check_axes", "integer_fields", "MAX_RUNS"]
 
 #: Most runs a sweep may plan (a plan holds one seed per run in memory).
 MAX_RUNS = 1_000_000
@@ -50,6 +51,27 @@ class RunSpec:
     sample: int
     seed: int
     params: dict
+
+
+def integer_fields() -> frozenset[str]:
+    """Names of the config fields whose rule is an :class:`~obsdesign._validate.Integer` (e.g. ``delay_samples``).
+
+    A swept integer field gets integer grid points (``LO``, ``HI`` whole and ``N`` such that the
+    step is whole); it cannot be drawn uniformly.
+
+    >>> sorted(integer_fields())
+    ['delay_samples']
+    """
+    return frozenset(f.name for cls in SECTIONS.values() for f in dataclasses.fields(cls)
+                     if isinstance(f.metadata.get("check"), Integer))
+
+
+def _integer_axis(name: str, lo: float, hi: float, n: int) -> None:
+    """``ValueError`` unless ``linspace(lo, hi, n)`` holds whole numbers only."""
+    points = np.linspace(lo, hi, n)
+    if not np.all(points == np.round(points)):
+        raise ValueError(f"vary {name}: expected whole grid points for an integer field (LO, HI whole and "
+                         f"(HI - LO) / (N - 1) whole), found {lo:g}:{hi:g}:{n}")
 
 
 def check_names(kind: str, spec: dict) -> dict[str, tuple]:
@@ -120,12 +142,17 @@ def check_axes(vary: dict, uncertain: dict, samples: int) -> tuple[dict, dict]:
     for name, value in vary.items():
         lo, hi = _bounds("vary", name, value, 3, "(LO, HI, N)")
         out_vary[name] = (lo, hi, check_integer(f"vary {name} N", value[2], minimum=1))
+        if name.removeprefix("plant.") in integer_fields():
+            _integer_axis(name, *out_vary[name])
     out_unc = {}
     for name, value in uncertain.items():
         if name in vary:
             raise ValueError(f"uncertain: {name!r} is varied already; expected each parameter in vary or in "
                              "uncertain, not both")
         lo, hi = _bounds("uncertain", name, value, 2, "(LO, HI)")
+        if name.removeprefix("plant.") in integer_fields():
+            raise ValueError(f"uncertain {name}: an integer field cannot be drawn uniformly; vary it on a grid "
+                             f"(--vary {name}=LO:HI:N) instead")
         if hi < lo:
             raise ValueError(f"uncertain {name}: expected LO <= HI, found {lo:g} > {hi:g}")
         out_unc[name] = (lo, hi)
@@ -152,6 +179,7 @@ def make_plan(vary: dict, uncertain: dict, samples: int, seed: int) -> list[RunS
         Sweep seed.
     """
     axes = [np.linspace(lo, hi, n) for lo, hi, n in vary.values()]
+    ints = integer_fields()
     grid = list(itertools.product(*axes)) if axes else [()]
     n_runs = len(grid) * samples
     children = np.random.SeedSequence(seed).spawn(n_runs)
@@ -160,7 +188,8 @@ def make_plan(vary: dict, uncertain: dict, samples: int, seed: int) -> list[RunS
         for j in range(samples):
             r = g * samples + j
             rng = np.random.default_rng(children[r])
-            params = {name: float(v) for name, v in zip(vary, point)}
+            params = {name: int(round(v)) if name.removeprefix("plant.") in ints else float(v)
+                      for name, v in zip(vary, point)}
             params.update({name: float(rng.uniform(lo, hi)) for name, (lo, hi) in uncertain.items()})
             plan.append(RunSpec(r, g, j, int(children[r].generate_state(1, np.uint32)[0]), params))
     return plan
