@@ -70,3 +70,30 @@ def test_refusals():
         simulate_circle(VCM.override(mode="feedforward", lookahead=20000), radius=5e-3, feed=2e-2)
     with pytest.raises(ValueError, match="direction: expected one of"):
         simulate_circle(VCM, direction="up")
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--feed", "5"], "feed: expected a path velocity the axis can drive"),
+    (["--radius", "1e-5"], "radius: expected a radius in"),
+    (["--feed", "2e-2", "--modes", "feedforward", "--lookahead", "20000"], "compensation.lookahead: expected at most"),
+    (["--modes", "pid,sideways"], "mode: expected one of"),
+])
+def test_cli_bad_input_is_one_line_and_exit_2(argv, message, capsys):
+    from obsdesign.cli import main
+
+    assert main(["simulate", "circle", *argv]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0]
+
+
+def test_cli_circle_rows_are_the_api_rows(capsys):
+    import json
+
+    from obsdesign.cli import main
+    from obsdesign.sim.circle import circle_modes
+
+    assert main(["simulate", "circle", "--feed", "2e-2", "--modes", "pid,feedforward", "--buildup", "3e-4",
+                 "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)["rows"]
+    api = circle_modes(od.load_preset("vcm").override(buildup=3e-4), modes=("pid", "feedforward"), feeds=(2e-2,))
+    assert [r["glitch_peak"] for r in rows] == [r["glitch_peak"] for r in api]

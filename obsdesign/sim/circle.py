@@ -48,7 +48,7 @@ from ..params import Config
 from . import kernel
 from .simulate import prepare
 
-__all__ = ["CircleResult", "simulate_circle", "circle_path", "circle_metrics", "DIRECTIONS", "MAX_RADIUS"]
+__all__ = ["CircleResult", "simulate_circle", "circle_modes", "circle_path", "circle_metrics", "DIRECTIONS", "MAX_RADIUS"]
 
 DIRECTIONS = ("ccw", "cw")
 #: Largest radius [m] (a path beyond 1 m is not a precision-axis test).
@@ -282,3 +282,55 @@ def simulate_circle(cfg: Config, *, radius: float = 5e-3, feed: float = 1e-2, di
         empty = np.empty(0)
         return CircleResult(metrics, empty, empty, empty, empty, empty, empty, window)
     return CircleResult(metrics, np.arange(n) * dt, theta[:n], x_ref[:n], y_ref[:n], x[:n], y[:n], window)
+
+
+def circle_modes(cfg: Config, *, modes=None, feeds=(1e-2,), directions=("ccw",), seeds=(0,), radius: float = 5e-3,
+                 **options) -> list[dict]:
+    """The circle test for each compensation mode, feed, direction and seed: one row each.
+
+    Parameters
+    ----------
+    cfg : Config
+        The design of both axes (its ``[compensation]`` knobs other than ``mode`` are kept).
+    modes : sequence of str, optional
+        ``pid`` (no compensation) and names of
+        :data:`obsdesign.sampled.choices.COMPENSATION_MODES`; default all of them.
+    feeds, directions, seeds : sequence
+        Path velocities [m/s], ``ccw``/``cw``, noise seeds.
+    radius : float
+        Radius [m].
+    **options
+        Further options of :func:`simulate_circle`.
+
+    Returns
+    -------
+    list of dict
+        ``mode, feed, direction, seed, glitch_peak, circularity, radial_rms`` [SI].
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> rows = circle_modes(od.load_preset("vcm"), modes=("pid", "observer"), feeds=(2e-2,))
+    >>> [r["mode"] for r in rows], rows[1]["glitch_peak"] < rows[0]["glitch_peak"]
+    (['pid', 'observer'], True)
+    """
+    from ..sampled.choices import COMPENSATION_MODES
+
+    names = ("pid", *COMPENSATION_MODES.names())
+    modes = names if modes is None else tuple(check_choice("mode", m, names) for m in modes)
+    rows = []
+    for mode in modes:
+        if mode == "pid":
+            c, controller = cfg, "pid"
+        else:
+            keep = {} if mode != "observer" else {"lookahead": 0, "buildup": 0.0}
+            c, controller = cfg.override(mode=mode, **keep), "pid+observer"
+        for feed in feeds:
+            for direction in directions:
+                for seed in seeds:
+                    m = simulate_circle(c, radius=radius, feed=feed, direction=direction, controller=controller,
+                                        seed=seed, **options).metrics
+                    rows.append({"mode": mode, "feed": feed, "direction": direction, "seed": seed,
+                                 "glitch_peak": m["glitch_peak"], "circularity": m["circularity"],
+                                 "radial_rms": m["radial_error"]["rms"]})
+    return rows
