@@ -97,3 +97,21 @@ def test_cli_circle_rows_are_the_api_rows(capsys):
     rows = json.loads(capsys.readouterr().out)["rows"]
     api = circle_modes(od.load_preset("vcm").override(buildup=3e-4), modes=("pid", "feedforward"), feeds=(2e-2,))
     assert [r["glitch_peak"] for r in rows] == [r["glitch_peak"] for r in api]
+
+
+def test_cli_plot_writes_the_ballbar_figure(tmp_path, capsys):
+    from obsdesign.cli import main
+
+    out = tmp_path / "ballbar.svg"
+    assert main(["simulate", "circle", "--feed", "2e-2", "--modes", "pid,observer", "--plot", str(out)]) == 0
+    assert out.read_text().startswith("<?xml")
+    from obsdesign.report.circle_section import ballbar_figure
+
+    res = simulate_circle(VCM, feed=2e-2, keep_trace=True)
+    fig = ballbar_figure({"a": res, "b": res})
+    assert [ax.name for ax in fig.axes] == ["polar", "polar"]
+    labels = sorted(float(t.get_text()) for t in fig.axes[0].texts)  # the four glitches, marked with their heights
+    assert labels == pytest.approx(sorted(round(g["height"] * 1e6, 1) for g in res.metrics["glitches"]))
+    # without a trace the figure is refused, naming the run
+    with pytest.raises(ValueError, match="results: run 'x' has no trace"):
+        ballbar_figure({"x": simulate_circle(VCM, feed=2e-2)})

@@ -45,8 +45,6 @@ def cmd_circle(args: argparse.Namespace) -> int:
     cfg = load(args).override(noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
                               quantization=args.quantization, dt=args.dt,
                               lookahead=args.lookahead, buildup=args.buildup)
-    if args.plot:
-        raise UsageError("obsdesign simulate circle: argument --plot: the ballbar plot is not available yet")
     modes = args.modes
     if modes is None:
         modes = ("pid",) if args.controller == "pid" else (cfg.compensation.mode,)
@@ -56,6 +54,18 @@ def cmd_circle(args: argparse.Namespace) -> int:
     rows = circle_modes(cfg, modes=modes, feeds=args.feed, directions=directions, seeds=(args.seed,),
                         radius=args.radius, revolutions=args.revolutions, stiffness=args.stiffness,
                         estimator=args.estimator)
+    if args.plot:  # the ballbar picture of the first feed and direction, one panel per mode
+        from ..report.circle_section import save_ballbar_figure
+        from ..sim.circle import simulate_circle
+
+        panels = {}
+        for mode in modes:
+            c = cfg if mode == "pid" else cfg.override(mode=mode)
+            panels[mode] = simulate_circle(c, radius=args.radius, feed=args.feed[0], direction=directions[0],
+                                           controller="pid" if mode == "pid" else "pid+observer", seed=args.seed,
+                                           revolutions=args.revolutions, stiffness=args.stiffness,
+                                           estimator=args.estimator, keep_trace=True)
+        save_ballbar_figure(panels, args.plot)
     lines = [f"circle radius {args.radius:g} m, {cfg.name}: glitch peak / circularity / radial RMS [um]"]
     for r in rows:
         lines.append(f"  {r['mode']:12s} feed {r['feed']:g} m/s {r['direction']:3s}  {r['glitch_peak'] * 1e6:9.3f} "
