@@ -39,6 +39,26 @@ def table(cfg, plant, seeds, label):
             print(f"| {tag} | " + " | ".join(cells) + " |")
 
 
+def mismatch(cfg, seeds=(0, 1)):
+    """The modes on the LuGre and GMS plants (defaults of obsdesign.friction, levels of [friction]), ccw."""
+    import dataclasses
+
+    from obsdesign.plant_spec import PlantFrictionSpec
+
+    feeds = (2e-3, 2e-2)
+    print("\n#### LuGre / GMS plants (observer and feed-forward designed for the paper's model), ccw, seeds", seeds)
+    print("\n| plant | mode | " + " | ".join(f"{f * 1e3:g} mm/s" for f in feeds) + " |\n|---|---|---|---|")
+    for model in ("lugre", "gms"):
+        plant = dataclasses.replace(cfg, plant_friction=PlantFrictionSpec(model=model))
+        rows = circle_modes(cfg, feeds=feeds, seeds=seeds, plant=plant)
+        for mode in dict.fromkeys(r["mode"] for r in rows):
+            cells = []
+            for f in feeds:
+                g = np.array([r["glitch_peak"] for r in rows if r["mode"] == mode and r["feed"] == f]) * 1e6
+                cells.append(f"{g.mean():.2f} ({g.min():.2f}-{g.max():.2f})")
+            print(f"| {model} | {mode} | " + " | ".join(cells) + " |")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=5)
@@ -47,6 +67,7 @@ def main():
     print("glitch peak [um]: mean (min-max) over seeds", seeds, "and both directions")
     table(cfg, "physical", seeds, "vcm plant (pre-sliding s = 3000 1/m)")
     table(cfg, cfg.override(s=1e7), seeds, "plant = the feed-forward model (s = 1e7 1/m)")
+    mismatch(cfg)
 
 
 if __name__ == "__main__":
