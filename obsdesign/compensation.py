@@ -8,7 +8,15 @@ The closed loop ``pid+observer`` adds ``comp / K`` to the PID's command [V] with
 The defaults (gain 1, no viscous term, no deadzone) give the paper's law ``f_hat_filtered / K``;
 the simulator and the exported controller then do exactly the floating-point operations of
 that law. The section is optional in TOML. :meth:`obsdesign.Config.override` addresses its
-fields as ``gain``, ``viscous`` and ``deadzone``.
+fields by their names (``gain``, ``viscous``, ``deadzone``, ``mode``, ``lookahead``, ...).
+
+``mode`` (:data:`obsdesign.sampled.choices.COMPENSATION_MODES`) chooses what compensates:
+``observer`` (the law above), ``feedforward`` (the friction model of the reference velocity,
+``w (sign(v_ref) (Cf + ff_stribeck exp(-(v_ref / ff_stribeck_velocity)^2)) + sigma v_ref) + ff_offset``
+with ``Cf``, ``sigma`` of ``[friction]`` and the look-ahead/build-up weight ``w`` of
+:func:`obsdesign.sampled.reference.reference_feedforward`) or ``blend`` (the feed-forward plus the
+low-passed observer estimate less the low-passed model part the observer also sees); both
+scaled by ``gain``. docs/compensation-modes.md states the laws.
 
 Examples
 --------
@@ -22,6 +30,12 @@ ValueError: compensation.gain: expected a finite number > 0 and <= 1, found 1.5
 Traceback (most recent call last):
 ...
 TypeError: compensation.viscous: expected true or false, found int 1
+>>> CompensationSpec(mode="feedforward", lookahead=20).buildup
+0.0
+>>> CompensationSpec(mode="blend", deadzone=1e-4)
+Traceback (most recent call last):
+...
+ValueError: compensation.deadzone: applies to mode 'observer' only; expected 0 with mode 'blend', found 0.0001
 """
 
 from __future__ import annotations
@@ -29,7 +43,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from ._validate import NONNEGATIVE, Range, param_field, validate_fields
+from ._validate import FINITE, NONNEGATIVE, POSITIVE, Choice, Integer, Range, param_field, validate_fields
+from .sampled.choices import COMPENSATION_MODES
 
 __all__ = ["CompensationSpec", "Flag"]
 
@@ -70,6 +85,21 @@ class CompensationSpec:
     deadzone : float
         Velocity [m/s] below which the compensation fades linearly to zero
         (``|v_hat| / deadzone``); 0 disables the fade.
+    mode : str
+        A name of :data:`obsdesign.sampled.choices.COMPENSATION_MODES`: ``observer``,
+        ``feedforward`` or ``blend`` (``viscous`` and ``deadzone`` are of ``observer`` only).
+    ff_stribeck : float
+        Stribeck force [N] of the feed-forward model at zero velocity, above ``Cf``.
+    ff_stribeck_velocity : float
+        Stribeck velocity [m/s] of the feed-forward model.
+    ff_offset : float
+        Constant force [N] of the feed-forward model (not weighted by the ramp).
+    lookahead : int
+        Samples over which the feed-forward is ramped to zero before a reversal of the
+        reference velocity (0: none).
+    buildup : float
+        Reference distance [m] over which the feed-forward builds up after a start or a reversal
+        (0: at once).
 
     Examples
     --------
@@ -84,11 +114,25 @@ class CompensationSpec:
                          "fraction of the friction estimate compensated", 1.0)
     viscous: bool = param_field(Flag(), "-", "add sigma * v_hat to the filtered estimate", False)
     deadzone: float = param_field(NONNEGATIVE, "m/s", "compensation fades out below this |v_hat| (0: off)", 0.0)
+    mode: str = param_field(Choice(COMPENSATION_MODES.names()), "-",
+                            "what compensates: observer estimate, reference feed-forward or their blend", "observer")
+    ff_stribeck: float = param_field(NONNEGATIVE, "N", "feed-forward Stribeck force above Cf at rest", 0.0)
+    ff_stribeck_velocity: float = param_field(POSITIVE, "m/s", "feed-forward Stribeck velocity", 1e-3)
+    ff_offset: float = param_field(FINITE, "N", "feed-forward constant force", 0.0)
+    lookahead: int = param_field(Integer(minimum=0, maximum=1_000_000), "samples",
+                                 "feed-forward ramp to zero before a reference reversal (0: off)", 0)
+    buildup: float = param_field(NONNEGATIVE, "m", "feed-forward build-up distance after a start (0: off)", 0.0)
 
     def __post_init__(self) -> None:
         validate_fields(self)
+        if self.mode != "observer":
+            for name, off in (("viscous", False), ("deadzone", 0.0)):
+                if getattr(self, name) != off:
+                    raise ValueError(f"compensation.{name}: applies to mode 'observer' only; expected "
+                                     f"{0 if off is not False else 'false'} with mode {self.mode!r}, "
+                                     f"found {getattr(self, name)!r}")
 
     @property
     def is_default(self) -> bool:
-        """Whether the knobs are the paper's law (gain 1, no viscous term, no deadzone)."""
-        return self.gain == 1.0 and not self.viscous and self.deadzone == 0.0
+        """Whether the knobs are the paper's law (mode observer, gain 1, no viscous term, no deadzone)."""
+        return self.mode == "observer" and self.gain == 1.0 and not self.viscous and self.deadzone == 0.0

@@ -74,37 +74,45 @@ def case(request):
 
 
 # ---------------------------------------------------------------------------------------------
-# Runners: each takes the files of one language and returns the commands for the inputs.
-def _run_python(files, x_ref, x_meas, tmp_path):
+# Runners: each takes the files of one language and returns the commands for the inputs; ``extra``
+# holds the further inputs of the step (v_ref, w_ff of the feed-forward modes).
+def _run_python(files, x_ref, x_meas, tmp_path, extra=()):
     (path,) = [tmp_path / n for n in files]
     path.write_text(files[path.name])
     spec = importlib.util.spec_from_file_location(f"exported_controller_{id(files)}", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     ctrl = mod.Controller()
-    return np.array([ctrl.step(float(r), float(x)) for r, x in zip(x_ref, x_meas)])
+    return np.array([ctrl.step(*map(float, row)) for row in zip(x_ref, x_meas, *extra)])
 
 
-C_DRIVER = r"""
+def _c_driver(n_in):
+    names = ["r", "x", "v", "w"][:n_in]
+    fmt = ",".join(["%lf"] * n_in)
+    return rf"""
 #include <stdio.h>
 #include "obsdesign_controller.h"
-int main(int argc, char **argv) {
-    double r, x;
+int main(int argc, char **argv) {{
+    double {", ".join(names)};
     obsdesign_controller c;
     FILE *in;
     if (argc != 2 || !(in = fopen(argv[1], "r"))) return 2;
     obsdesign_controller_init(&c);
-    while (fscanf(in, "%lf,%lf", &r, &x) == 2) printf("%.17g\n", obsdesign_controller_step(&c, r, x));
+    while (fscanf(in, "{fmt}", {", ".join("&" + n for n in names)}) == {n_in})
+        printf("%.17g\n", obsdesign_controller_step(&c, {", ".join(names)}));
     fclose(in);
     return 0;
-}
+}}
 """
 
 
-def _compile_c(files, tmp_path):
+C_DRIVER = _c_driver(2)
+
+
+def _compile_c(files, tmp_path, n_in=2):
     for name, text in files.items():
         (tmp_path / name).write_text(text)
-    (tmp_path / "driver.c").write_text(C_DRIVER)
+    (tmp_path / "driver.c").write_text(_c_driver(n_in))
     exe = tmp_path / "driver"
     subprocess.run(["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O2", f"-I{tmp_path}", "-o",
                     str(exe), str(tmp_path / "driver.c"), str(tmp_path / "obsdesign_controller.c"), "-lm"],
@@ -112,33 +120,35 @@ def _compile_c(files, tmp_path):
     return exe
 
 
-def _run_c(files, x_ref, x_meas, tmp_path):
-    exe = _compile_c(files, tmp_path)
+def _run_c(files, x_ref, x_meas, tmp_path, extra=()):
+    exe = _compile_c(files, tmp_path, 2 + len(extra))
     data = tmp_path / "in.csv"
-    np.savetxt(data, np.column_stack([x_ref, x_meas]), delimiter=",", fmt="%.17g")
+    np.savetxt(data, np.column_stack([x_ref, x_meas, *extra]), delimiter=",", fmt="%.17g")
     out = subprocess.run([str(exe), str(data)], capture_output=True, text=True, check=True).stdout
     return np.loadtxt(out.splitlines())
 
 
-def _run_js(files, x_ref, x_meas, tmp_path):
+def _run_js(files, x_ref, x_meas, tmp_path, extra=()):
     for name, text in files.items():
         (tmp_path / name).write_text(text)
-    (tmp_path / "in.json").write_text(json.dumps({"x_ref": list(map(float, x_ref)), "x_meas": list(map(float, x_meas))}))
+    rows = [list(map(float, row)) for row in zip(x_ref, x_meas, *extra)]
+    (tmp_path / "in.json").write_text(json.dumps(rows))
     module = (tmp_path / "obsdesign_controller.mjs").as_uri()
     script = (f"import {{ Controller }} from {json.dumps(module)}; import fs from 'fs';"
               f"const d = JSON.parse(fs.readFileSync({json.dumps(str(tmp_path / 'in.json'))}, 'utf8'));"
               "const c = new Controller();"
-              "console.log(JSON.stringify(d.x_ref.map((r, i) => c.step(r, d.x_meas[i]))));")
+              "console.log(JSON.stringify(d.map((row) => c.step(...row))));")
     out = subprocess.run(["node", "--input-type=module", "-e", script], capture_output=True, text=True, check=True)
     return np.array(json.loads(out.stdout))
 
 
-def _run_octave(files, x_ref, x_meas, tmp_path, *, persistent=False):
+def _run_octave(files, x_ref, x_meas, tmp_path, extra=(), *, persistent=False):
     for name, text in files.items():
         (tmp_path / name).write_text(text)
-    np.savetxt(tmp_path / "in.csv", np.column_stack([x_ref, x_meas]), delimiter=",", fmt="%.17g")
-    call = ("out(i) = obsdesign_controller(data(i, 1), data(i, 2));" if persistent else
-            "[out(i), st] = obsdesign_controller_step(st, data(i, 1), data(i, 2));")
+    np.savetxt(tmp_path / "in.csv", np.column_stack([x_ref, x_meas, *extra]), delimiter=",", fmt="%.17g")
+    args = ", ".join(f"data(i, {j + 1})" for j in range(2 + len(extra)))
+    call = (f"out(i) = obsdesign_controller({args});" if persistent else
+            f"[out(i), st] = obsdesign_controller_step(st, {args});")
     script = ("data = dlmread('in.csv', ','); st = obsdesign_controller_init(); out = zeros(rows(data), 1);"
               f"for i = 1:rows(data) {call} end; fprintf('%.17g\\n', out);")
     out = subprocess.run(["octave", "--no-gui", "--quiet", "--no-window-system", "--eval", script],

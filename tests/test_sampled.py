@@ -75,12 +75,12 @@ def test_pid_step_on_a_constant_error_is_its_closed_form():
     cst, ost = sk.CONTROLLER_STATE, sk.OBSERVER_STATE
     ez, ub = np.zeros(1), sk.delay_buffer(c)
     for n in range(50):
-        cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, ub, n, e0, 0.0, 0.0, 0.0, obs, est, c)
+        cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, ub, n, e0, 0.0, 1.0, 0.0, 0.0, 0.0, obs, est, c)
         expected = c.kp * e0 + c.ki * (n + 1) * e0 * dt + c.G / c.K
         assert cmd == pytest.approx(expected, rel=1e-13)
         assert cst[3] == 0.0  # derivative state
     # a large error saturates: the command is u_max and the integral is not advanced
-    cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, ub, 50, 1.0, 0.0, 0.0, 0.0, obs, est, c)
+    cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, ub, 50, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, obs, est, c)
     assert cmd == c.u_max
     assert cst[2] == pytest.approx(50 * e0 * dt, rel=1e-13)
     assert cst[0] == c.K * c.u_max - c.G  # the net force the estimator is fed next
@@ -99,7 +99,7 @@ def test_computation_delay_shifts_the_command_by_whole_samples():
         cst, ost, ez, ub = sk.CONTROLLER_STATE, sk.OBSERVER_STATE, np.zeros(1), sk.delay_buffer(c)
         out, fed = [], []
         for n in range(300):
-            cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, ub, n, 1e-3, 0.0, xm[n], 0.0, obs, est, c)
+            cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, ub, n, 1e-3, 0.0, 1.0, 0.0, xm[n], 0.0, obs, est, c)
             out.append(cmd)
             fed.append(cst[0])
         runs[d] = (np.array(out), np.array(fed), c)
@@ -118,8 +118,8 @@ def test_computation_delay_shifts_the_command_by_whole_samples():
         rst, rost, rub = sk.CONTROLLER_STATE, sk.OBSERVER_STATE, sk.delay_buffer(ref[2])
         got, want = [], []
         for n in range(300):
-            cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, ub, n, 1e-3, 0.0, xm[n], 0.0, obs, est, c)
-            rst, rost, rcmd, *_ = sk.controller_sample(rst, rost, ez, rub, n, 1e-3, 0.0, xm[n], 0.0, *ref)
+            cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, ub, n, 1e-3, 0.0, 1.0, 0.0, xm[n], 0.0, obs, est, c)
+            rst, rost, rcmd, *_ = sk.controller_sample(rst, rost, ez, rub, n, 1e-3, 0.0, 1.0, 0.0, xm[n], 0.0, *ref)
             got.append(cmd)
             want.append(rcmd)
         assert np.array_equal(np.array(got)[d:], np.array(want)[:-d])
@@ -134,7 +134,7 @@ def test_derivative_filter_is_first_order_with_pole_alpha():
     assert c.alpha_d == pytest.approx(math.exp(-cfg.observer.dt * c.kp * cfg.pid.derivative_N / c.kd), rel=1e-14)
     cst, ost, ez, ub = sk.CONTROLLER_STATE, sk.OBSERVER_STATE, np.zeros(1), sk.delay_buffer(c)
     for n in range(20):
-        cst, ost, *_ = sk.controller_sample(cst, ost, ez, ub, n, 0.0 if n == 0 else 1.0, 0.0, 0.0, 0.0, obs, est, c)
+        cst, ost, *_ = sk.controller_sample(cst, ost, ez, ub, n, 0.0 if n == 0 else 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, obs, est, c)
         if n >= 1:
             assert cst[3] == pytest.approx((1 - c.alpha_d) * c.alpha_d ** (n - 1) / c.dt, rel=1e-12)
 

@@ -28,8 +28,10 @@ def _cmd_export(args: argparse.Namespace) -> int:
         if value is not None and args.what != "controller":
             raise UsageError(f"obsdesign export: argument {flag}: applies to --what controller only, found {value!r}")
     cfg = load(args).override(dt=args.dt)  # --rho, --kappa, --variant: applied by load, once
+    from ._table import table_options  # --what friction-table: its flags, refused with the others
+
     paths = export(cfg, args.format, args.output, what=args.what, controller=args.controller,
-                   schedule=args.stiffness, estimator=args.estimator)
+                   schedule=args.stiffness, estimator=args.estimator, table=table_options(args))
     warn_unstable(cfg, "the exported observer diverges")
     if cfg.sensor.noise_rms > 0 and args.what == "observer" and args.format != "latex":
         print_warnings([f"the exported observer's stiffness schedule reverses at sign changes of v_hat (the "
@@ -69,8 +71,9 @@ def add_commands(sub) -> None:
     p = sub.add_parser("export", help="export the derivation, the designed observer or the whole controller as code")
     p.add_argument("--format", required=True, choices=EXPORT_FORMATS)
     p.add_argument("--what", choices=EXPORT_WHAT, default="observer",
-                   help="observer (default) or controller: observer, low-pass, PID and compensation of the "
-                        "simulator, step(x_ref, x_meas) -> command [V]")
+                   help="observer (default), controller: observer, low-pass, PID and compensation of the "
+                        "simulator, step(x_ref, x_meas) -> command [V]; friction-table: the feed-forward model as "
+                        "a velocity -> force (current) table, CSV and C array (--format c)")
     p.add_argument("--controller", choices=[name for name in CONTROLLERS.names() if name != "open-loop"],
                    help="with --what controller: the simulator's controller to generate (default pid+observer)")
     p.add_argument("--stiffness", choices=[name for name in SCHEDULES.names() if name != "true"],
@@ -84,6 +87,9 @@ def add_commands(sub) -> None:
     p.add_argument("--rho", type=POSITIVE_ARG, help="gain parameter rho (> 0)")
     p.add_argument("--dt", type=POSITIVE_ARG, help="sample time [s] of the discrete observer")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder")
+    from ._table import add_table_flags
+
+    add_table_flags(p)
     p.set_defaults(run=_cmd_export)
 
     p = sub.add_parser("report", help="self-contained HTML design report")

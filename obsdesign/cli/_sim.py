@@ -34,6 +34,10 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
     check_output_file("simulate", "--out", args.out, (".csv", ".npz"))
     check_output_file("simulate", "--plot", args.plot, (".svg", ".png"))
+    if args.scenario == "circle":  # the two-axis contour test: its own command module
+        from ._circle import cmd_circle
+
+        return cmd_circle(args)
     if args.config is None and args.preset is None:
         args.preset = "table1" if args.scenario in ("excitation", "constant") else "vcm"
     cfg = load(args).override(noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
@@ -225,7 +229,7 @@ def _is_worker_failure(e: BaseException) -> bool:
 def add_commands(sub) -> None:
     """Add ``simulate`` and ``sweep`` to the subparsers ``sub``."""
     p = sub.add_parser("simulate", help="closed-loop simulation of a scenario")
-    p.add_argument("scenario", choices=SCENARIOS)
+    p.add_argument("scenario", choices=(*SCENARIOS, "circle"))
     add_config_flags(p, default_preset="table1 for excitation/constant, vcm otherwise")
     p.add_argument("--controller", choices=CONTROLLERS.names())
     add_design_flags(p, json_flag="print the metrics as one JSON object")
@@ -253,6 +257,9 @@ def add_commands(sub) -> None:
     p.add_argument("--settle-tol", type=POSITIVE_ARG, default=2e-6, help="settling band [m] (default 2e-6)")
     p.add_argument("--out", metavar="FILE", help="write the trace to FILE.csv or FILE.npz")
     p.add_argument("--plot", metavar="FILE", help="write a figure to FILE.svg or FILE.png")
+    from ._circle import add_circle_flags
+
+    add_circle_flags(p)
     p.set_defaults(run=_cmd_simulate)
 
     p = sub.add_parser("sweep", help="design sweep with Monte-Carlo draws, locally or on Dask")

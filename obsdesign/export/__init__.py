@@ -19,8 +19,9 @@ from __future__ import annotations
 
 #: The export formats, in the order the command line lists them.
 FORMATS = ("latex", "python", "c", "octave", "js")
-#: What can be exported: the observer (default) or the whole sampled controller.
-WHAT = ("observer", "controller")
+#: What can be exported: the observer (default), the whole sampled controller, or the feed-forward
+#: friction model as a drive's velocity table (:mod:`obsdesign.export.friction_table`).
+WHAT = ("observer", "controller", "friction-table")
 #: The formats of the whole sampled controller: the code formats (not the derivation's LaTeX).
 CONTROLLER_FORMATS = tuple(fmt for fmt in FORMATS if fmt != "latex")
 

@@ -35,6 +35,12 @@ the defaults give the paper's law ``f_hat_filtered / K`` with exactly its operat
     comp = gain * (f_hat_filtered + (sigma * v_hat if viscous else 0)) * fade
     u_volt += comp / K
 
+Compensation modes ``feedforward`` and ``blend`` (``[compensation] mode``): the step takes two more
+inputs, ``step(x_ref, x_meas, v_ref, w_ff)``, the reference velocity [m/s] and the feed-forward
+weight in [0, 1] of :func:`obsdesign.sampled.reference.reference_feedforward` (the trajectory
+generator's numbers: the look-ahead needs the path ahead), and compensates
+:func:`obsdesign.sampled.kernel.reference_compensation` in its order (docs/compensation-modes.md).
+
 Examples
 --------
 >>> import obsdesign as od
@@ -183,7 +189,8 @@ def controller_constants(cfg, *, controller: str | None = None, compensation: Co
         Keys are the constant names of the generated code. Always: ``DT``, ``K``, ``G``, ``U_MAX``,
         ``SIGMA``, ``V_HAT0``, ``F_HAT0``, the PID (``KP``, ``KI``, ``KD``, ``ALPHA_D``), the
         compensation (``COMP_ON``, ``COMP_GAIN``, ``COMP_VISCOUS``, ``COMP_DEADZONE``; flags are
-        0.0 or 1.0) and the computation delay (``DELAY`` [samples], ``DELAY_INIT``: the saturated
+        0.0 or 1.0; modes ``feedforward``/``blend`` add ``COMP_MODE``, the model ``FF_CF``,
+        ``FF_STRIBECK``, ``FF_VS``, ``FF_OFFSET`` and ``BLEND_VISCOUS``) and the computation delay (``DELAY`` [samples], ``DELAY_INIT``: the saturated
         ``G / K`` in flight before the first command). ``paper``/``paper-k0``: ``CF``, ``S``,
         ``KAPPA``, ``L1``, ``L2``, the affine observer arrays ``A0_i`` ... ``G1_i``, the low-pass
         ``LP_*``, ``SCHEDULE`` (the registry's code; :data:`SCHEDULE_ZERO` for ``paper-k0``) and
@@ -221,6 +228,9 @@ def controller_constants(cfg, *, controller: str | None = None, compensation: Co
         "COMP_VISCOUS": 1.0 if c.comp_viscous else 0.0, "COMP_DEADZONE": c.comp_deadzone,
         "DELAY": c.delay, "DELAY_INIT": c.delay_init,
     }
+    if ctrl.controller == "pid+observer" and ctrl.compensation.mode != "observer":
+        consts.update({"COMP_MODE": c.comp_mode, "FF_CF": c.ff_cf, "FF_STRIBECK": c.ff_stribeck, "FF_VS": c.ff_vs,
+                       "FF_OFFSET": c.ff_offset, "BLEND_VISCOUS": 1.0 if c.blend_viscous else 0.0})
     if ctrl.baseline is None:
         if ctrl.estimator == "paper-k0":
             code = SCHEDULE_ZERO
@@ -369,6 +379,9 @@ def controller_files(cfg, language: str, *, controller: str | None = None,
         "core": _c_core() if language == "c" and not baseline else "",
         "helpers": _python_helpers(baseline) if language == "python" else "",
         "terms": discretize._TERMS, "delay": ctrl.delay,
+        "ffmode": compensation.mode != "observer" and controller == "pid+observer",
+        "blend": compensation.mode == "blend" and controller == "pid+observer",
+        "blend_viscous": cfg.observer.variant == "lag",
     }
     env = _environment()
     return {name: env.get_template(name + ".j2").render(**ctx) for name in _TEMPLATES[language]}

@@ -37,7 +37,7 @@ __all__ = ["export"]
 
 def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "observer",
            controller: str | None = None, schedule: str | None = None,
-           estimator: str | None = None) -> list[Path]:
+           estimator: str | None = None, table: dict | None = None) -> list[Path]:
     """Write the export files of one format into ``out_dir`` (created if missing).
 
     Parameters
@@ -63,6 +63,10 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
     estimator : str, optional
         With ``what='controller'``: the estimator (:data:`obsdesign.sampled.choices.ESTIMATORS`,
         default ``paper``).
+    table : dict, optional
+        With ``what='friction-table'`` (format ``c``: ``friction_table.csv`` and ``friction_table.h``):
+        the options of :func:`obsdesign.export.friction_table.friction_table` (``points``,
+        ``v_max``, ``velocities``, ``motor_constant``).
 
     Returns
     -------
@@ -73,6 +77,14 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
         raise ValueError(f"format: expected one of {', '.join(FORMATS)}, found {fmt!r}")
     if not isinstance(what, str) or what not in WHAT:
         raise ValueError(f"what: expected one of {', '.join(WHAT)}, found {what!r}")
+    if what == "friction-table":
+        if fmt != "c":
+            raise ValueError(f"format: the friction table is written as CSV and a C array; expected c, found {fmt!r}")
+        from .friction_table import friction_table, table_files
+
+        return _write(table_files(friction_table(cfg, **(table or {}))), out_dir)
+    if table is not None:
+        raise ValueError(f"table: applies to what='friction-table' only, found {table!r} with what={what!r}")
     if what == "controller":
         if fmt not in CONTROLLER_FORMATS:
             raise ValueError(f"format: the controller is exported as one of {', '.join(CONTROLLER_FORMATS)}, "

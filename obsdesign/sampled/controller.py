@@ -37,7 +37,7 @@ import numpy as np
 from .._validate import FINITE
 from ..compensation import CompensationSpec
 from ..params import Config
-from .choices import CONTROLLERS, ESTIMATORS, SCHEDULES
+from .choices import COMPENSATION_MODES, CONTROLLERS, ESTIMATORS, SCHEDULES
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..design.observer import ObserverArrays
@@ -145,6 +145,14 @@ class ControllerArgs(NamedTuple):
         Computation delay [samples] between the measurement and the command's output.
     delay_init : float
         The command [V] in flight before the first computed one arrives: the saturated feed-forward ``G / K``.
+    comp_mode : int
+        Compensation mode code (:data:`obsdesign.sampled.choices.COMPENSATION_MODES`).
+    ff_cf, ff_stribeck, ff_vs, ff_offset : float
+        The feed-forward model: Coulomb level ``friction.Cf`` [N], Stribeck force [N] and velocity
+        [m/s], constant force [N] (``[compensation]``).
+    blend_viscous : bool
+        Whether the observer's estimate contains the viscous force (variant ``lag``): the model
+        part ``blend`` subtracts.
     """
 
     controller: int
@@ -162,6 +170,12 @@ class ControllerArgs(NamedTuple):
     comp_deadzone: float
     delay: int
     delay_init: float
+    comp_mode: int
+    ff_cf: float
+    ff_stribeck: float
+    ff_vs: float
+    ff_offset: float
+    blend_viscous: bool
 
 
 @dataclass(frozen=True, eq=False)
@@ -246,7 +260,10 @@ class SampledController:
         c = ControllerArgs(controller=CONTROLLERS.code(self.controller), dt=self.dt, K=pl.K, G=pl.G, sigma=fr.sigma,
                            kp=self.kp, ki=self.ki, kd=self.kd, alpha_d=self.alpha_d, u_max=pl.u_max,
                            comp_gain=comp.gain, comp_viscous=comp.viscous, comp_deadzone=comp.deadzone,
-                           delay=self.delay, delay_init=min(max(pl.G / pl.K, -pl.u_max), pl.u_max))
+                           delay=self.delay, delay_init=min(max(pl.G / pl.K, -pl.u_max), pl.u_max),
+                           comp_mode=COMPENSATION_MODES.code(comp.mode), ff_cf=fr.Cf, ff_stribeck=comp.ff_stribeck,
+                           ff_vs=comp.ff_stribeck_velocity, ff_offset=comp.ff_offset,
+                           blend_viscous=cfg.observer.variant == "lag")
         return o, e, c
 
 
@@ -325,6 +342,9 @@ def sampled_controller(cfg: Config, *, controller: str = "pid+observer", schedul
                                      phase_margin_deg=cfg.pid.phase_margin_deg)
         tau_d = kd / kp / cfg.pid.derivative_N
     compensation = cfg.compensation if controller == "pid+observer" else CompensationSpec()
+    if compensation.mode == "blend" and baseline is not None:
+        raise ValueError(f"compensation.mode: 'blend' needs the paper observer's low-passed estimate; expected "
+                         f"estimator paper or paper-k0, found {estimator!r}")
     return SampledController(config=cfg, controller=controller, schedule=schedule, estimator=estimator,
                              observer=observer, lowpass=lowpass, kp=kp, ki=ki, kd=kd, tau_d=tau_d,
                              compensation=compensation,

@@ -11,7 +11,9 @@ same order):
    (:func:`obsdesign.estimators.base.estimator_step`, compensating with its unfiltered ``f_hat``);
 2. controller: open loop (``u_open / K``), or the parallel PID eq:PIDparallel on the measured error
    with a first-order filtered derivative and conditional integration under saturation, plus
-   ``comp / K`` for ``pid+observer`` (:func:`compensation_force`);
+   ``comp / K`` for ``pid+observer``: mode ``observer`` :func:`compensation_force`; ``feedforward``
+   and ``blend`` :func:`reference_compensation` of the reference velocity ``v_ref`` and weight
+   ``w_ff`` (inputs of the sample, :func:`obsdesign.sampled.reference.reference_feedforward`);
 3. load feed-forward ``G / K``, saturation at ``u_max``;
 4. computation delay of ``d`` samples (``[pid] delay_samples``): the command computed at sample ``n``
    is applied from sample ``n + d`` on (a ring buffer of ``d`` commands, which holds the saturated
@@ -33,10 +35,10 @@ from ..design.discretize import coefficients
 from ..estimators.base import estimator_output, estimator_step
 from ..friction.presliding import stiffness, track_reversal, track_reversal_hysteresis
 from ..estimators.registry import FIRST_BASELINE_CODE
-from .choices import CONTROLLERS, ESTIMATORS, SCHEDULES
+from .choices import COMPENSATION_MODES, CONTROLLERS, ESTIMATORS, SCHEDULES
 
-__all__ = ["observer_sample", "controller_sample", "compensation_force", "observe_loop", "delay_buffer",
-           "OBSERVER_STATE", "CONTROLLER_STATE"]
+__all__ = ["observer_sample", "controller_sample", "compensation_force", "reference_compensation",
+           "feedforward_model", "observe_loop", "delay_buffer", "OBSERVER_STATE", "CONTROLLER_STATE"]
 
 # Codes read once from the registries; numba freezes module globals at compile time (the registries
 # are append-only: a code never changes meaning).
@@ -47,6 +49,8 @@ SCHEDULE_ESTIMATED_RAW = SCHEDULES.code("estimated-raw")
 ESTIMATOR_PAPER_K0 = ESTIMATORS.code("paper-k0")
 CONTROLLER_OPEN = CONTROLLERS.code("open-loop")
 CONTROLLER_PID_OBSERVER = CONTROLLERS.code("pid+observer")
+COMP_OBSERVER = COMPENSATION_MODES.code("observer")
+COMP_BLEND = COMPENSATION_MODES.code("blend")
 
 #: The observer's state before the first measurement: ``(y1, y2, zf1, zf2, fh_prev, xm_prev, e_dir,
 #: e_xr, e_fr, k_coef, P11, P12, P21, P22, bu1, bu2, gx01, gx02, gx11, gx12, e_ext)``: observer,
@@ -54,8 +58,9 @@ CONTROLLER_PID_OBSERVER = CONTROLLERS.code("pid+observer")
 #: (``k_coef = -1``: none yet) and the extreme displacement of the branch (hysteresis). A tuple, not
 #: an array, so the compiler keeps it in registers.
 OBSERVER_STATE = (0.0,) * 9 + (-1.0,) + (0.0,) * 11
-#: The controller's state before the first sample: ``(u_prev, xm_prev, integ, deriv, e_prev)``.
-CONTROLLER_STATE = (0.0,) * 5
+#: The controller's state before the first sample: ``(u_prev, xm_prev, integ, deriv, e_prev, zb1, zb2,
+#: fb_prev)``: the last three are the low-pass of the model part of mode ``blend``.
+CONTROLLER_STATE = (0.0,) * 8
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -160,17 +165,58 @@ def compensation_force(ff, vh, ctrl):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def controller_sample(cst, ost, ez, ubuf, n, x_ref, u_open, xm, k_true, obs, est, ctrl):
+def feedforward_model(v_ref, w_ff, viscous, ctrl):
+    """The feed-forward friction model [N] of mode ``feedforward``: ``w_ff (sign(v_ref) (Cf + Fst
+    exp(-(v_ref / vst)^2)) + sigma v_ref [viscous]) + offset`` (``sign(0) = 0``)."""
+    c = 0.0
+    if v_ref != 0.0:
+        q = v_ref / ctrl.ff_vs
+        c = ctrl.ff_cf + ctrl.ff_stribeck * np.exp(-(q * q))
+        if v_ref < 0.0:
+            c = -c
+    if viscous:
+        c += ctrl.sigma * v_ref
+    return w_ff * c + ctrl.ff_offset
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def reference_compensation(n, ff, v_ref, w_ff, zb1, zb2, fb_prev, obs, ctrl):
+    """Compensated force [N] of modes ``feedforward`` and ``blend``, and the blend's low-pass state.
+
+    ``feedforward``: ``gain F(v_ref)`` (:func:`feedforward_model`). ``blend``: ``gain (F(v_ref) +
+    ff - LP[F_o])`` with ``ff`` the observer's low-passed estimate eq:3:4:5 and ``LP[F_o]`` the same
+    low-pass (same recursion, same start) of ``F_o``, the part of the model the observer estimates
+    (all of it for variant ``lag``; without the viscous term for ``static``): the sum is ``(1 - LP) F
+    + LP f_hat``, so each frequency of the friction is compensated once. Returns ``(comp, zb1, zb2,
+    fb)``.
+    """
+    f_model = feedforward_model(v_ref, w_ff, True, ctrl)
+    if ctrl.comp_mode != COMP_BLEND:
+        return ctrl.comp_gain * f_model, zb1, zb2, fb_prev
+    fo = f_model if ctrl.blend_viscous else feedforward_model(v_ref, w_ff, False, ctrl)
+    if n > 0:
+        lp_phi, lp_g0, lp_g1 = obs.lp_phi, obs.lp_g0, obs.lp_g1
+        t1 = lp_phi[0, 0] * zb1 + lp_phi[0, 1] * zb2 + lp_g0[0] * fb_prev + lp_g1[0] * fo
+        t2 = lp_phi[1, 0] * zb1 + lp_phi[1, 1] * zb2 + lp_g0[1] * fb_prev + lp_g1[1] * fo
+        zb1 = t1
+        zb2 = t2
+    return ctrl.comp_gain * (f_model + ff - zb1), zb1, zb2, fo
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def controller_sample(cst, ost, ez, ubuf, n, x_ref, v_ref, w_ff, u_open, xm, k_true, obs, est, ctrl):
     """One sample of the whole controller: measurement ``xm`` and reference ``x_ref`` in, command out.
 
     ``cst`` is the controller state (:data:`CONTROLLER_STATE`), ``ost`` the observer's
     (:data:`OBSERVER_STATE`), ``ez`` the state array of a linear baseline and ``ubuf`` the
-    ``max(delay, 1)`` commands in flight (:func:`delay_buffer`; both updated in place); ``u_open`` is
-    the open-loop force [N] of the sample (``open-loop`` only). Returns ``(cst, ost, command [V]
+    ``max(delay, 1)`` commands in flight (:func:`delay_buffer`; both updated in place); ``v_ref``
+    [m/s] and ``w_ff`` are the reference velocity and feed-forward weight of the sample (read by the
+    modes ``feedforward`` and ``blend`` only); ``u_open`` is the open-loop force [N] of the sample
+    (``open-loop`` only). Returns ``(cst, ost, command [V]
     applied from this sample on (after saturation, with the feed-forward, delayed), v_hat, f_hat,
     f_hat_filtered (the compensated signal), k)``.
     """
-    u_prev, xm_prev, integ, deriv, e_prev = cst
+    u_prev, xm_prev, integ, deriv, e_prev, zb1, zb2, fb_prev = cst
     ost, vh, fh, ff, k_now = _estimate(ost, ez, n, xm, u_prev, xm_prev, k_true, obs, est)
     K = ctrl.K
     if ctrl.controller == CONTROLLER_OPEN:
@@ -183,7 +229,11 @@ def controller_sample(cst, ost, ez, ubuf, n, x_ref, u_open, xm, k_true, obs, est
         integ_new = integ + e * ctrl.dt
         u_volt = ctrl.kp * e + ctrl.ki * integ_new + ctrl.kd * deriv
         if ctrl.controller == CONTROLLER_PID_OBSERVER:
-            u_volt += compensation_force(ff, vh, ctrl) / K
+            if ctrl.comp_mode == COMP_OBSERVER:
+                u_volt += compensation_force(ff, vh, ctrl) / K
+            else:
+                comp, zb1, zb2, fb_prev = reference_compensation(n, ff, v_ref, w_ff, zb1, zb2, fb_prev, obs, ctrl)
+                u_volt += comp / K
         total = u_volt + ctrl.G / K
         if abs(total) <= ctrl.u_max:
             integ = integ_new  # conditional integration (anti-windup)
@@ -198,7 +248,7 @@ def controller_sample(cst, ost, ez, ubuf, n, x_ref, u_open, xm, k_true, obs, est
         applied = ubuf[slot]
         ubuf[slot] = total
         total = applied
-    cst = (K * total - ctrl.G, xm, integ, deriv, e_prev)
+    cst = (K * total - ctrl.G, xm, integ, deriv, e_prev, zb1, zb2, fb_prev)
     return cst, ost, total, vh, fh, ff, k_now
 
 

@@ -1,7 +1,8 @@
 """Time-varying nonlinear simulation of plant, friction, observer and controller (numba).
 
 Two public steps, :func:`prepare` (design and sample the inputs of a run) and :func:`run`
-(the numba kernel and the metrics); :func:`simulate` is both in one call.
+(the numba kernel and the metrics); :func:`simulate` is both in one call. :func:`simulate_circle`
+runs the two-axis circle (ballbar) test (:mod:`obsdesign.sim.circle`).
 """
 
 from .._lazy import keep_functions, lazy_names
@@ -9,7 +10,7 @@ from .._lazy import keep_functions, lazy_names
 
 __all__ = ["CONTROLLERS", "ESTIMATORS", "PLANTS", "SCHEDULES", "COLUMNS", "SimResult",
            "SCENARIOS", "Chirp", "ConstantForce", "Excitation", "Positioning", "band_limited_noise",
-           "LoopInputs", "prepare", "run", "simulate"]
+           "LoopInputs", "prepare", "run", "simulate", "simulate_circle", "CircleResult"]
 
 #: Public name -> module it comes from; loaded on first use (obsdesign._lazy).
 _LAZY = {
@@ -29,6 +30,8 @@ _LAZY = {
     'prepare': '.simulate',
     'run': '.simulate',
     'simulate': '.simulate',
+    'simulate_circle': '.circle',
+    'CircleResult': '.circle',
 }
 __getattr__, __dir__ = lazy_names(__name__, _LAZY)
 keep_functions(__name__, ('simulate',))

@@ -77,19 +77,23 @@ class PlantArgs(NamedTuple):
 
 
 class Signals(NamedTuple):
-    """The sampled inputs of :func:`run_loop`: reference [m], open-loop force [N], sensor noise [m]
-    and encoder resolution [m] (0: none).
+    """The sampled inputs of :func:`run_loop`: reference [m], open-loop force [N], sensor noise [m],
+    encoder resolution [m] (0: none), reference velocity [m/s] and feed-forward weight
+    (:func:`obsdesign.sampled.reference.reference_feedforward`).
 
     Attributes
     ----------
     x_ref, u_open, noise : ndarray
     quantization : float
+    v_ref, w_ff : ndarray
     """
 
     x_ref: np.ndarray
     u_open: np.ndarray
     noise: np.ndarray
     quantization: float
+    v_ref: np.ndarray
+    w_ff: np.ndarray
 
 
 #: Output arrays of :func:`run_loop`, in the order of :class:`Outputs`.
@@ -207,6 +211,7 @@ def run_loop(obs, est, ctrl, plant, sig, out):
     Returns the number of samples written (less than the length when the run diverged).
     """
     x_ref, u_open, noise, quantization = sig.x_ref, sig.u_open, sig.noise, sig.quantization
+    v_ref, w_ff = sig.v_ref, sig.w_ff
     n_sub, mode, lag_model, m = plant.n_sub, plant.mode, plant.lag_model, plant.m
     K_plant, G_plant, fcode, pp = plant.K, plant.G, plant.friction_code, plant.plant_params
     kappa = obs.kappa
@@ -239,7 +244,8 @@ def run_loop(obs, est, ctrl, plant, sig, out):
                 k_true = stiffness(x, p_dir, p_xr, p_fr, Cf_p, s_p, kappa)
             else:
                 k_true = min(friction_stiffness(fcode, pp, fst, x, v), kappa)
-        cst, ost, total, vh, fh, ff, k_now = controller_sample(cst, ost, ez, ubuf, n, x_ref[n], u_open[n], xm,
+        cst, ost, total, vh, fh, ff, k_now = controller_sample(cst, ost, ez, ubuf, n, x_ref[n], v_ref[n], w_ff[n],
+                                                               u_open[n], xm,
                                                                k_true, obs, est, ctrl)
         u = K_plant * total - G_plant  # net driving force, load compensated
         # record

@@ -122,14 +122,27 @@ class LoopInputs:
         """The estimator's name."""
         return self.sampled.estimator
 
+    def reference_feedforward(self) -> tuple[np.ndarray, np.ndarray]:
+        """The reference velocity [m/s] and feed-forward weight of every sample
+        (:func:`obsdesign.sampled.reference.reference_feedforward` of ``x_ref`` with the config's
+        ``lookahead`` and ``buildup``); zeros and ones when the compensation mode is ``observer``
+        (the kernel does not read them)."""
+        comp = self.sampled.compensation
+        if comp.mode == "observer":
+            return np.zeros(self.n_samples), np.ones(self.n_samples)
+        from ..sampled.reference import reference_feedforward
+
+        return reference_feedforward(self.x_ref, self.dt, lookahead=comp.lookahead, buildup=comp.buildup)
+
     def kernel_args(self) -> tuple:
         """The groups of :func:`obsdesign.sim.kernel.run_loop` before its outputs: the controller's
         ``(ObserverArgs, EstimatorArgs, ControllerArgs)``, then ``PlantArgs`` and ``Signals``."""
         plant = kernel.PlantArgs(n_sub=self.n_sub, mode=self.mode, lag_model=self.config.observer.variant == "lag",
                                  m=self.m, K=self.K_plant, G=self.G_plant, friction_code=self.friction_code,
                                  plant_params=self.plant_params)
+        v_ref, w_ff = self.reference_feedforward()
         signals = kernel.Signals(x_ref=self.x_ref, u_open=self.u_open, noise=self.noise,
-                                 quantization=self.quantization)
+                                 quantization=self.quantization, v_ref=v_ref, w_ff=w_ff)
         return (*self.sampled.kernel_args(), plant, signals)
 
 
