@@ -96,3 +96,15 @@ def test_the_dt_verdicts_and_the_certificate_are_checks(page):
     assert "Step up: overshoot" in driver.find_element(By.ID, "stepsummary").text
     driver.find_element(By.ID, "reset").click()
     assert driver.find_element(By.ID, "certificate").text.startswith("not certified")
+
+
+@pytest.mark.parametrize("mode", ["feedforward", "blend"])
+def test_the_pages_step_is_the_simulators_in_the_reference_modes(page, mode):
+    """A feed-forward mode's step takes the reference velocity and weight: the page feeds the simulator's own
+    arrays (``LoopInputs.reference_feedforward``), so its step is still the kernel's."""
+    cfg = od.load_preset("vcm").override(mode=mode, buildup=2e-4)
+    driver = page(cfg)
+    x_page = np.asarray(driver.execute_script("return previewStep(arguments[0]).x;", _values(cfg)))
+    x_sim = run(preview_inputs(cfg)).x
+    assert x_page.shape == x_sim.shape and np.max(np.abs(x_sim)) > 5e-4
+    assert np.max(np.abs(x_page - x_sim)) <= TOLERANCE

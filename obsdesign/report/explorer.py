@@ -169,10 +169,20 @@ def explorer_context(cfg: Config, certificate=None) -> dict:
             "n": int(loop.n_samples), "n_up": n_up, "n_down": n_up + int(np.argmax(x_ref[n_up:] == 0.0)), "step": 1e-3,
             "n_sub": int(plant.n_sub), "K": float(plant.K), "G": float(plant.G), **levels,
             "quantization": float(loop.quantization), "constants": consts, "paper_plant": paper_plant,
+            **_reference_inputs(loop),
         },
     }
     formulas = re.sub(r"^export ", "", js_module(variant), flags=re.M) + _observer_arrays_js(variant)
     return {"explorer_js": formulas + ctrl_js, "explorer_params": sliders, "explorer_data": data}
+
+
+def _reference_inputs(loop) -> dict:
+    """The feed-forward modes' step inputs ``v_ref``, ``w_ff`` per sample (``LoopInputs.reference_feedforward``,
+    the simulator's own arrays); nothing for the observer mode, whose step takes none."""
+    if loop.sampled.compensation.mode == "observer":
+        return {}
+    v_ref, w_ff = loop.reference_feedforward()
+    return {"v_ref": [float(v) for v in v_ref], "w_ff": [float(w) for w in w_ff]}
 
 
 def _finite(obj):
