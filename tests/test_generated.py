@@ -19,8 +19,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from obsdesign.design import numeric
-from obsdesign.symbolic import derive
-from obsdesign.symbolic import generate
+from obsdesign.symbolic import derive, generate
 from obsdesign.symbolic.model import SYMBOLS
 
 ARGS = tuple(SYMBOLS[n] for n in numeric.ARG_NAMES)

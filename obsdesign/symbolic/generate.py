@@ -157,14 +157,14 @@ def _printed(variant: str) -> dict:
         "parameters": [str(sym[n]) for n in EXPORT_PARAMETERS if n in sym],
         "k": str(sym["k"]), "L1": str(sym["L1"]), "L2": str(sym["L2"]),
         "relations": [rel.rel_op for rel in d.stability_conditions],
-        "python": {"gains": [sp.pycode(e) for e in gains], "coefficients": [sp.pycode(e) for e in coefficients],
+        "pycode": {"gains": [sp.pycode(e) for e in gains], "coefficients": [sp.pycode(e) for e in coefficients],
                    **{n: [sp.pycode(e) for e in m] for n, m in mats.items()}},
-        "octave": {"gains": [sp.octave_code(e) for e in gains],
+        "octave_code": {"gains": [sp.octave_code(e) for e in gains],
                    "coefficients": [sp.octave_code(e) for e in coefficients],
                    **{n: sp.octave_code(m) for n, m in mats.items()}},
-        "js": {"gains": [sp.jscode(e) for e in gains], "coefficients": [sp.jscode(e) for e in coefficients],
+        "jscode": {"gains": [sp.jscode(e) for e in gains], "coefficients": [sp.jscode(e) for e in coefficients],
                "bounds": [sp.jscode(e) for e in bounds]},
-        "c": {"gains": [sp.ccode(e) for e in gains]},
+        "ccode": {"gains": [sp.ccode(e) for e in gains]},
     }
 
 
@@ -172,7 +172,7 @@ def formulas_source() -> str:
     """The text of ``obsdesign/export/_formulas.py`` (formulas printed by SymPy per language)."""
     head = '"""The derivation\'s formulas as printed by SymPy for each export language.\n\n' + _HOW + '\n"""\n'
     body = pprint.pformat({v: _printed(v) for v in VARIANTS}, width=110, sort_dicts=False)
-    return head + "\n#: variant -> parameter and symbol names, relations, and per language the printed formulas.\n" \
+    return head + "\n#: variant -> parameter and symbol names, relations, and per SymPy printer (pycode, octave_code, jscode, ccode) the printed formulas.\n" \
         + "FORMULAS = " + body + "\n"
 
 
@@ -181,7 +181,18 @@ def _targets() -> dict[Path, str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``--regenerate`` writes the generated files; ``--check`` returns 1 if one differs."""
+    """``--regenerate`` writes the generated files; ``--check`` returns 1 if one differs.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        ``["--regenerate"]`` or ``["--check"]`` (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        0, or 1 for ``--check`` with a stale file, 2 for other arguments.
+    """
     argv = sys.argv[1:] if argv is None else argv
     if argv not in (["--regenerate"], ["--check"]):
         print("usage: python -m obsdesign.design.numeric --regenerate | --check", file=sys.stderr)
