@@ -63,7 +63,7 @@ def _timed(argv: list[str], env: dict | None = None) -> tuple[float, float]:
     return wall, _cpu_children() - c0
 
 
-def _simulate(cli: list[str], env: dict | None = None) -> tuple[float, float]:
+def _simulate(cli: list[str], env: dict | None = None) -> tuple[float, float, float]:
     """Wall time of ``simulate positioning``, the kernel's own time it reports (``sim_wall_s``), CPU time."""
     c0, t0 = _cpu_children(), time.perf_counter()
     proc = subprocess.run(cli + SIMULATE, capture_output=True, text=True, check=True, env=env)

@@ -40,7 +40,11 @@ _PROBE = ("import sys, runpy\nsys.argv = ['obsdesign', *sys.argv[1:]]\ntry:\n"
           f"print('HEAVY', code, ','.join(m for m in {HEAVY!r} if m in sys.modules), file=sys.stderr)\n")
 
 
-@pytest.mark.parametrize("name", list(CASES))
+#: Cases that repeat what another case shows (the same modules): in ``make test`` only.
+SLOW = {"check --json", "loop", "noise", "derive --format json", "export --format octave", "export --format js"}
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW else n for n in CASES])
 def test_command_imports_only_what_it_computes_with(name, tmp_path):
     args, expected = CASES[name]
     argv = [a.replace("{tmp}", str(tmp_path / "out")) for a in args]
