@@ -15,7 +15,7 @@ import sys
 import numpy as np
 import pytest
 import sympy as sp
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from obsdesign.design import numeric
@@ -61,6 +61,7 @@ point = st.fixed_dictionaries({
 
 @pytest.mark.parametrize("variant", ["lag", "static"])
 @pytest.mark.parametrize("what", generate.EXPRESSIONS)
+@settings(max_examples=25)
 @given(values=point)
 def test_generated_functions_equal_lambdify_of_a_fresh_derivation(variant, what, values):
     expr = generate.expressions(variant, what)
@@ -76,6 +77,7 @@ def test_generated_functions_equal_lambdify_of_a_fresh_derivation(variant, what,
 
 @pytest.mark.parametrize("variant", ["lag", "static"])
 @pytest.mark.parametrize("which", ["velocity", "friction"])
+@settings(max_examples=15)
 @given(values=point)
 def test_noise_coefficients_equal_the_fresh_transfer(variant, which, values):
     num, den = numeric.poly_coeffs(variant, which)(**numeric.model_values(**values))
