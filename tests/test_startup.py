@@ -41,7 +41,8 @@ _PROBE = ("import sys, runpy\nsys.argv = ['obsdesign', *sys.argv[1:]]\ntry:\n"
 
 
 #: Cases that repeat what another case shows (the same modules): in ``make test`` only.
-SLOW = {"check --json", "loop", "noise", "derive --format json", "export --format octave", "export --format js"}
+SLOW = {"check --json", "pid", "loop", "noise", "derive --format json", "export --format octave", "export --format js",
+        "export --format latex"}
 
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW else n for n in CASES])
