@@ -17,7 +17,8 @@ $(STAMP): pyproject.toml | $(PY)
 test: $(STAMP)
 	$(PY) -m pytest
 
-# The quick loop while editing: everything but the cases marked @pytest.mark.slow.
+# The quick loop while editing: everything but the cases marked @pytest.mark.slow (meant for under
+# 2 minutes on an idle 2-core machine; docs/development.md says what is marked slow and why).
 test-fast: $(STAMP)
 	$(PY) -m pytest -m "not slow"
 

@@ -12,7 +12,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import sympy as sp
 
 from .design.noise import noise_analysis
 from .design.observer import check_stability
@@ -422,6 +421,8 @@ def pid_claims(cfg: Config | None = None) -> tuple:
 
 def derivation_claims() -> tuple:
     """Statements of the derivation that the symbolic engine checks (table1 numbers)."""
+    import sympy as sp
+
     from .symbolic import derive
     from .symbolic.derivation import EXTRA_SYMBOLS
 

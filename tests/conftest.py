@@ -4,3 +4,15 @@ import hypothesis
 
 hypothesis.settings.register_profile("obsdesign", derandomize=True, deadline=None, max_examples=60)
 hypothesis.settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "obsdesign"))
+
+
+def pytest_collection_modifyitems(config, items):
+    """The controller-export cases that run GNU Octave (one interpreter start each, 2-20 s on the
+    2-core machine) are slow: ``make test`` runs them, ``make test-fast`` skips them. The C, Python
+    and JavaScript cases of the same tests stay in the fast run."""
+    import pytest
+
+    for item in items:
+        if (item.path.name == "test_controller_export.py" and "octave" in item.name
+                and not item.name.startswith("test_controller_files_errors")):
+            item.add_marker(pytest.mark.slow)

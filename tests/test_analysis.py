@@ -32,6 +32,7 @@ def test_report_claims_are_honest():
     assert steady.reproduced == (not all(abs(e) <= 1e-6 for e in pid_errors))
 
 
+@pytest.mark.slow
 def test_derivation_claims_flag_the_paper_differences():
     """The sign of eq:3:2:7 and the lag noise feedthrough are reported as not reproduced, with numbers."""
     from obsdesign import studies as paper

@@ -60,6 +60,7 @@ def _random_switching_contracts(cfg, sequences=1000, samples=10_000, grid=513, s
     return cert, worst
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("cfg", [TABLE1, VCM, VCM.override(rho=1.2, kappa=2e5), TABLE1.override(dt=2e-3)],
                          ids=["table1", "vcm", "vcm-stiff", "table1-2ms"])
 def test_certified_designs_contract_under_random_switching(cfg):
@@ -127,6 +128,7 @@ def _hurwitz(rng):
             return A
 
 
+@pytest.mark.slow
 def test_continuous_verdict_agrees_with_shorten_narendra():
     rng = np.random.default_rng(7)
     exists = none = 0

@@ -115,6 +115,7 @@ def test_presliding_velocity_bound_against_brute_force():
 FASTER_THAN_SAMPLING = "ignore:fastest observer pole .* the observer is faster than the sampling:UserWarning"
 
 
+@pytest.mark.slow
 @pytest.mark.filterwarnings(FASTER_THAN_SAMPLING)
 @given(rho=st.floats(1.001, 12.0), kap=st.floats(100.0, 1e6), mass=st.floats(0.05, 10.0),
        frac=st.floats(0.0, 1.0), variant=st.sampled_from(["lag", "static"]))

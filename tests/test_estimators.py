@@ -79,6 +79,7 @@ def test_one_catalogue_light_and_complete():
             assert info.knob and info.knob_unit and 0 < lo < hi and not info.lowpass
 
 
+@pytest.mark.slow
 def test_a_sixth_linear_estimator_is_its_module_plus_one_entry(request, monkeypatch, capsys, tmp_path):
     """docs/estimators.md, "Adding an estimator": a module with its builder and one registry entry
     reach tune, build, the simulator's kernel, compare and the command line, with no other edit.

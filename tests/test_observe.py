@@ -216,6 +216,7 @@ def test_cli_identify_asymmetric_keys(record, capsys):
     assert out["sigma_pos"] == pytest.approx(30.0, rel=1e-3) and out["Cf_neg"] == pytest.approx(1.5, rel=1e-2)
 
 
+@pytest.mark.slow
 def test_cli_report_with_data_escapes_names(record, tmp_path, capsys):
     evil = tmp_path / "<b>axis&.csv"
     evil.write_bytes(record.read_bytes().replace(b"u_volt", b"u<i>v</i>", 1))
@@ -277,6 +278,7 @@ def test_cli_subprocess_sample_time_mismatch(record, tmp_path):
     assert not (tmp_path / "o.csv").exists()
 
 
+@pytest.mark.slow
 @needs_emps
 def test_analysis_emps_script(tmp_path):
     root = Path(__file__).resolve().parents[1]

@@ -120,6 +120,7 @@ def _params():
         yield pytest.param(command, marks=marks, id=_label(command))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", list(_params()))
 def test_readme_command_runs_as_written(command, fresh_dir):
     comment = command.partition(" #")[2]

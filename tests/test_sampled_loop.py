@@ -170,6 +170,7 @@ def cfg_files(tmp_path_factory):
     return {"vcm": ("--preset", "vcm"), "2kHz": ("--config", path)}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["vcm", "2kHz"])
 @pytest.mark.parametrize("d", [0, 1])
 def test_loop_json_agrees_with_an_independent_sampled_loop(cfg_files, name, d):

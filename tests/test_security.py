@@ -338,6 +338,7 @@ def hostile_report(tmp_path_factory):
     return svgs, render_report(od.load_preset("vcm"), sweep_dir=sweep_dir, compare_dir=compare_dir)
 
 
+@pytest.mark.slow
 def test_rendered_report_holds_no_markup_from_the_folders(hostile_report):
     """Review 2026-12-01 rep-meta-raw, rep-meta-fo, rep-script-uc, rep-breakout: --compare inlined compare.svg."""
     svgs, html = hostile_report
@@ -375,6 +376,7 @@ def test_page_guard_refuses_an_extra_element_by_name(extra, element):
     assert exit_status(info.value) == 2
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("folder_kind", ["sweep", "compare"])
 @pytest.mark.skipif(not (CHROMIUM and DRIVER), reason="headless Chromium not installed")
 def test_report_with_hostile_folder_figures_runs_and_fetches_nothing(tmp_path, folder_kind):

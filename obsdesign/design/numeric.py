@@ -1,10 +1,16 @@
-"""Numeric callables compiled from the symbolic derivation (one source of truth).
+"""Numeric callables of the symbolic derivation (one source of truth, no SymPy at run time).
 
 Every number of the design package comes from an expression of
-:func:`obsdesign.symbolic.derive`, turned into a NumPy function by SymPy's
-``lambdify`` and cached. Arguments are passed by the names of
-:data:`ARG_NAMES` (``m, sigma, beta, Cf, s, kappa, rho, k, L1, L2``); the
-Laplace variable ``p`` comes last where an expression has it.
+:func:`obsdesign.symbolic.derive`. The expressions are turned into NumPy functions
+once, by :mod:`obsdesign.symbolic.generate`, and shipped as source in
+``obsdesign/design/_generated.py`` (each body as SymPy's ``lambdify`` prints it);
+``tests/test_generated.py`` checks the file against a fresh derivation. Regenerate
+after a change of the symbolic model::
+
+    python -m obsdesign.design.numeric --regenerate
+
+Arguments are passed by the names of :data:`ARG_NAMES` (``m, sigma, beta, Cf, s,
+kappa, rho, k, L1, L2``).
 
 Examples
 --------
@@ -21,16 +27,10 @@ import math
 from typing import Callable
 
 import numpy as np
-import sympy as sp
 
-from ..symbolic import derive
-from ..symbolic.derivation import LAPLACE
-from ..symbolic.model import SYMBOLS
-
-__all__ = ["ARG_NAMES", "compiled", "model_values", "poly_coeffs"]
+__all__ = ["ARG_NAMES", "compiled", "model_values", "poly_coeffs", "stability_conditions"]
 
 ARG_NAMES = ("m", "sigma", "beta", "Cf", "s", "kappa", "rho", "k", "L1", "L2")
-_ARGS = tuple(SYMBOLS[n] for n in ARG_NAMES)
 
 
 def model_values(**values: float) -> dict[str, float]:
@@ -47,23 +47,9 @@ def model_values(**values: float) -> dict[str, float]:
     return {n: float(values.get(n, math.nan)) for n in ARG_NAMES}
 
 
-def _expression(variant: str, what: str):
-    d = derive(variant)
-    L1, L2 = SYMBOLS["L1"], SYMBOLS["L2"]
-    if what == "gain_rule":
-        return [d.gain_rule[L1], d.gain_rule[L2]]
-    if what == "coefficients":
-        return [d.a0, d.a1]
-    if what == "stability_bounds":
-        return [rel.rhs for rel in d.stability_conditions]
-    if what in ("A", "B", "C", "observer_matrix", "observer_input", "observer_output_gain"):
-        return getattr(d, what)
-    raise ValueError(f"compiled: unknown expression {what!r}")
-
-
 @functools.lru_cache(maxsize=None)
 def compiled(variant: str, what: str) -> Callable[..., object]:
-    """A cached NumPy function of the named derivation result.
+    """The NumPy function of the named derivation result.
 
     Parameters
     ----------
@@ -79,7 +65,12 @@ def compiled(variant: str, what: str) -> Callable[..., object]:
     callable
         Takes the :data:`ARG_NAMES` as keyword arguments.
     """
-    fn = sp.lambdify(_ARGS, _expression(variant, what), modules="numpy")
+    from . import _generated  # here, so that --regenerate runs without the file
+
+    try:
+        fn = _generated.FUNCTIONS[(variant, what)]
+    except KeyError:
+        raise ValueError(f"compiled: unknown expression {what!r} of variant {variant!r}") from None
 
     def call(**kw: float):
         return fn(*(kw[n] for n in ARG_NAMES))
@@ -96,12 +87,9 @@ def poly_coeffs(variant: str, which: str) -> Callable[..., tuple[np.ndarray, np.
     """
     if which not in ("velocity", "friction"):
         raise ValueError(f"poly_coeffs: expected 'velocity' or 'friction', found {which!r}")
-    expr = getattr(derive(variant).noise, which)
-    num, den = sp.fraction(sp.together(expr))
-    num_c = sp.Poly(num, LAPLACE).all_coeffs()
-    den_c = sp.Poly(den, LAPLACE).all_coeffs()
-    fnum = sp.lambdify(_ARGS, num_c, modules="numpy")
-    fden = sp.lambdify(_ARGS, den_c, modules="numpy")
+    from . import _generated
+
+    fnum, fden = _generated.POLY_COEFFS[(variant, which)]
 
     def call(**kw: float):
         args = [kw[n] for n in ARG_NAMES]
@@ -109,3 +97,24 @@ def poly_coeffs(variant: str, which: str) -> Callable[..., tuple[np.ndarray, np.
         return num_v / den_v[0], den_v / den_v[0]
 
     return call
+
+
+def stability_conditions(variant: str) -> tuple[tuple[str, str, str, str], ...]:
+    """Proposition 1 as printed by the derivation: ``(gain, printed gain, relation, condition)`` per gain.
+
+    Parameters
+    ----------
+    variant : {'lag', 'static'}
+
+    >>> stability_conditions("lag")[1]
+    ('L2', 'L_2', '<', 'L_2 < sigma/beta')
+    """
+    from . import _generated
+
+    return _generated.STABILITY_CONDITIONS[variant]
+
+
+if __name__ == "__main__":
+    from ..symbolic.generate import main
+
+    raise SystemExit(main())

@@ -21,14 +21,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
-import control as ct
 import numpy as np
-import scipy.optimize
 
 from .._display import ResultDisplay
 from .._validate import NONNEGATIVE, POSITIVE, Range
 from ..params import Config
+
+if TYPE_CHECKING:
+    import control as ct
 
 __all__ = ["PIDDesign", "design_pid", "pid_gains", "pid_from_config", "pid_from_gains", "peak_magnitude"]
 
@@ -111,6 +113,9 @@ def peak_magnitude(sys: ct.TransferFunction) -> tuple[float, float]:
     (float, float)
         ``max |sys(j omega)|`` and ``omega`` [rad/s].
     """
+    import control as ct
+    import scipy.optimize
+
     w = np.logspace(-4, 6, 4001)
     mag = np.abs(ct.frequency_response(sys, w).complex.ravel())
     i = int(mag.argmax())
@@ -124,6 +129,8 @@ def peak_magnitude(sys: ct.TransferFunction) -> tuple[float, float]:
 
 
 def _build(k: float, T_I: float, tau: float, phi: float, phase_margin_deg: float) -> PIDDesign:
+    import control as ct
+
     H = ct.tf([phi], [tau, 1.0, 0.0])
     C = ct.tf([k * tau * T_I, k * (tau + T_I), k], [T_I, 0.0])
     S = ct.feedback(H, C)  # H / (1 + H C), eq:Syd

@@ -32,14 +32,16 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
-import control as ct
 import numpy as np
-import scipy.linalg
 from numba import njit
 
 from .._validate import POSITIVE, as_float
 from ..params import Config
+
+if TYPE_CHECKING:
+    import control as ct
 
 __all__ = [
     "check_config",
@@ -127,6 +129,8 @@ def foh_matrices(A: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, np.nd
     M[:n, :n] = A * h
     M[:n, n:2 * n] = np.eye(n)
     M[n:2 * n, 2 * n:] = np.eye(n)
+    import scipy.linalg
+
     E = scipy.linalg.expm(M)
     return E[:n, :n].copy(), h * E[:n, n:2 * n], h * E[:n, 2 * n:]
 
@@ -235,6 +239,8 @@ class DiscreteEstimator:
         ``xi[n] = Phi xi[n-1] + (Phi g1 + g0) y[n-1]``, ``out = Cz xi + (Cz g1 + d) y``.
         Use ``sys[1, 0]`` for ``y -> f_hat`` and ``sys[0, 0]`` for ``y -> v_hat``.
         """
+        import control as ct
+
         B = (self.Phi @ self.g1 + self.g0).reshape(-1, 1)
         D = (self.Cz @ self.g1 + self.d).reshape(2, 1)
         return ct.ss(np.array(self.Phi), B, np.array(self.Cz), D, self.dt,
@@ -242,6 +248,8 @@ class DiscreteEstimator:
 
     def transfer_from_input(self) -> ct.StateSpace:
         """Discrete system from ``u`` (held) to ``(v_hat, f_hat)`` at ``y = 0``."""
+        import control as ct
+
         return ct.ss(np.array(self.Phi), np.array(self.gu).reshape(-1, 1), np.array(self.Cz),
                      np.zeros((2, 1)), self.dt, inputs=["u"], outputs=["v_hat", "f_hat"], name=f"{self.name}:u")
 

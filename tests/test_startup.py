@@ -1,0 +1,56 @@
+"""Imports by need (issue 19): which heavy modules each command loads.
+
+Each command runs in a fresh interpreter (as ``python -m obsdesign``) and reports which of the heavy
+modules ended up in ``sys.modules``. The expected sets say what the command computes with:
+SymPy only to print symbols (derive, the LaTeX export), python-control where a margin, a
+transfer or a Kalman gain is computed (it imports matplotlib itself), SciPy where an optimiser, a
+Lyapunov solver or an integral runs (the stability certificate of ``check``, which ``export``
+and ``simulate`` also show as warnings; numba imports SciPy too), numba where a kernel runs.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+HEAVY = ("sympy", "control", "scipy", "numba", "matplotlib", "dask")
+
+CONTROL = {"control", "scipy", "matplotlib"}  # python-control imports SciPy and matplotlib itself
+CASES = {
+    "check": (["check", "--preset", "vcm"], {"scipy"}),
+    "check --json": (["check", "--preset", "table1", "--json"], {"scipy"}),
+    "pid": (["pid", "--preset", "vcm"], CONTROL),
+    "loop": (["loop", "--preset", "vcm"], CONTROL),
+    "noise": (["noise", "--preset", "vcm"], CONTROL),
+    "derive": (["derive", "--variant", "static"], {"sympy"}),
+    "derive --format json": (["derive", "--format", "json"], {"sympy"}),
+    "export --format c": (["export", "--format", "c", "--preset", "vcm", "-o", "{tmp}"], {"scipy"}),
+    "export --format octave": (["export", "--format", "octave", "--preset", "vcm", "-o", "{tmp}"], {"scipy"}),
+    "export --format js": (["export", "--format", "js", "--preset", "vcm", "-o", "{tmp}"], {"scipy"}),
+    "export --format latex": (["export", "--format", "latex", "--preset", "vcm", "-o", "{tmp}"], {"sympy", "scipy"}),
+    "simulate positioning": (["simulate", "positioning"], {"numba", "scipy"}),
+    "config": (["config", "--preset", "vcm"], set()),
+}
+
+_PROBE = ("import sys, runpy\nsys.argv = ['obsdesign', *sys.argv[1:]]\ntry:\n"
+          "    runpy.run_module('obsdesign', run_name='__main__')\nexcept SystemExit as e:\n    code = e.code\n"
+          "else:\n    code = 0\n"
+          f"print('HEAVY', code, ','.join(m for m in {HEAVY!r} if m in sys.modules), file=sys.stderr)\n")
+
+
+#: Cases that repeat what another case shows (the same modules): in ``make test`` only.
+SLOW = {"check --json", "pid", "loop", "noise", "derive --format json", "export --format octave", "export --format js",
+        "export --format latex"}
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW else n for n in CASES])
+def test_command_imports_only_what_it_computes_with(name, tmp_path):
+    args, expected = CASES[name]
+    argv = [a.replace("{tmp}", str(tmp_path / "out")) for a in args]
+    proc = subprocess.run([sys.executable, "-c", _PROBE, *argv], capture_output=True, text=True, timeout=600)
+    line = [ln for ln in proc.stderr.splitlines() if ln.startswith("HEAVY ")][-1]
+    _, code, loaded = (line.split(" ", 2) + [""])[:3]
+    assert code == "0", proc.stderr
+    assert set(filter(None, loaded.split(","))) == expected, f"{name}: {loaded}"

@@ -1,0 +1,64 @@
+"""Capture the stdout, stderr, exit status and written files of a fixed set of CLI calls.
+
+Used to show that a change leaves every output byte-identical (issue 19, "outputs unchanged"):
+
+    PYTHONPATH=/path/to/old  python tools/capture_outputs.py /tmp/before
+    PYTHONPATH=/path/to/new  python tools/capture_outputs.py /tmp/after
+    diff -r /tmp/before /tmp/after
+
+Each case gets a folder ``<out>/<name>/`` holding ``stdout``, ``stderr``, ``status`` and the files the
+command wrote (its ``-o``/``--out`` target). Paths of the temporary folder are replaced by ``<OUT>``.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+CASES: dict[str, list[str]] = {}
+for preset in ("vcm", "table1"):
+    CASES[f"check-{preset}"] = ["check", "--preset", preset]
+    CASES[f"check-{preset}-json"] = ["check", "--preset", preset, "--json"]
+    CASES[f"pid-{preset}"] = ["pid", "--preset", preset]
+    CASES[f"pid-{preset}-json"] = ["pid", "--preset", preset, "--json"]
+    CASES[f"loop-{preset}"] = ["loop", "--preset", preset]
+    CASES[f"loop-{preset}-json"] = ["loop", "--preset", preset, "--json"]
+    CASES[f"noise-{preset}"] = ["noise", "--preset", preset]
+    CASES[f"noise-{preset}-json"] = ["noise", "--preset", preset, "--json"]
+    for fmt in ("latex", "python", "c", "octave", "js"):
+        CASES[f"export-{fmt}-{preset}"] = ["export", "--format", fmt, "--preset", preset, "-o", "{out}"]
+    CASES[f"export-controller-c-{preset}"] = ["export", "--format", "c", "--what", "controller",
+                                             "--preset", preset, "-o", "{out}"]
+for variant in ("lag", "static"):
+    CASES[f"derive-{variant}"] = ["derive", "--variant", variant]
+CASES["check-vcm-rho098"] = ["check", "--preset", "vcm", "--rho", "0.98"]
+CASES["check-table1-lag-json"] = ["check", "--preset", "table1", "--variant", "lag", "--json"]
+CASES["simulate-positioning"] = ["simulate", "positioning"]
+CASES["simulate-positioning-json"] = ["simulate", "positioning", "--json", "--out", "{out}/run.npz"]
+CASES["simulate-excitation-json"] = ["simulate", "excitation", "--json", "--duration", "0.5"]
+CASES["simulate-tracking-kalman-json"] = ["simulate", "tracking", "--estimator", "kalman", "--json",
+                                          "--duration", "0.5"]
+CASES["config-vcm"] = ["config", "--preset", "vcm"]
+
+
+def main(out: str, only: list[str]) -> None:
+    root = Path(out)
+    for name, args in CASES.items():
+        if only and name not in only:
+            continue
+        folder = root / name
+        files = folder / "files"
+        files.mkdir(parents=True, exist_ok=True)
+        argv = [a.replace("{out}", str(files)) for a in args]
+        proc = subprocess.run([sys.executable, "-m", "obsdesign", *argv], capture_output=True, text=True,
+                              env={**os.environ, "COLUMNS": "100"})
+        for stream, text in (("stdout", proc.stdout), ("stderr", proc.stderr)):
+            (folder / stream).write_text(text.replace(str(files), "<OUT>"))
+        (folder / "status").write_text(f"{proc.returncode}\n")
+        print(name, proc.returncode, flush=True)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], sys.argv[2:])
