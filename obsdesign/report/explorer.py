@@ -57,18 +57,16 @@ def explorer_params(cfg: Config) -> list[dict]:
 
 
 def _observer_arrays_js(variant: str) -> str:
-    """``observerArrays(params, k, L1, L2)``: ``[A (row-major), b, g]`` of eq:3:1:2 by SymPy ``jscode``."""
-    import sympy as sp
+    """``observerArrays(params, k, L1, L2)``: ``[A (row-major), b, g]`` of eq:3:1:2 as printed by SymPy ``jscode``
+    (the generated :data:`obsdesign.export._formulas.FORMULAS`: no SymPy at run time)."""
+    from ..export._formulas import FORMULAS
 
-    from ..export.codegen import _formulas, _params, _symbols
-
-    f = _formulas(variant)
-    sym = _symbols(variant)
-    params = ", ".join(str(p) for p in _params(variant))
-    k, L1, L2 = (str(sym[n]) for n in ("k", "L1", "L2"))
+    form = FORMULAS[variant]
+    f = form["jscode"]
+    params = ", ".join(form["parameters"])
     entries = [*f["observer_matrix"], *f["observer_input"], *f["observer_output_gain"]]
-    return (f"function observerArrays({params}, {k}, {L1}, {L2}) {{\n"
-            f"  return [{', '.join(sp.jscode(e) for e in entries)}];\n}}\n")
+    return (f"function observerArrays({params}, {form['k']}, {form['L1']}, {form['L2']}) {{\n"
+            f"  return [{', '.join(entries)}];\n}}\n")
 
 
 def preview_inputs(cfg: Config):

@@ -163,7 +163,8 @@ def _printed(variant: str) -> dict:
                    "coefficients": [sp.octave_code(e) for e in coefficients],
                    **{n: sp.octave_code(m) for n, m in mats.items()}},
         "jscode": {"gains": [sp.jscode(e) for e in gains], "coefficients": [sp.jscode(e) for e in coefficients],
-               "bounds": [sp.jscode(e) for e in bounds]},
+               "bounds": [sp.jscode(e) for e in bounds],
+               **{n: [sp.jscode(e) for e in m] for n, m in mats.items()}},
         "ccode": {"gains": [sp.ccode(e) for e in gains]},
     }
 
