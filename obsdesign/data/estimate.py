@@ -34,7 +34,7 @@ def _bic(fit) -> float:
     return n * math.log(fit.rss / n) + len(fit.free) * math.log(n)
 
 
-def _idim_std(cols: dict, y: np.ndarray, model: str) -> tuple[dict, float]:
+def _idim_std(cols: dict, y: np.ndarray, model: str) -> tuple[dict, float, float]:
     """IDIM-LS standard errors ``sigma_e^2 (X^T X)^-1`` (unbounded OLS; asymmetric: propagated) and cond."""
     X = np.column_stack([cols[c] for c in ("a", "v", "sign", "one")])
     theta, cov, resid, cond = ols(X, y, ("acceleration", "velocity", "sign(v)", "offset"))

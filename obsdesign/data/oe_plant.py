@@ -173,7 +173,9 @@ def select_windows(x_f: np.ndarray, *, threshold: float, travel: float, lead: in
     if ext.size < 3:
         return np.empty(0, np.int64), np.empty(0, np.int64), 0
     gross = np.abs(np.diff(x_f[ext])) > travel
-    starts, ends, reversals = [], [], 0
+    starts: list[int] = []
+    ends: list[int] = []
+    reversals = 0
     k = 0
     while k < gross.size - 1:
         if not gross[k]:

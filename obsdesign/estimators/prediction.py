@@ -174,9 +174,9 @@ def lag_moments(est: DiscreteEstimator, cfg: Config, *,
     level = cfg.friction.Cf ** 2
     poles = [abs(np.log(p)) for p in np.linalg.eigvals(est.Phi) if p != 0]
     lo, hi = math.log(1e-8 * math.pi), math.log(math.pi)
-    edges = {lo, hi, *np.arange(lo, hi, math.log(10.0) / 2)}
-    edges |= {math.log(c) for c in (*poles, 2.0 * lam * dt) if 1e-8 * math.pi < c < math.pi}
-    edges = np.array(sorted(edges))
+    cuts = {lo, hi, *np.arange(lo, hi, math.log(10.0) / 2)}
+    cuts |= {math.log(c) for c in (*poles, 2.0 * lam * dt) if 1e-8 * math.pi < c < math.pi}
+    edges = np.array(sorted(cuts))
     x, w = np.polynomial.legendre.leggauss(_NODES)
     half = np.diff(edges)[:, None] / 2.0
     u = ((edges[:-1, None] + edges[1:, None]) / 2.0 + half * x[None, :]).ravel()

@@ -14,12 +14,16 @@ from __future__ import annotations
 import inspect
 from dataclasses import dataclass
 from importlib import resources
+from typing import Any
 
 from .._format import code_literal
 from ..params import Config
 from ..design.observer import ObserverArrays, design_observer
-from ._formulas import FORMULAS
+from ._formulas import FORMULAS as _PRINTED
 from .literals import c_string, comment_text, js_string, octave_string, python_string
+
+#: The generated formulas (nested dicts and lists of printed strings), typed for the printers below.
+FORMULAS: dict[str, Any] = _PRINTED
 
 __all__ = ["ExportSpec", "export_spec", "python_module", "octave_files", "js_module", "c_files", "latex_document"]
 

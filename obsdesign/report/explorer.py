@@ -59,7 +59,7 @@ def explorer_params(cfg: Config) -> list[dict]:
 def _observer_arrays_js(variant: str) -> str:
     """``observerArrays(params, k, L1, L2)``: ``[A (row-major), b, g]`` of eq:3:1:2 as printed by SymPy ``jscode``
     (the generated :data:`obsdesign.export._formulas.FORMULAS`: no SymPy at run time)."""
-    from ..export._formulas import FORMULAS
+    from ..export.codegen import FORMULAS
 
     form = FORMULAS[variant]
     f = form["jscode"]

@@ -105,6 +105,7 @@ def _lambdified(name: str, expr) -> tuple[str, set[str]]:
     source = source.replace("def _lambdifygenerated(", f"def {name}(", 1)
     tree = ast.parse(source)
     fn = tree.body[0]
+    assert isinstance(fn, ast.FunctionDef)
     local = {a.arg for a in fn.args.args}
     names = {n.id for n in ast.walk(fn) if isinstance(n, ast.Name) and n.id not in local}
     for n in names:
