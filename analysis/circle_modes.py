@@ -1,4 +1,5 @@
 """The circle (ballbar) test of the compensation modes on the vcm axis: the numbers of docs/compensation-modes.md.
+===============================================================================================================
 
 vcm preset with sensor noise (``noise_rms`` 0.2 um on the 1 um encoder), radius 5 mm, feeds 2, 6.3 and
 20 mm/s, 10 kHz, both directions, seeds 0-4: the quadrant-glitch peak of PID only and of each

@@ -20,6 +20,7 @@ of the friction ``f``. Its error ``f - g f_hat`` has two independent parts:
       C = (1/pi) int_0^pi |T|^2 S
 
   (``A = Cf^2`` for ``static``, ``F = 1``)
+
 and ``total = sqrt(lag^2 + noise^2)`` (the two are uncorrelated). The moments are integrated on
 ``log theta`` by 16-point Gauss-Legendre rules over half decades, split at the estimator's pole
 frequencies and the reversal corner (``theta >= 1e-8 pi``: below it the error vanishes as
