@@ -60,7 +60,7 @@ def integer_fields() -> frozenset[str]:
     step is whole); it cannot be drawn uniformly.
 
     >>> sorted(integer_fields())
-    ['delay_samples']
+    ['delay_samples', 'lookahead']
     """
     return frozenset(f.name for cls in SECTIONS.values() for f in dataclasses.fields(cls)
                      if isinstance(f.metadata.get("check"), Integer))
