@@ -18,9 +18,8 @@ import argparse
 import numpy as np
 
 import obsdesign as od
+from obsdesign.report.circle_section import FEEDS
 from obsdesign.sim.circle import circle_modes
-
-FEEDS = (2e-3, 6.32e-3, 2e-2)
 
 
 def table(cfg, plant, seeds, label):

@@ -61,7 +61,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
     flags = {f"{PARAMETERS[flag]}.{flag}": f"--{flag}" for flag in DESIGN_FLAGS if getattr(args, flag) is not None}
     write_report(cfg, out, source_label=label, progress=not args.quiet, sweep_dir=args.sweep, data=trace,
                  compare_dir=args.compare, paper_studies=args.paper_studies, flags=flags,
-                 moving_speed=args.moving_speed)
+                 moving_speed=args.moving_speed, circle=args.circle)
     print(args.output)
     return 0
 
@@ -105,5 +105,8 @@ def add_commands(sub) -> None:
                         "(default 5 %% of the record's peak speed; standstill is reported separately)")
     p.add_argument("--paper-studies", action=argparse.BooleanOptionalAction, default=None,
                    help="add the paper's reproduction studies and claims (default: for the paper's presets only)")
+    p.add_argument("--circle", action=argparse.BooleanOptionalAction, default=True,
+                   help="add the circle (ballbar) test of the compensation modes on this axis (default: yes; "
+                        "--no-circle saves its few seconds)")
     add_design_flags(p, json_flag=None)
     p.set_defaults(run=_cmd_report)

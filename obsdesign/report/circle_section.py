@@ -4,7 +4,10 @@
 the measured contour as ``R_plot + magnification (r - R)`` around the nominal circle (dashed) over the
 evaluated revolution, with the four quadrant glitches marked at their peaks and labelled with their
 heights; the panels share one magnification, so they compare. ``obsdesign simulate circle --plot FILE``
-writes it. Render only: the numbers come from :mod:`obsdesign.sim.circle`.
+writes it. :func:`circle_section` is the report's section "Circle (ballbar) test of the compensation
+modes": the glitch peaks of :func:`~obsdesign.sim.circle.circle_modes` per mode and feed (mean and
+min-max over the seeds and both directions) and the ballbar picture at one feed. Render only: the
+numbers come from :mod:`obsdesign.sim.circle`.
 
 Examples
 --------
@@ -19,7 +22,16 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["ballbar_figure", "save_ballbar_figure"]
+__all__ = ["ballbar_figure", "save_ballbar_figure", "circle_section", "FEEDS", "RADIUS", "SEEDS", "FIGURE_FEED"]
+
+#: Feeds [m/s] of the circle test of issue 20's contract (2 to 20 mm/s), for the report and analysis/circle_modes.py.
+FEEDS = (2e-3, 6.32e-3, 2e-2)
+#: Radius [m] of the report's circle test.
+RADIUS = 5e-3
+#: Noise seeds of the report's circle test (only the first when the config has no random noise).
+SEEDS = (0, 1, 2)
+#: The feed [m/s] of the report's ballbar picture (the shortest run, the largest PID glitch).
+FIGURE_FEED = 2e-2
 
 
 def ballbar_figure(results: dict, *, magnification: float | None = None):
@@ -87,3 +99,68 @@ def save_ballbar_figure(results: dict, path) -> None:
     from .figures import save_figure
 
     save_figure(ballbar_figure(results), path)
+
+
+def circle_section(cfg, *, feeds=FEEDS, seeds=SEEDS, radius: float = RADIUS, figure_feed: float = FIGURE_FEED) -> dict:
+    """The report's circle test of the compensation modes on the axis of ``cfg``.
+
+    Runs :func:`~obsdesign.sim.circle.circle_modes` (every mode, both directions) per feed; a feed the
+    axis cannot drive, or a run that diverges, gives a note instead of numbers. With no random noise
+    (``sensor.noise_rms = 0``) every seed gives the same run, so only the first seed runs.
+
+    Parameters
+    ----------
+    cfg : Config
+        The design of both axes.
+    feeds, seeds : sequence
+        Path velocities [m/s] and noise seeds.
+    radius : float
+        Radius [m].
+    figure_feed : float
+        Feed [m/s] of the ballbar picture (ccw, the first seed; all modes); the runs of the table
+        when it is one of ``feeds``.
+
+    Returns
+    -------
+    dict
+        ``radius, feeds, seeds, directions, noisy``; ``rows``: per mode ``mode`` and ``cells`` (per feed
+        ``mean, min, max`` of the glitch peak [m] over seeds and directions, or ``None``); ``notes``: the
+        refused feeds' messages; ``figure``: the ballbar figure (``None`` if its feed was refused).
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> sec = circle_section(od.load_preset("vcm"), feeds=(2e-2,))
+    >>> sec["seeds"], [r["mode"] for r in sec["rows"]][:2], sec["figure"] is not None
+    ((0,), ['pid', 'observer'], True)
+    """
+    from ..sim.circle import DIRECTIONS, circle_modes
+
+    noisy = cfg.sensor.noise_rms > 0
+    seeds = tuple(seeds) if noisy else tuple(seeds)[:1]
+    peaks: dict = {}
+    notes = []
+    pictured: dict = {}
+    for feed in (*feeds, *(() if figure_feed in feeds else (figure_feed,))):
+        try:
+            rows = circle_modes(cfg, feeds=(feed,), directions=DIRECTIONS if feed in feeds else DIRECTIONS[:1],
+                                seeds=seeds if feed in feeds else seeds[:1], radius=radius,
+                                keep_trace=feed == figure_feed)
+        except ValueError as err:
+            notes.append(f"{feed * 1e3:g} mm/s: {err}")
+            continue
+        for r in rows:
+            if feed in feeds:
+                peaks.setdefault(r["mode"], {}).setdefault(feed, []).append(r["glitch_peak"])
+            if feed == figure_feed and r["direction"] == DIRECTIONS[0] and r["seed"] == seeds[0]:
+                pictured[r["mode"]] = r["result"]
+    table = []
+    for mode, by_feed in peaks.items():
+        cells = []
+        for feed in feeds:
+            g = np.asarray(by_feed.get(feed, []))
+            cells.append({"mean": float(g.mean()), "min": float(g.min()), "max": float(g.max())} if g.size else None)
+        table.append({"mode": mode, "cells": cells})
+    figure = ballbar_figure(pictured) if pictured else None
+    return {"radius": radius, "feeds": tuple(feeds), "seeds": seeds, "directions": DIRECTIONS, "noisy": noisy,
+            "rows": table, "notes": notes, "figure": figure, "figure_feed": figure_feed}

@@ -37,6 +37,7 @@ from ..params import Config
 from ..sweeps.summary import check_summary
 from ..symbolic import derive
 from ..symbolic.printing import derivation_html
+from .circle_section import circle_section
 from .data_section import data_section
 from .explorer import explorer_context, explorer_json
 from .figures import figure_svg
@@ -177,7 +178,7 @@ def _with_csp(html: str) -> str:
 
 def render_report(cfg: Config, *, source_label: str | None = None, progress: bool = False,
                   sweep_dir=None, data=None, compare_dir=None, paper_studies: bool | None = None,
-                  flags=None, moving_speed: float | None = None) -> str:
+                  flags=None, moving_speed: float | None = None, circle: bool = True) -> str:
     """Render the report of a config as one HTML string.
 
     The design is judged by the stated criteria of :mod:`obsdesign.criteria`. The paper's reproduction
@@ -207,6 +208,9 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     moving_speed : float, optional
         ``data``: the speed [m/s] above which the axis counts as moving in the data check (default
         :data:`obsdesign.report.data_section.MOVING_FRACTION` of the record's peak speed).
+    circle : bool
+        Add "Circle (ballbar) test of the compensation modes"
+        (:func:`obsdesign.report.circle_section.circle_section`; default yes).
     """
     from tqdm import tqdm
 
@@ -220,9 +224,11 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     variant = cfg.observer.variant
     paper = matching_preset(cfg) is not None if paper_studies is None else bool(paper_studies)
     steps = ["derivation", "stability", "PID and loop", "noise", "convergence (Table 1)", "experiments", "friction loops",
-             "noise study", "render"]
+             "noise study", "circle test", "render"]
     if not paper:
         steps = [s for s in steps if s not in ("convergence (Table 1)", "noise study")]
+    if not circle:
+        steps.remove("circle test")
     bar = tqdm(steps, desc="obsdesign report", disable=not progress, leave=False)
     ctx: dict = {"cfg": cfg, "version": __version__, "source_label": source_label,
                  "date": datetime.date.today().isoformat()}
@@ -288,6 +294,13 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
         claims += studies.noise_study().claims
         bar.update()
     ctx["claims"] = claims if paper else []
+    ctx["circle"] = None
+    if circle:
+        bar.set_postfix_str("circle test")
+        ctx["circle"] = circle_section(cfg)
+        fig = ctx["circle"].pop("figure")
+        ctx["circle"]["svg"] = _svg(fig) if fig is not None else None
+        bar.update()
     ctx["criteria"] = judge_design(cfg, sampled_loop=ctx["loop_view"].sampled, experiments=exp, noise=na,
                                    stability=rep)
 
@@ -311,7 +324,8 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
 
 def write_report(cfg: Config, path: str | os.PathLike, *, source_label: str | None = None,
                  progress: bool = False, sweep_dir=None, data=None, compare_dir=None,
-                 paper_studies: bool | None = None, flags=None, moving_speed: float | None = None) -> None:
+                 paper_studies: bool | None = None, flags=None, moving_speed: float | None = None,
+                 circle: bool = True) -> None:
     """Render and write the report atomically (temporary file, then rename).
 
     Parameters
@@ -320,9 +334,9 @@ def write_report(cfg: Config, path: str | os.PathLike, *, source_label: str | No
         The design.
     path : str or os.PathLike
         Output HTML file.
-    source_label, progress, sweep_dir, data, compare_dir, paper_studies, flags, moving_speed : optional
+    source_label, progress, sweep_dir, data, compare_dir, paper_studies, flags, moving_speed, circle : optional
         As for :func:`render_report`.
     """
     atomic_write(path, render_report(cfg, source_label=source_label, progress=progress, sweep_dir=sweep_dir,
                                      data=data, compare_dir=compare_dir, paper_studies=paper_studies,
-                                     flags=flags, moving_speed=moving_speed))
+                                     flags=flags, moving_speed=moving_speed, circle=circle))

@@ -300,7 +300,8 @@ def circle_modes(cfg: Config, *, modes=None, feeds=(1e-2,), directions=("ccw",),
     radius : float
         Radius [m].
     **options
-        Further options of :func:`simulate_circle`.
+        Further options of :func:`simulate_circle`; with ``keep_trace=True`` each row also holds its
+        run as ``result`` (a :class:`CircleResult`).
 
     Returns
     -------
@@ -328,9 +329,12 @@ def circle_modes(cfg: Config, *, modes=None, feeds=(1e-2,), directions=("ccw",),
         for feed in feeds:
             for direction in directions:
                 for seed in seeds:
-                    m = simulate_circle(c, radius=radius, feed=feed, direction=direction, controller=controller,
-                                        seed=seed, **options).metrics
+                    res = simulate_circle(c, radius=radius, feed=feed, direction=direction, controller=controller,
+                                          seed=seed, **options)
+                    m = res.metrics
                     rows.append({"mode": mode, "feed": feed, "direction": direction, "seed": seed,
                                  "glitch_peak": m["glitch_peak"], "circularity": m["circularity"],
                                  "radial_rms": m["radial_error"]["rms"]})
+                    if options.get("keep_trace"):
+                        rows[-1]["result"] = res
     return rows
