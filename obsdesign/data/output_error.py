@@ -23,6 +23,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .._validate import check_choice
 from ..friction.registry import FRICTION_MODELS
 from .identify import Identification
 from .oe_plant import PAPER_LAYOUT, select_windows, simulate_windows
@@ -51,17 +52,11 @@ def refinable(model: str) -> tuple[str, ...]:
     model : str
         A name of :data:`MODELS`.
     """
-    info = FRICTION_MODELS[_check_model(model)]
+    info = FRICTION_MODELS[check_choice("model", model, MODELS)]
     names = tuple(n for n in info.scalar_parameters() if n not in _SKIP)
     if "offset" not in names:
         names += ("offset",)
     return names + ("m", "delay")
-
-
-def _check_model(model: object) -> str:
-    if not isinstance(model, str) or model not in MODELS:
-        raise ValueError(f"model: expected one of {', '.join(MODELS)}, found {model!r}")
-    return model
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -347,7 +342,7 @@ def refine(trace: Trace, ident: Identification, *, parameters: tuple[str, ...] =
         raise TypeError(f"trace: expected a Trace, found {type(trace).__name__}")
     if not isinstance(ident, Identification):
         raise TypeError(f"ident: expected an Identification (obsdesign.data.identify), found {type(ident).__name__}")
-    model = _check_model(model)
+    model = check_choice("model", model, MODELS)
     names = tuple(parameters) if not isinstance(parameters, str) else (parameters,)
     allowed = refinable(model)
     if not names or len(set(names)) != len(names) or any(n not in allowed for n in names):

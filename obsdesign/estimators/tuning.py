@@ -1,14 +1,8 @@
 """Fair tuning: each baseline's knob from the paper observer's noise or convergence rate.
 
-Noise model (as :mod:`obsdesign.design.noise`): band-limited white noise of RMS ``eta``,
-flat on ``[0, B]`` Hz. Sampled at ``dt`` its spectrum is flat on ``|theta| <= theta_B =
-2 pi B dt`` (``B`` capped at the Nyquist frequency), so a discrete transfer ``G(z)`` from
-the measurement to an estimate gives::
-
-    rms^2 = eta^2 / theta_B * integral_0^theta_B |G(e^{j theta})|^2 d theta
-
-summed in closed form (:func:`estimate_noise_rms`: a discrete Lyapunov equation and a matrix
-logarithm), so the knobs below are solved on an integral exact to rounding.
+The noise RMS of an estimate is the closed-form band integral of
+:mod:`obsdesign.estimators.noise_rms` (:func:`estimate_noise_rms`: a discrete Lyapunov equation
+and a matrix logarithm), so the knobs below are solved on an integral exact to rounding.
 
 Rules (``rule``):
 

@@ -64,6 +64,16 @@ CONTROLLER_STATE = (0.0,) * 8
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def lowpass_step(z1, z2, u_prev, u, obs):
+    """One sample of the low-pass filter eq:3:4:5 in state space with FOH input: the state ``(z1, z2)``
+    after the input went from ``u_prev`` to ``u`` (``obs.lp_phi``, ``obs.lp_g0``, ``obs.lp_g1``)."""
+    lp_phi, lp_g0, lp_g1 = obs.lp_phi, obs.lp_g0, obs.lp_g1
+    t1 = lp_phi[0, 0] * z1 + lp_phi[0, 1] * z2 + lp_g0[0] * u_prev + lp_g1[0] * u
+    t2 = lp_phi[1, 0] * z1 + lp_phi[1, 1] * z2 + lp_g0[1] * u_prev + lp_g1[1] * u
+    return t1, t2
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def observer_sample(st, n, xm, u_prev, k_true, obs):
     """Process measurement ``xm`` of sample ``n`` (``u_prev``: the net force held since sample ``n - 1``).
 
@@ -91,11 +101,7 @@ def observer_sample(st, n, xm, u_prev, k_true, obs):
     fh = y2 + L2 * xm
     # low-pass filter eq:3:4:5 of the friction estimate (state-space, FOH input)
     if n > 0:
-        lp_phi, lp_g0, lp_g1 = obs.lp_phi, obs.lp_g0, obs.lp_g1
-        t1 = lp_phi[0, 0] * zf1 + lp_phi[0, 1] * zf2 + lp_g0[0] * fh_prev + lp_g1[0] * fh
-        t2 = lp_phi[1, 0] * zf1 + lp_phi[1, 1] * zf2 + lp_g0[1] * fh_prev + lp_g1[1] * fh
-        zf1 = t1
-        zf2 = t2
+        zf1, zf2 = lowpass_step(zf1, zf2, fh_prev, fh, obs)
     ff = zf1
     # stiffness schedule for the coming interval
     schedule = obs.schedule
@@ -195,11 +201,7 @@ def reference_compensation(n, ff, v_ref, w_ff, zb1, zb2, fb_prev, obs, ctrl):
         return ctrl.comp_gain * f_model, zb1, zb2, fb_prev
     fo = f_model if ctrl.blend_viscous else feedforward_model(v_ref, w_ff, False, ctrl)
     if n > 0:
-        lp_phi, lp_g0, lp_g1 = obs.lp_phi, obs.lp_g0, obs.lp_g1
-        t1 = lp_phi[0, 0] * zb1 + lp_phi[0, 1] * zb2 + lp_g0[0] * fb_prev + lp_g1[0] * fo
-        t2 = lp_phi[1, 0] * zb1 + lp_phi[1, 1] * zb2 + lp_g0[1] * fb_prev + lp_g1[1] * fo
-        zb1 = t1
-        zb2 = t2
+        zb1, zb2 = lowpass_step(zb1, zb2, fb_prev, fo, obs)
     return ctrl.comp_gain * (f_model + ff - zb1), zb1, zb2, fo
 
 
