@@ -4,9 +4,11 @@
 vcm preset with sensor noise (``noise_rms`` 0.2 um on the 1 um encoder), radius 5 mm, feeds 2, 6.3 and
 20 mm/s, 10 kHz, both directions, seeds 0-4: the quadrant-glitch peak of PID only and of each
 compensation mode (mean, min-max over the seeds and directions), on the preset's plant (Coulomb with
-pre-sliding memory, s = 3000 1/m) and on a plant whose friction is exactly the feed-forward model
-(s = 1e7 1/m: no pre-sliding to speak of). The feed-forward modes run once with the config's defaults
-and once with a build-up distance of 1/s (the pre-sliding scale of the preset).
+pre-sliding memory, s = 3000 1/m) and on a plant with no pre-sliding to speak of (s = 1e7 1/m: Coulomb +
+viscous). The feed-forward modes run with the config's defaults (the Coulomb term on the model's
+pre-sliding curve of s = 3000 along the reference), as a velocity function (``ff_presliding`` off: a
+drive's table) and as a velocity function with a build-up distance of 1/s (the drives' approximation of
+the pre-sliding turn-over).
 
 Usage: ``python analysis/circle_modes.py [--seeds N]`` (prints Markdown tables).
 """
@@ -23,8 +25,11 @@ from obsdesign.sim.circle import circle_modes
 
 
 def table(cfg, plant, seeds, label):
-    variants = [("pid / observer / feedforward / blend", cfg, None)]
-    variants.append(("build-up 1/s", cfg.override(buildup=1.0 / cfg.friction.s), ("feedforward", "blend")))
+    variants = [(None, cfg, None)]
+    ff = ("feedforward", "blend")
+    variants.append(("velocity function", cfg.override(ff_presliding=False), ff))
+    variants.append((f"velocity function, build-up {1e3 / cfg.friction.s:.2g} mm",
+                     cfg.override(ff_presliding=False, buildup=1.0 / cfg.friction.s), ff))
     print(f"\n#### {label}\n")
     print("| mode | " + " | ".join(f"{f * 1e3:g} mm/s" for f in FEEDS) + " |")
     print("|---|" + "---|" * len(FEEDS))
@@ -35,7 +40,7 @@ def table(cfg, plant, seeds, label):
             for f in FEEDS:
                 g = np.array([r["glitch_peak"] for r in rows if r["mode"] == mode and r["feed"] == f]) * 1e6
                 cells.append(f"{g.mean():.2f} ({g.min():.2f}-{g.max():.2f})")
-            tag = mode if modes is None else f"{mode}, build-up {1e3 / cfg.friction.s:.2g} mm"
+            tag = mode if name is None else f"{mode}, {name}"
             print(f"| {tag} | " + " | ".join(cells) + " |")
 
 
@@ -50,13 +55,16 @@ def mismatch(cfg, seeds=(0, 1)):
     print("\n| plant | mode | " + " | ".join(f"{f * 1e3:g} mm/s" for f in feeds) + " |\n|---|---|---|---|")
     for model in ("lugre", "gms"):
         plant = dataclasses.replace(cfg, plant_friction=PlantFrictionSpec(model=model))
-        rows = circle_modes(cfg, feeds=feeds, seeds=seeds, plant=plant)
-        for mode in dict.fromkeys(r["mode"] for r in rows):
-            cells = []
-            for f in feeds:
-                g = np.array([r["glitch_peak"] for r in rows if r["mode"] == mode and r["feed"] == f]) * 1e6
-                cells.append(f"{g.mean():.2f} ({g.min():.2f}-{g.max():.2f})")
-            print(f"| {model} | {mode} | " + " | ".join(cells) + " |")
+        for name, c, modes in ((None, cfg, None),
+                               ("velocity function", cfg.override(ff_presliding=False), ("feedforward", "blend"))):
+            rows = circle_modes(c, modes=modes, feeds=feeds, seeds=seeds, plant=plant)
+            for mode in dict.fromkeys(r["mode"] for r in rows):
+                cells = []
+                for f in feeds:
+                    g = np.array([r["glitch_peak"] for r in rows if r["mode"] == mode and r["feed"] == f]) * 1e6
+                    cells.append(f"{g.mean():.2f} ({g.min():.2f}-{g.max():.2f})")
+                tag = mode if name is None else f"{mode}, {name}"
+                print(f"| {model} | {tag} | " + " | ".join(cells) + " |")
 
 
 def main():
@@ -66,7 +74,7 @@ def main():
     cfg = od.load_preset("vcm").override(noise_rms=2e-7)
     print("glitch peak [um]: mean (min-max) over seeds", seeds, "and both directions")
     table(cfg, "physical", seeds, "vcm plant (pre-sliding s = 3000 1/m)")
-    table(cfg, cfg.override(s=1e7), seeds, "plant = the feed-forward model (s = 1e7 1/m)")
+    table(cfg, cfg.override(s=1e7), seeds, "plant without pre-sliding (s = 1e7 1/m: Coulomb + viscous)")
     mismatch(cfg)
 
 

@@ -13,8 +13,9 @@ fields by their names (``gain``, ``viscous``, ``deadzone``, ``mode``, ``lookahea
 ``mode`` (:data:`obsdesign.sampled.choices.COMPENSATION_MODES`) chooses what compensates:
 ``observer`` (the law above), ``feedforward`` (the friction model of the reference velocity,
 ``w (sign(v_ref) (Cf + ff_stribeck exp(-(v_ref / ff_stribeck_velocity)^2)) + sigma v_ref) + ff_offset``
-with ``Cf``, ``sigma`` of ``[friction]`` and the look-ahead/build-up weight ``w`` of
-:func:`obsdesign.sampled.reference.reference_feedforward`) or ``blend`` (the feed-forward plus the
+with ``Cf``, ``sigma`` of ``[friction]`` and the weight ``w`` of
+:func:`obsdesign.sampled.reference.reference_feedforward`: the pre-sliding curve of the reference
+(``ff_presliding``) times the look-ahead/build-up ramp) or ``blend`` (the feed-forward plus the
 low-passed observer estimate less the low-passed model part the observer also sees); both
 scaled by ``gain``. docs/compensation-modes.md states the laws.
 
@@ -100,6 +101,10 @@ class CompensationSpec:
     buildup : float
         Reference distance [m] over which the feed-forward builds up after a start or a reversal
         (0: at once).
+    ff_presliding : bool
+        The feed-forward model's Coulomb term follows the pre-sliding curve eq:2:3:3-4 of
+        ``[friction] s`` along the reference (its memory of the last reversal) instead of switching
+        sign at once; a true velocity function (a drive's table) is ``false``.
 
     Examples
     --------
@@ -122,6 +127,8 @@ class CompensationSpec:
     lookahead: int = param_field(Integer(minimum=0, maximum=1_000_000), "samples",
                                  "feed-forward ramp to zero before a reference reversal (0: off)", 0)
     buildup: float = param_field(NONNEGATIVE, "m", "feed-forward build-up distance after a start (0: off)", 0.0)
+    ff_presliding: bool = param_field(Flag(), "-",
+                                      "feed-forward Coulomb term follows the pre-sliding curve of [friction] s", True)
 
     def __post_init__(self) -> None:
         validate_fields(self)

@@ -266,7 +266,7 @@ class Config:
         >>> load_preset("table1").override(mass=1.0)
         Traceback (most recent call last):
         ...
-        ValueError: override: unknown parameter 'mass'; expected one of Cf, G, K, beta, buildup, deadzone, delay_samples, derivative_N, dt, ff_offset, ff_stribeck, ff_stribeck_velocity, gain, kappa, lookahead, m, max_S, mode, noise_bandwidth, noise_rms, omega_co, phase_margin_deg, phi, quantization, rho, s, sigma, tau, u_max, variant, viscous
+        ValueError: override: unknown parameter 'mass'; expected one of Cf, G, K, beta, buildup, deadzone, delay_samples, derivative_N, dt, ff_offset, ff_presliding, ff_stribeck, ff_stribeck_velocity, gain, kappa, lookahead, m, max_S, mode, noise_bandwidth, noise_rms, omega_co, phase_margin_deg, phi, quantization, rho, s, sigma, tau, u_max, variant, viscous
         """
         changes: dict[str, dict[str, Any]] = {}
         for name, value in values.items():

@@ -49,16 +49,54 @@ def test_metrics_of_a_contour_with_known_glitches():
     assert m["axes"]["x"]["max"] == 0.0  # the references are the positions here
 
 
-@pytest.mark.parametrize("feed", [6.3e-3, 2e-2])
+@pytest.mark.parametrize("feed", [2e-3, 6.3e-3, 2e-2])
 def test_feedforward_of_the_exact_friction_model_removes_the_glitch(feed):
     """Plant friction = the feed-forward model: Coulomb + viscous with the design's Cf, sigma and no
-    pre-sliding to speak of (s = 1e7 1/m: 0.1 um, a tenth of an encoder count). Compensating
-    sign(v_ref) Cf + sigma v_ref cancels the friction but for the sampling and the tracking error's
-    own velocity, so the quadrant glitch must fall to at most 10 % of the PID-only one."""
+    pre-sliding to speak of (s = 1e7 1/m: 0.1 um, a tenth of an encoder count), the feed-forward a
+    velocity function (``ff_presliding`` off). Compensating sign(v_ref) Cf + sigma v_ref cancels the
+    friction but for the sampling and the tracking error's own velocity, so the quadrant glitch must
+    fall to at most 10 % of the PID-only one."""
     plant = VCM.override(s=1e7)
     pid = simulate_circle(VCM, radius=5e-3, feed=feed, controller="pid", plant=plant).metrics
-    ff = simulate_circle(VCM.override(mode="feedforward"), radius=5e-3, feed=feed, plant=plant).metrics
+    ff = simulate_circle(VCM.override(mode="feedforward", ff_presliding=False), radius=5e-3, feed=feed,
+                         plant=plant).metrics
     assert ff["glitch_peak"] <= 0.10 * pid["glitch_peak"]
+
+
+@pytest.mark.parametrize("feed", [2e-3, 6.3e-3, 2e-2])
+def test_feedforward_with_the_models_presliding_curve_on_its_own_plant(feed):
+    """The preset's plant (Coulomb with pre-sliding memory, s = 3000 1/m) and the default feed-forward,
+    whose Coulomb term follows the same pre-sliding curve along the reference: the model is the
+    plant's friction but for the plant's own tracking error (the friction turns over the travel of
+    the axis, the model over that of the reference) and the viscous term, so again at most 10 % of
+    the PID-only glitch; a velocity-function feed-forward on this plant over-compensates after each
+    reversal and does worse than the curve."""
+    pid = simulate_circle(VCM, radius=5e-3, feed=feed, controller="pid").metrics["glitch_peak"]
+    curve = simulate_circle(VCM.override(mode="feedforward"), radius=5e-3, feed=feed).metrics["glitch_peak"]
+    switch = simulate_circle(VCM.override(mode="feedforward", ff_presliding=False), radius=5e-3,
+                             feed=feed).metrics["glitch_peak"]
+    assert curve <= 0.10 * pid and curve < switch
+
+
+def test_presliding_weight_is_the_plant_models_friction_along_the_reference():
+    """``w_ff`` with the curve = sign(v_ref) Fc/Cf of the plant's own friction routine driven by the
+    reference (an independent loop over eq:2:3:1-4), times the look-ahead ramp."""
+    from obsdesign.friction.presliding import coulomb_normalized, track_reversal
+    from obsdesign.sampled.reference import reference_feedforward
+
+    t = np.arange(3000) * 1e-4
+    x = 2e-3 * np.sin(2 * np.pi * 5 * t)
+    s = 3000.0
+    v, w = reference_feedforward(x, 1e-4, presliding=s)
+    _, ramp = reference_feedforward(x, 1e-4, lookahead=40)
+    _, both = reference_feedforward(x, 1e-4, lookahead=40, presliding=s)
+    d, xr, fr, expect = 0.0, x[0], 0.0, np.empty_like(x)
+    for i in range(len(x)):
+        d, xr, fr = track_reversal(v[i], x[i], d, xr, fr, s)
+        expect[i] = coulomb_normalized(x[i], d, xr, fr, s) * np.sign(v[i]) if v[i] != 0 else 1.0
+    assert np.array_equal(w, expect)
+    assert w.min() == -1.0 and w.max() == 1.0
+    assert np.allclose(both, w * ramp, rtol=0, atol=1e-15)
 
 
 def test_refusals():
@@ -77,6 +115,7 @@ def test_refusals():
     (["--radius", "1e-5"], "radius: expected a radius in"),
     (["--feed", "2e-2", "--modes", "feedforward", "--lookahead", "20000"], "compensation.lookahead: expected at most"),
     (["--modes", "pid,sideways"], "mode: expected one of"),
+    (["--ff-presliding", "maybe"], "argument --ff-presliding: invalid choice: 'maybe'"),
 ])
 def test_cli_bad_input_is_one_line_and_exit_2(argv, message, capsys):
     from obsdesign.cli import main
@@ -92,11 +131,16 @@ def test_cli_circle_rows_are_the_api_rows(capsys):
     from obsdesign.cli import main
     from obsdesign.sim.circle import circle_modes
 
-    assert main(["simulate", "circle", "--feed", "2e-2", "--modes", "pid,feedforward", "--buildup", "3e-4",
-                 "--json"]) == 0
-    rows = json.loads(capsys.readouterr().out)["rows"]
-    api = circle_modes(od.load_preset("vcm").override(buildup=3e-4), modes=("pid", "feedforward"), feeds=(2e-2,))
-    assert [r["glitch_peak"] for r in rows] == [r["glitch_peak"] for r in api]
+    peaks = {}
+    for flag, presliding in (("on", True), ("off", False)):
+        assert main(["simulate", "circle", "--feed", "2e-2", "--modes", "pid,feedforward", "--buildup", "3e-4",
+                     "--ff-presliding", flag, "--json"]) == 0
+        rows = json.loads(capsys.readouterr().out)["rows"]
+        api = circle_modes(od.load_preset("vcm").override(buildup=3e-4, ff_presliding=presliding),
+                           modes=("pid", "feedforward"), feeds=(2e-2,))
+        assert [r["glitch_peak"] for r in rows] == [r["glitch_peak"] for r in api]
+        peaks[flag] = rows[1]["glitch_peak"]
+    assert peaks["on"] != peaks["off"]  # the flag reaches the run
 
 
 def test_cli_plot_writes_the_ballbar_figure(tmp_path, capsys):

@@ -34,6 +34,9 @@ def add_circle_flags(p) -> None:
     g.add_argument("--lookahead", type=integer(0), help="feed-forward ramp before a reversal [samples] "
                                                         "([compensation] lookahead)")
     g.add_argument("--buildup", type=NONNEGATIVE_ARG, help="feed-forward build-up distance [m] ([compensation] buildup)")
+    g.add_argument("--ff-presliding", choices=("on", "off"),
+                   help="feed-forward Coulomb term on the pre-sliding curve of [friction] s (on, the default) or "
+                        "switched at the reversal like a drive's velocity table (off) ([compensation] ff_presliding)")
 
 
 def cmd_circle(args: argparse.Namespace) -> int:
@@ -44,7 +47,8 @@ def cmd_circle(args: argparse.Namespace) -> int:
         args.preset = "vcm"
     cfg = load(args).override(noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
                               quantization=args.quantization, dt=args.dt,
-                              lookahead=args.lookahead, buildup=args.buildup)
+                              lookahead=args.lookahead, buildup=args.buildup,
+                              ff_presliding=None if args.ff_presliding is None else args.ff_presliding == "on")
     modes = args.modes
     if modes is None:
         modes = ("pid",) if args.controller == "pid" else (cfg.compensation.mode,)

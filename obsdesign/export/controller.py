@@ -37,7 +37,7 @@ the defaults give the paper's law ``f_hat_filtered / K`` with exactly its operat
 
 Compensation modes ``feedforward`` and ``blend`` (``[compensation] mode``): the step takes two more
 inputs, ``step(x_ref, x_meas, v_ref, w_ff)``, the reference velocity [m/s] and the feed-forward
-weight in [0, 1] of :func:`obsdesign.sampled.reference.reference_feedforward` (the trajectory
+weight in [-1, 1] of :func:`obsdesign.sampled.reference.reference_feedforward` (the trajectory
 generator's numbers: the look-ahead needs the path ahead), and compensates
 :func:`obsdesign.sampled.kernel.reference_compensation` in its order (docs/compensation-modes.md).
 

@@ -324,7 +324,7 @@ def circle_modes(cfg: Config, *, modes=None, feeds=(1e-2,), directions=("ccw",),
         if mode == "pid":
             c, controller = cfg, "pid"
         else:
-            keep = {} if mode != "observer" else {"lookahead": 0, "buildup": 0.0}
+            keep = {} if mode != "observer" else {"lookahead": 0, "buildup": 0.0, "ff_presliding": True}
             c, controller = cfg.override(mode=mode, **keep), "pid+observer"
         for feed in feeds:
             for direction in directions:

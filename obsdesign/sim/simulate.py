@@ -125,14 +125,15 @@ class LoopInputs:
     def reference_feedforward(self) -> tuple[np.ndarray, np.ndarray]:
         """The reference velocity [m/s] and feed-forward weight of every sample
         (:func:`obsdesign.sampled.reference.reference_feedforward` of ``x_ref`` with the config's
-        ``lookahead`` and ``buildup``); zeros and ones when the compensation mode is ``observer``
+        ``lookahead``, ``buildup`` and, with ``ff_presliding``, the pre-sliding curve of ``[friction] s``); zeros and ones when the compensation mode is ``observer``
         (the kernel does not read them)."""
         comp = self.sampled.compensation
         if comp.mode == "observer":
             return np.zeros(self.n_samples), np.ones(self.n_samples)
         from ..sampled.reference import reference_feedforward
 
-        return reference_feedforward(self.x_ref, self.dt, lookahead=comp.lookahead, buildup=comp.buildup)
+        return reference_feedforward(self.x_ref, self.dt, lookahead=comp.lookahead, buildup=comp.buildup,
+                                     presliding=self.config.friction.s if comp.ff_presliding else None)
 
     def kernel_args(self) -> tuple:
         """The groups of :func:`obsdesign.sim.kernel.run_loop` before its outputs: the controller's
