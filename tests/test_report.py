@@ -178,3 +178,63 @@ def test_the_report_shows_the_sampled_loop_beside_the_continuous_one(tmp_path):
     cells = re.findall(r"<td>([^<]*)</td>", page[i:i + 3000])
     shown = float(cells[1].split()[0])  # phase margin [deg], 4 significant digits
     assert math.isclose(shown, pm, rel_tol=1e-3), (shown, pm)
+
+
+HELPER_CHECK = """
+import re, sys, threading
+import obsdesign as od
+from obsdesign.report.html import render_report
+strip = re.compile(r" in [0-9.]+ s\\.</p>")
+assert threading.active_count() == 1
+serial = strip.sub("", render_report(od.load_preset("vcm"), workers=1))
+assert threading.active_count() == 1  # no tqdm monitor thread without a bar: the next report can fork
+import concurrent.futures.process as p
+forked = []
+orig = p.ProcessPoolExecutor.__init__
+p.ProcessPoolExecutor.__init__ = lambda self, *a, **k: (forked.append(1), orig(self, *a, **k))[1]
+parallel = strip.sub("", render_report(od.load_preset("vcm"), workers=2))
+print(len(forked), serial == parallel, len(serial))
+"""
+
+
+@pytest.mark.slow
+def test_the_page_is_the_same_with_and_without_the_helper_process():
+    """workers=2 forks a helper for the Table 1 study and the circle's slowest feed; the page it gives
+    is the one computed in one process, byte for byte but for the render time (in a fresh process:
+    a thread left by another test would keep the helper from forking)."""
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", HELPER_CHECK], capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    forked, same, size = out.stdout.split()
+    assert forked == "1" and same == "True" and int(size) > 100_000
+
+
+def test_workers_is_checked():
+    with pytest.raises(ValueError, match="workers: expected an integer >= 1, found 0"):
+        render_report(od.load_preset("vcm"), workers=0)
+    with pytest.raises(ValueError, match="workers: expected an integer >= 1, found 1.5"):
+        render_report(od.load_preset("vcm"), workers=1.5)
+
+
+def test_envelope_keeps_each_columns_extremes_in_time_order():
+    import numpy as np
+
+    from obsdesign.report.figures import envelope
+
+    rng = np.random.default_rng(3)
+    t = np.cumsum(rng.uniform(0.5, 1.5, 100_003))
+    y = np.cumsum(rng.standard_normal(t.size))
+    te, ye = envelope(t, y, columns=500)
+    k = -(-t.size // 500)
+    for c in range(0, t.size // k, 37):  # every column's extremes, from the series itself
+        sl = slice(c * k, (c + 1) * k)
+        assert sorted(ye[2 * c:2 * c + 2]) == [y[sl].min(), y[sl].max()]
+    idx = np.searchsorted(t, te)
+    assert np.array_equal(t[idx], te) and np.array_equal(y[idx], ye)  # samples of the input, in time order
+    assert np.all(np.diff(idx) >= 0)
+    short = np.arange(10.0)
+    assert envelope(short, short)[1] is not None and len(envelope(short, short)[0]) == 10
+    y[5] = np.nan  # a diverged run is drawn as it is
+    assert len(envelope(t, y, columns=500)[0]) == t.size

@@ -10,7 +10,8 @@ from ..export import WHAT as EXPORT_WHAT
 from ..params import PARAMETERS, VARIANTS
 from ..sampled.choices import CONTROLLERS, ESTIMATORS, SCHEDULES
 from ._common import (DESIGN_FLAGS, INPUT_DIR, INPUT_FILE, POSITIVE_ARG, UsageError, add_config_flags,
-                      add_design_flags, check_output_dir, check_output_file, load, print_warnings, warn_unstable)
+                      add_design_flags, check_output_dir, check_output_file, load, print_warnings, warn_unstable,
+                      workers_arg)
 from ._data import add_trace_flags, load_trace_args
 
 __all__ = ["add_commands"]
@@ -61,7 +62,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
     flags = {f"{PARAMETERS[flag]}.{flag}": f"--{flag}" for flag in DESIGN_FLAGS if getattr(args, flag) is not None}
     write_report(cfg, out, source_label=label, progress=not args.quiet, sweep_dir=args.sweep, data=trace,
                  compare_dir=args.compare, paper_studies=args.paper_studies, flags=flags,
-                 moving_speed=args.moving_speed, circle=args.circle)
+                 moving_speed=args.moving_speed, circle=args.circle, workers=args.workers)
     print(args.output)
     return 0
 
@@ -108,5 +109,8 @@ def add_commands(sub) -> None:
     p.add_argument("--circle", action=argparse.BooleanOptionalAction, default=True,
                    help="add the circle (ballbar) test of the compensation modes on this axis (default: yes; "
                         "--no-circle saves its few seconds)")
+    p.add_argument("--workers", type=workers_arg,
+                   help="processes (default: all cores; 2 or more run the Table 1 study and the circle test in a "
+                        "helper process beside this one; 1: all here). The report is the same either way")
     add_design_flags(p, json_flag=None)
     p.set_defaults(run=_cmd_report)

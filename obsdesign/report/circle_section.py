@@ -103,7 +103,36 @@ def save_ballbar_figure(results: dict, path) -> None:
     save_figure(ballbar_figure(results), path)
 
 
-def circle_section(cfg, *, feeds=FEEDS, seeds=SEEDS, radius: float = RADIUS, figure_feed: float = FIGURE_FEED) -> dict:
+def feed_runs(cfg, feed: float, *, feeds=FEEDS, seeds=SEEDS, radius: float = RADIUS,
+              figure_feed: float = FIGURE_FEED):
+    """The runs of :func:`circle_section` at one feed: its rows, or the message why the axis cannot drive it.
+
+    Parameters
+    ----------
+    cfg : Config
+    feed : float
+        The path velocity [m/s].
+    feeds, seeds, radius, figure_feed
+        As for :func:`circle_section` (they decide the directions, seeds and traces of this feed).
+
+    Returns
+    -------
+    list of dict or str
+        :func:`~obsdesign.sim.circle.circle_modes` rows, or the refusal's message.
+    """
+    from ..sim.circle import DIRECTIONS, circle_modes
+
+    seeds = tuple(seeds) if cfg.sensor.noise_rms > 0 else tuple(seeds)[:1]
+    try:
+        return circle_modes(cfg, feeds=(feed,), directions=DIRECTIONS if feed in feeds else DIRECTIONS[:1],
+                            seeds=seeds if feed in feeds else seeds[:1], radius=radius,
+                            keep_trace=feed == figure_feed)
+    except ValueError as err:
+        return str(err)
+
+
+def circle_section(cfg, *, feeds=FEEDS, seeds=SEEDS, radius: float = RADIUS, figure_feed: float = FIGURE_FEED,
+                   runs=None) -> dict:
     """The report's circle test of the compensation modes on the axis of ``cfg``.
 
     Runs :func:`~obsdesign.sim.circle.circle_modes` (every mode, both directions) per feed; a feed the
@@ -121,6 +150,9 @@ def circle_section(cfg, *, feeds=FEEDS, seeds=SEEDS, radius: float = RADIUS, fig
     figure_feed : float
         Feed [m/s] of the ballbar picture (ccw, the first seed; all modes); the runs of the table
         when it is one of ``feeds``.
+    runs : mapping, optional
+        Feed -> :func:`feed_runs` of the same arguments, computed elsewhere (the report's helper
+        process); the other feeds run here.
 
     Returns
     -------
@@ -136,20 +168,19 @@ def circle_section(cfg, *, feeds=FEEDS, seeds=SEEDS, radius: float = RADIUS, fig
     >>> sec["seeds"], [r["mode"] for r in sec["rows"]][:2], sec["figure"] is not None
     ((0,), ['pid', 'observer'], True)
     """
-    from ..sim.circle import DIRECTIONS, circle_modes
+    from ..sim.circle import DIRECTIONS
 
     noisy = cfg.sensor.noise_rms > 0
     seeds = tuple(seeds) if noisy else tuple(seeds)[:1]
+    runs = dict(runs or {})
     peaks: dict = {}
     notes = []
     pictured: dict = {}
     for feed in (*feeds, *(() if figure_feed in feeds else (figure_feed,))):
-        try:
-            rows = circle_modes(cfg, feeds=(feed,), directions=DIRECTIONS if feed in feeds else DIRECTIONS[:1],
-                                seeds=seeds if feed in feeds else seeds[:1], radius=radius,
-                                keep_trace=feed == figure_feed)
-        except ValueError as err:
-            notes.append(f"{feed * 1e3:g} mm/s: {err}")
+        rows = runs[feed] if feed in runs else feed_runs(cfg, feed, feeds=feeds, seeds=seeds, radius=radius,
+                                                         figure_feed=figure_feed)
+        if isinstance(rows, str):
+            notes.append(f"{feed * 1e3:g} mm/s: {rows}")
             continue
         for r in rows:
             if feed in feeds:

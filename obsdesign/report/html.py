@@ -32,12 +32,14 @@ from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescap
 from .. import __version__, studies
 from .._format import with_unit
 from .._io import atomic_write
+from .._validate import check_integer
 from ..design import check_stability, noise_analysis, pid_from_config
 from ..params import Config
 from ..sweeps.summary import check_summary
 from ..symbolic import derive
 from ..symbolic.printing import derivation_html
-from .circle_section import circle_section
+from .circle_section import FEEDS as CIRCLE_FEEDS
+from .circle_section import circle_section, feed_runs
 from .data_section import data_section
 from .explorer import explorer_context, explorer_json
 from .figures import figure_svg
@@ -176,9 +178,75 @@ def _with_csp(html: str) -> str:
     return html.replace(_CSP_MARK, policy, 1)
 
 
+def _convergence_part() -> tuple[list, str]:
+    """The Table 1 convergence study's claims and figure (a task of :func:`render_report`'s helper)."""
+    conv = studies.convergence_study(seeds=3)
+    return list(conv.claims), _svg(convergence_figure(conv))
+
+
+def _circle_part(cfg: Config, runs: dict) -> dict:
+    """The circle section with its figure as inline SVG; ``runs``: feeds computed by the helper."""
+    section = circle_section(cfg, runs=runs)
+    fig = section.pop("figure")
+    section["svg"] = _svg(fig) if fig is not None else None
+    return section
+
+
+class _NoBar:
+    """The progress bar when there is none."""
+
+    def set_postfix_str(self, _text):
+        pass
+
+    def update(self):
+        pass
+
+    def close(self):
+        pass
+
+
+class _Serial:
+    """The stand-in of a one-worker pool: runs a task when its result is asked for."""
+
+    def submit(self, fn, *args):
+        return _Deferred(fn, args)
+
+    def shutdown(self, **_):
+        pass
+
+
+class _Deferred:
+    def __init__(self, fn, args):
+        self.fn, self.args = fn, args
+
+    def result(self):
+        return self.fn(*self.args)
+
+
+def _helper_pool(workers: int | None):
+    """A pool of one forked helper process for the report's independent studies, or :class:`_Serial`.
+
+    The helper is forked (it inherits the imported modules, so it starts in milliseconds) and only
+    while this process runs no other thread (a fork copies one thread; a lock held by another one
+    could deadlock the copy): otherwise, on a one-core machine, with ``workers=1`` or where fork
+    does not exist, the tasks run here, one after another. Either way the results are the same
+    floats and the same SVG bytes (same code, same inputs; tests/test_report.py compares the pages).
+    """
+    import multiprocessing
+    import threading
+
+    n = workers if workers is not None else (os.cpu_count() or 1)
+    if n < 2 or threading.active_count() > 1 or "fork" not in multiprocessing.get_all_start_methods():
+        return _Serial()
+    from concurrent.futures import ProcessPoolExecutor
+
+    return ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("fork"))
+
+
 def render_report(cfg: Config, *, source_label: str | None = None, progress: bool = False,
                   sweep_dir=None, data=None, compare_dir=None, paper_studies: bool | None = None,
-                  flags=None, moving_speed: float | None = None, circle: bool = True) -> str:
+                  flags=None, moving_speed: float | None = None, circle: bool = True,
+                  workers: int | None = None) -> str:
     """Render the report of a config as one HTML string.
 
     The design is judged by the stated criteria of :mod:`obsdesign.criteria`. The paper's reproduction
@@ -211,25 +279,53 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     circle : bool
         Add "Circle (ballbar) test of the compensation modes"
         (:func:`obsdesign.report.circle_section.circle_section`; default yes).
+    workers : int, optional
+        Processes that compute: with 2 or more (default: the number of cores) the Table 1
+        convergence study and the circle test run in one forked helper process while this one
+        computes the rest; 1 computes everything here. The page is the same either way.
     """
-    from tqdm import tqdm
-
-    from ..criteria import judge_design
-    from ..provenance import matching_preset, parameter_sources
+    from ..provenance import matching_preset
     from .comparison_section import comparison_section
 
+    if workers is not None:
+        workers = check_integer("workers", workers, minimum=1)
     source_label = source_label or f"preset {cfg.name}"
     sweep_section = _sweep_section(sweep_dir)
     compare_section = comparison_section(compare_dir)
-    variant = cfg.observer.variant
     paper = matching_preset(cfg) is not None if paper_studies is None else bool(paper_studies)
-    steps = ["derivation", "stability", "PID and loop", "noise", "convergence (Table 1)", "experiments", "friction loops",
-             "noise study", "circle test", "render"]
+    steps = ["derivation", "stability", "PID and loop", "noise", "experiments", "friction loops",
+             "noise study", "convergence (Table 1)", "circle test", "render"]
     if not paper:
         steps = [s for s in steps if s not in ("convergence (Table 1)", "noise study")]
     if not circle:
         steps.remove("circle test")
-    bar = tqdm(steps, desc="obsdesign report", disable=not progress, leave=False)
+    pool = _helper_pool(workers)
+    try:
+        return _render(cfg, pool, steps, paper, circle, source_label=source_label, progress=progress, data=data,
+                       sweep_section=sweep_section, compare_section=compare_section, flags=flags,
+                       moving_speed=moving_speed)
+    finally:
+        pool.shutdown(cancel_futures=True)
+
+
+def _render(cfg, pool, steps, paper, circle, *, source_label, progress, data, sweep_section, compare_section,
+            flags, moving_speed) -> str:
+    """:func:`render_report` after its arguments are checked, with the helper ``pool``."""
+    from tqdm import tqdm
+
+    from ..criteria import judge_design
+    from ..provenance import parameter_sources
+
+    variant = cfg.observer.variant
+    # the independent heavy studies go to the helper first, so that they run while this process works
+    # (on vcm: the convergence study 3.8 s and the slowest feed of the circle test, 2.5 s, against
+    # about 6.5 s here; the circle's lowest feed has the longest contour)
+    conv_job = pool.submit(_convergence_part) if paper else None
+    slow_feed = min(CIRCLE_FEEDS)
+    circle_job = pool.submit(feed_runs, cfg, slow_feed) if circle else None
+    # no tqdm object without a bar: tqdm starts a monitor thread even when disabled, and a thread
+    # would keep the next report in this process from forking its helper
+    bar = tqdm(steps, desc="obsdesign report", leave=False) if progress else _NoBar()
     ctx: dict = {"cfg": cfg, "version": __version__, "source_label": source_label,
                  "date": datetime.date.today().isoformat()}
     t0 = time.perf_counter()
@@ -270,11 +366,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     ctx["paper"] = paper
     if paper:
         claims = list(studies.derivation_claims()) + list(studies.pid_claims())
-        bar.set_postfix_str("convergence (Table 1)")
-        conv = studies.convergence_study(seeds=3)
-        claims += conv.claims
-        ctx["convergence_svg"] = _svg(convergence_figure(conv))
-        bar.update()
+        conv_index = len(claims)  # the convergence claims go here when the helper returns them
 
     bar.set_postfix_str("experiments")
     exp = studies.experiments_study(cfg)
@@ -293,13 +385,15 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
         bar.set_postfix_str("noise study")
         claims += studies.noise_study().claims
         bar.update()
+        bar.set_postfix_str("convergence (Table 1)")
+        conv_claims, ctx["convergence_svg"] = conv_job.result()
+        claims[conv_index:conv_index] = conv_claims
+        bar.update()
     ctx["claims"] = claims if paper else []
     ctx["circle"] = None
     if circle:
         bar.set_postfix_str("circle test")
-        ctx["circle"] = circle_section(cfg)
-        fig = ctx["circle"].pop("figure")
-        ctx["circle"]["svg"] = _svg(fig) if fig is not None else None
+        ctx["circle"] = _circle_part(cfg, {slow_feed: circle_job.result()})
         bar.update()
     ctx["criteria"] = judge_design(cfg, sampled_loop=ctx["loop_view"].sampled, experiments=exp, noise=na,
                                    stability=rep)
@@ -325,7 +419,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
 def write_report(cfg: Config, path: str | os.PathLike, *, source_label: str | None = None,
                  progress: bool = False, sweep_dir=None, data=None, compare_dir=None,
                  paper_studies: bool | None = None, flags=None, moving_speed: float | None = None,
-                 circle: bool = True) -> None:
+                 circle: bool = True, workers: int | None = None) -> None:
     """Render and write the report atomically (temporary file, then rename).
 
     Parameters
@@ -334,9 +428,9 @@ def write_report(cfg: Config, path: str | os.PathLike, *, source_label: str | No
         The design.
     path : str or os.PathLike
         Output HTML file.
-    source_label, progress, sweep_dir, data, compare_dir, paper_studies, flags, moving_speed, circle : optional
+    source_label, progress, sweep_dir, data, compare_dir, paper_studies, flags, moving_speed, circle, workers : optional
         As for :func:`render_report`.
     """
     atomic_write(path, render_report(cfg, source_label=source_label, progress=progress, sweep_dir=sweep_dir,
                                      data=data, compare_dir=compare_dir, paper_studies=paper_studies,
-                                     flags=flags, moving_speed=moving_speed, circle=circle))
+                                     flags=flags, moving_speed=moving_speed, circle=circle, workers=workers))

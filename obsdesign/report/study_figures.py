@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..studies import ConvergenceStudy, ExperimentsStudy, FrictionLoopsStudy
-from .figures import plt
+from .figures import envelope, plt
 
 __all__ = ["convergence_figure", "experiments_figure", "friction_loops_figure"]
 
@@ -20,15 +20,15 @@ def convergence_figure(study: ConvergenceStudy):
     """
     fig, axes = plt.subplots(4, 1, figsize=(8, 10.5), constrained_layout=True)
     r98, r102 = study.runs[("excitation", 0.98)], study.runs[("excitation", 1.02)]
-    axes[0].plot(r102.t, r102.u, lw=0.6)
+    axes[0].plot(*envelope(r102.t, r102.u), lw=0.6)
     axes[0].set_ylabel("input force u [N]")
     axes[0].set_title("(a) band-limited random input force")
-    axes[1].plot(r102.t, r102.x_meas * 1e3, lw=0.5)
+    axes[1].plot(*envelope(r102.t, r102.x_meas * 1e3), lw=0.5)
     axes[1].set_ylabel("measured x [mm]")
     axes[1].set_title("(b) measured displacement (with sensor noise)")
-    axes[2].plot(r102.t, r102.f, "k", lw=1, label="true friction state of the plant")
-    axes[2].plot(r98.t, r98.f_hat_filtered, lw=0.8, label="estimate with rho = 0.98 (violates Proposition 2)")
-    axes[2].plot(r102.t, r102.f_hat_filtered, lw=0.8, label="estimate with rho = 1.02")
+    axes[2].plot(*envelope(r102.t, r102.f), "k", lw=1, label="true friction state of the plant")
+    axes[2].plot(*envelope(r98.t, r98.f_hat_filtered), lw=0.8, label="estimate with rho = 0.98 (violates Proposition 2)")
+    axes[2].plot(*envelope(r102.t, r102.f_hat_filtered), lw=0.8, label="estimate with rho = 1.02")
     axes[2].set_ylabel("friction [N]")
     axes[2].legend(loc="best", fontsize="small")
     axes[2].set_title("(c) friction and its filtered estimates")
@@ -65,8 +65,9 @@ def experiments_figure(study: ExperimentsStudy):
     names = {"pid": "PID alone", "pid+observer": "PID + friction observer"}
     for ctrl in study.positioning:
         r = study.runs[("positioning", ctrl)]
-        full.plot(r.t, r.e * 1e6, lw=0.8, label=names[ctrl])
-        zoom.plot(r.t, r.e * 1e6, lw=0.8, label=names[ctrl])
+        te, ee = envelope(r.t, r.e * 1e6)  # both panels span the whole run (the zoom is in y only)
+        full.plot(te, ee, lw=0.8, label=names[ctrl])
+        zoom.plot(te, ee, lw=0.8, label=names[ctrl])
     full.set_title("(a) positioning error, 1 mm steps up and down (full scale: the overshoot shows)")
     zoom.set_ylim(-50, 50)
     zoom.set_title("(b) the same, zoomed to \u00b150 um (traces leave this range)")
