@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._idim import check_int, implausible, positive_number, quantization, time_window
+from ._idim import check_int, implausible, positive_number, quantization, second_difference, time_window
 from .choices import INPUT_TIMINGS, STRIBECK_CHOICES
 from .estimate import cautions, estimate
 from .friction_fit import check_bounds, check_fix
@@ -323,8 +323,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
         Seed of the bootstrap.
     input_timing : {'sample', 'hold'}
         ``hold``: the input logged at sample ``n`` is held until ``n + 1`` (a sampled controller's
-        output, zero-order hold, as in :func:`obsdesign.simulate`); the central-difference
-        acceleration at ``n`` then corresponds to ``(u[n-1] + u[n]) / 2``, which is used. ``sample``
+        output, zero-order hold, as in :func:`obsdesign.simulate`); the second-difference
+        acceleration at ``n`` then corresponds exactly to ``(u[n-1] + u[n]) / 2``, which is used. ``sample``
         (default, the EMPS benchmark's IDIM-LS): the input as logged. On a held input, ``sample``
         biases the viscous coefficient (-1 % open loop, -3 % closed loop in the coverage check).
 
@@ -349,8 +349,11 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     -----
     1. Position and force are low-passed by the same Butterworth filter run forwards and
        backwards (``sosfiltfilt``): zero phase, so no lag between the columns.
-    2. Velocity and acceleration by central differences (``numpy.gradient``); 5 periods of
-       the cut-off (50 samples at the default) are cut at both ends (filter transients).
+    2. Velocity by the central difference (``numpy.gradient``), acceleration by the second
+       difference ``(x[n+1] - 2 x[n] + x[n-1]) / dt^2`` (exact for a mass under a held input;
+       ``numpy.gradient`` twice would under-read it by ``(w dt)^2 / 4`` and bias the mass up, see
+       :func:`~obsdesign.data._idim.second_difference`); 5 periods of the cut-off (50 samples at
+       the default) are cut at both ends (filter transients).
     3. Every regressor column and the force are decimated in parallel by
        ``scipy.signal.decimate`` (8th-order Chebyshev I anti-alias filter at 0.8 of the new
        Nyquist frequency, zero phase). Oversampled rows are strongly correlated, which OLS
@@ -428,7 +431,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     x_f = signal.sosfiltfilt(sos, position)
     u_f = signal.sosfiltfilt(sos, force)
     v = np.gradient(x_f, dt)
-    a = np.gradient(v, dt)
+    a = second_difference(x_f, dt)
     keep = slice(border, n - border)
 
     dec_sos = signal.cheby1(8, 0.05, 0.8 / q, output="sos") if q > 1 else None

@@ -36,6 +36,8 @@ import math
 
 import numpy as np
 
+from ._idim import second_difference
+
 __all__ = ["block_length", "bootstrap", "column_noise", "eiv_shift", "ACF_CUTOFF", "N_BOOT", "LEVEL"]
 
 #: The residual autocorrelation below which rows count as independent (block length rule).
@@ -148,7 +150,7 @@ def column_noise(white: float, sos: np.ndarray, dec_sos: np.ndarray | None, q: i
         return np.gradient(signal.sosfiltfilt(sos, h), dt)
 
     return {"v": eta2 * noise_variance(lambda h: smooth(vel(h)), length),
-            "a": eta2 * noise_variance(lambda h: smooth(np.gradient(vel(h), dt)), length)}
+            "a": eta2 * noise_variance(lambda h: smooth(second_difference(signal.sosfiltfilt(sos, h), dt)), length)}
 
 
 def eiv_shift(jac: np.ndarray, theta: np.ndarray, noisy: dict[int, float]) -> np.ndarray:
