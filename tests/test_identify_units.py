@@ -84,7 +84,19 @@ def test_the_slow_log_needs_the_stribeck_term(logs):
     rss_plain = (plain.nrmse_percent / 100) ** 2 * n
     rss_rich = (rich.nrmse_percent / 100) ** 2 * n  # same rows, same y: the ratio is the RSS ratio
     delta = n * math.log(rss_plain / rss_rich) - 2 * math.log(n)
-    assert delta > 10 and f"a decrease of {delta:.1f}" in rich.selection
+    # white force noise: the residual correlation time is 1, so the effective rows are all the rows
+    assert delta > 10 and f"a decrease of {delta:.1f}" in rich.selection and f"; {n} rows)" in rich.selection
+
+
+def test_stribeck_parameters_get_no_interval_unless_fixed():
+    """Fitted Fs, vs: no 95 % interval (the noise biases them beyond the bootstrap), said in interval_method."""
+    trace = _slow_trace()
+    ident = identify(trace, n_boot=50)
+    assert ident.stribeck and "Fs" not in ident.intervals and "vs" not in ident.intervals
+    assert "none for Fs and vs" in ident.interval_method and "[95 %" not in str(ident).split("Fs", 1)[1].split("\n")[0]
+    fixed = identify(trace, fix={"Fs": 3.0, "vs": 2e-3}, n_boot=50)
+    assert fixed.intervals["Fs"] == (3.0, 3.0) and fixed.intervals["vs"] == (2e-3, 2e-3)
+    assert "none for Fs" not in fixed.interval_method
 
 
 def test_stribeck_is_dropped_where_it_explains_nothing():

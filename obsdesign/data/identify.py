@@ -33,7 +33,7 @@ import numpy as np
 
 from ._idim import check_int, implausible, positive_number, quantization, second_difference, time_window
 from .choices import INPUT_TIMINGS, STRIBECK_CHOICES
-from .estimate import cautions, estimate
+from .estimate import NO_INTERVAL_REASON, cautions, estimate
 from .friction_fit import check_bounds, check_fix
 from .presliding import MIN_REVERSALS, MIN_ROWS as MIN_PRESLIDING_ROWS, _reversals, fit_presliding
 from .trace import REVERSAL_THRESHOLD, Trace
@@ -103,7 +103,9 @@ class Identification:
         The model selection: the BIC with and without the Stribeck term and the decision.
     intervals : dict
         ``name -> (low, high)``: 95 % intervals of every parameter (moving-block bootstrap,
-        widened by the errors-in-variables shift; ``interval_method`` says which).
+        widened by the errors-in-variables shift; ``interval_method`` says which), except a fitted
+        ``Fs`` and ``vs``: there the position noise biases the estimate beyond what the bootstrap
+        sees, and ``interval_method`` says so (``docs/measured-data.md``).
     interval_method : str
         How :attr:`intervals` were obtained.
     eiv_shift : dict
@@ -368,7 +370,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
        is therefore taken from the ``coulomb-viscous`` fit of the same rows, and ``Cf_pos``,
        ``Cf_neg`` are the levels minus/plus it (standard errors propagated linearly).
     7. ``intervals``: a moving-block bootstrap widened by the errors-in-variables shift
-       (:mod:`obsdesign.data.uncertainty`).
+       (:mod:`obsdesign.data.uncertainty`); none for a fitted ``Fs`` or ``vs`` (see
+       :data:`obsdesign.data.estimate.NO_INTERVAL`).
     8. ``s`` (eq:2:3:1-2:3:5) is fitted only if at least 5 reversals each stay within
        ``presliding_window`` of the reversal point for 5 rows of the fit grid (``5 decimation``
        samples) over at least 5 distinct encoder readings; otherwise ``s = None`` and
@@ -497,5 +500,6 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                           interval_method=(f"moving-block bootstrap, {n_boot} replicates, blocks of "
                                            f"{est['block_length']} rows, widened by the errors-in-variables shift"
                                            if n_boot else "1.96 standard errors, widened by the "
-                                           "errors-in-variables shift"),
+                                           "errors-in-variables shift")
+                          + (f"; {NO_INTERVAL_REASON}" if est["stribeck"] and not {"Fs", "vs"} <= set(fix) else ""),
                           units=trace.units)
