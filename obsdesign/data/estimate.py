@@ -30,11 +30,11 @@ from .uncertainty import block_length, bootstrap, correlation_time, eiv_shift, i
 __all__ = ["estimate", "cautions", "BIC_MARGIN", "STRIBECK_CHOICES", "NO_INTERVAL"]
 
 #: Parameters given no interval (unless fixed): the Stribeck level and speed. Their columns are
-#: nonlinear functions of the filtered velocity; position noise where ``|v|`` dwells near zero
-#: garbles them and biases ``Fs`` and ``vs`` beyond the bootstrap's spread (measured 95 %
+#: nonlinear functions of the filtered velocity; position noise that moves its zero crossings by a
+#: sample garbles them and biases ``Fs`` and ``vs`` beyond the bootstrap's spread (measured 95 %
 #: "intervals" covered the truth in 55-90 % of synthetic records, docs/measured-data.md).
 NO_INTERVAL = ("Fs", "vs")
-NO_INTERVAL_REASON = ("none for Fs and vs: position noise where the speed dwells near zero biases the Stribeck "
+NO_INTERVAL_REASON = ("none for Fs and vs: position noise at the velocity's zero crossings biases the Stribeck "
                       "columns beyond the bootstrap's spread")
 #: The BIC decrease the Stribeck term must bring to be kept (``stribeck='auto'``).
 BIC_MARGIN = 10.0

@@ -103,9 +103,7 @@ class Identification:
         The model selection: the BIC with and without the Stribeck term and the decision.
     intervals : dict
         ``name -> (low, high)``: 95 % intervals of every parameter (moving-block bootstrap,
-        widened by the errors-in-variables shift; ``interval_method`` says which), except a fitted
-        ``Fs`` and ``vs``: there the position noise biases the estimate beyond what the bootstrap
-        sees, and ``interval_method`` says so (``docs/measured-data.md``).
+        widened by the errors-in-variables shift; ``interval_method`` says which), but a fitted ``Fs``, ``vs``.
     interval_method : str
         How :attr:`intervals` were obtained.
     eiv_shift : dict
@@ -351,11 +349,9 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     -----
     1. Position and force are low-passed by the same Butterworth filter run forwards and
        backwards (``sosfiltfilt``): zero phase, so no lag between the columns.
-    2. Velocity by the central difference (``numpy.gradient``), acceleration by the second
-       difference ``(x[n+1] - 2 x[n] + x[n-1]) / dt^2`` (exact for a mass under a held input;
-       ``numpy.gradient`` twice would under-read it by ``(w dt)^2 / 4`` and bias the mass up, see
-       :func:`~obsdesign.data._idim.second_difference`); 5 periods of the cut-off (50 samples at
-       the default) are cut at both ends (filter transients).
+    2. Velocity by ``numpy.gradient``, acceleration by the second difference (exact for a mass
+       under a held input, :func:`~obsdesign.data._idim.second_difference`); 5 periods of the
+       cut-off (50 samples at the default) are cut at both ends (filter transients).
     3. Every regressor column and the force are decimated in parallel by
        ``scipy.signal.decimate`` (8th-order Chebyshev I anti-alias filter at 0.8 of the new
        Nyquist frequency, zero phase). Oversampled rows are strongly correlated, which OLS
@@ -370,8 +366,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
        is therefore taken from the ``coulomb-viscous`` fit of the same rows, and ``Cf_pos``,
        ``Cf_neg`` are the levels minus/plus it (standard errors propagated linearly).
     7. ``intervals``: a moving-block bootstrap widened by the errors-in-variables shift
-       (:mod:`obsdesign.data.uncertainty`); none for a fitted ``Fs`` or ``vs`` (see
-       :data:`obsdesign.data.estimate.NO_INTERVAL`).
+       (:mod:`obsdesign.data.uncertainty`); none for a fitted ``Fs`` and ``vs`` (``docs/measured-data.md``).
     8. ``s`` (eq:2:3:1-2:3:5) is fitted only if at least 5 reversals each stay within
        ``presliding_window`` of the reversal point for 5 rows of the fit grid (``5 decimation``
        samples) over at least 5 distinct encoder readings; otherwise ``s = None`` and
@@ -497,9 +492,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                           source=trace.source, warnings=notes, notices=notices, stribeck=est["stribeck"], selection=est["selection"],
                           intervals=est["intervals"], eiv_shift=est["eiv_shift"], at_bound=est["at_bound"],
                           fixed=tuple(sorted(fix)), min_speed=float(threshold), window=span,
-                          interval_method=(f"moving-block bootstrap, {n_boot} replicates, blocks of "
-                                           f"{est['block_length']} rows, widened by the errors-in-variables shift"
-                                           if n_boot else "1.96 standard errors, widened by the "
-                                           "errors-in-variables shift")
-                          + (f"; {NO_INTERVAL_REASON}" if est["stribeck"] and not {"Fs", "vs"} <= set(fix) else ""),
+                          interval_method=(f"moving-block bootstrap, {n_boot} replicates, blocks of {est['block_length']} "
+                                           "rows, " if n_boot else "1.96 standard errors, ") + "widened by the "
+                          "errors-in-variables shift" + (f"; {NO_INTERVAL_REASON}" if est["stribeck"] and not {"Fs", "vs"} <= set(fix) else ""),
                           units=trace.units)
