@@ -31,9 +31,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._idim import check_int, implausible, positive_number, quantization, time_window
+from ._idim import check_int, implausible, positive_number, quantization, second_difference, time_window
 from .choices import INPUT_TIMINGS, STRIBECK_CHOICES
-from .estimate import cautions, estimate
+from .estimate import NO_INTERVAL_REASON, cautions, estimate
 from .friction_fit import check_bounds, check_fix
 from .presliding import MIN_REVERSALS, MIN_ROWS as MIN_PRESLIDING_ROWS, _reversals, fit_presliding
 from .trace import REVERSAL_THRESHOLD, Trace
@@ -103,7 +103,7 @@ class Identification:
         The model selection: the BIC with and without the Stribeck term and the decision.
     intervals : dict
         ``name -> (low, high)``: 95 % intervals of every parameter (moving-block bootstrap,
-        widened by the errors-in-variables shift; ``interval_method`` says which).
+        widened by the errors-in-variables shift; ``interval_method`` says which), but a fitted ``Fs``, ``vs``.
     interval_method : str
         How :attr:`intervals` were obtained.
     eiv_shift : dict
@@ -323,8 +323,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
         Seed of the bootstrap.
     input_timing : {'sample', 'hold'}
         ``hold``: the input logged at sample ``n`` is held until ``n + 1`` (a sampled controller's
-        output, zero-order hold, as in :func:`obsdesign.simulate`); the central-difference
-        acceleration at ``n`` then corresponds to ``(u[n-1] + u[n]) / 2``, which is used. ``sample``
+        output, zero-order hold, as in :func:`obsdesign.simulate`); the second-difference
+        acceleration at ``n`` then corresponds exactly to ``(u[n-1] + u[n]) / 2``, which is used. ``sample``
         (default, the EMPS benchmark's IDIM-LS): the input as logged. On a held input, ``sample``
         biases the viscous coefficient (-1 % open loop, -3 % closed loop in the coverage check).
 
@@ -349,8 +349,9 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     -----
     1. Position and force are low-passed by the same Butterworth filter run forwards and
        backwards (``sosfiltfilt``): zero phase, so no lag between the columns.
-    2. Velocity and acceleration by central differences (``numpy.gradient``); 5 periods of
-       the cut-off (50 samples at the default) are cut at both ends (filter transients).
+    2. Velocity by ``numpy.gradient``, acceleration by the second difference (exact for a mass
+       under a held input, :func:`~obsdesign.data._idim.second_difference`); 5 periods of the
+       cut-off (50 samples at the default) are cut at both ends (filter transients).
     3. Every regressor column and the force are decimated in parallel by
        ``scipy.signal.decimate`` (8th-order Chebyshev I anti-alias filter at 0.8 of the new
        Nyquist frequency, zero phase). Oversampled rows are strongly correlated, which OLS
@@ -365,7 +366,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
        is therefore taken from the ``coulomb-viscous`` fit of the same rows, and ``Cf_pos``,
        ``Cf_neg`` are the levels minus/plus it (standard errors propagated linearly).
     7. ``intervals``: a moving-block bootstrap widened by the errors-in-variables shift
-       (:mod:`obsdesign.data.uncertainty`).
+       (:mod:`obsdesign.data.uncertainty`); none for a fitted ``Fs`` and ``vs`` (``docs/measured-data.md``).
     8. ``s`` (eq:2:3:1-2:3:5) is fitted only if at least 5 reversals each stay within
        ``presliding_window`` of the reversal point for 5 rows of the fit grid (``5 decimation``
        samples) over at least 5 distinct encoder readings; otherwise ``s = None`` and
@@ -428,7 +429,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     x_f = signal.sosfiltfilt(sos, position)
     u_f = signal.sosfiltfilt(sos, force)
     v = np.gradient(x_f, dt)
-    a = np.gradient(v, dt)
+    a = second_difference(x_f, dt)
     keep = slice(border, n - border)
 
     dec_sos = signal.cheby1(8, 0.05, 0.8 / q, output="sos") if q > 1 else None
@@ -491,8 +492,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                           source=trace.source, warnings=notes, notices=notices, stribeck=est["stribeck"], selection=est["selection"],
                           intervals=est["intervals"], eiv_shift=est["eiv_shift"], at_bound=est["at_bound"],
                           fixed=tuple(sorted(fix)), min_speed=float(threshold), window=span,
-                          interval_method=(f"moving-block bootstrap, {n_boot} replicates, blocks of "
-                                           f"{est['block_length']} rows, widened by the errors-in-variables shift"
-                                           if n_boot else "1.96 standard errors, widened by the "
-                                           "errors-in-variables shift"),
+                          interval_method=(f"moving-block bootstrap, {n_boot} replicates, blocks of {est['block_length']} "
+                                           "rows, " if n_boot else "1.96 standard errors, ") + "widened by the "
+                          "errors-in-variables shift" + (f"; {NO_INTERVAL_REASON}" if est["stribeck"] and not {"Fs", "vs"} <= set(fix) else ""),
                           units=trace.units)

@@ -36,10 +36,15 @@ import math
 
 import numpy as np
 
-__all__ = ["block_length", "bootstrap", "column_noise", "eiv_shift", "ACF_CUTOFF", "N_BOOT", "LEVEL"]
+from ._idim import second_difference
+
+__all__ = ["block_length", "bootstrap", "column_noise", "correlation_time", "eiv_shift", "ACF_CUTOFF", "N_BOOT",
+           "LEVEL", "SOKAL_WINDOW"]
 
 #: The residual autocorrelation below which rows count as independent (block length rule).
 ACF_CUTOFF = 0.1
+#: Sokal's window constant of :func:`correlation_time`.
+SOKAL_WINDOW = 5.0
 #: Default number of bootstrap replicates.
 N_BOOT = 400
 #: Two-sided interval level.
@@ -62,6 +67,43 @@ def block_length(resid: np.ndarray) -> int:
     below = np.flatnonzero(acf < ACF_CUTOFF)
     lag = int(below[0]) if below.size else n
     return int(max(1, min(max(math.ceil(n ** (1.0 / 3.0)), lag), n // 5)))
+
+
+def correlation_time(resid: np.ndarray, window: float = SOKAL_WINDOW) -> float:
+    """Integrated autocorrelation time ``tau = 1 + 2 sum_k rho_k`` of the residuals, at least 1.
+
+    The sum runs to the first lag ``k >= window * tau(k)`` (Sokal's automatic window). ``n / tau``
+    rows carry the information of that many independent ones; anti-correlated residuals
+    (``tau < 1``) are not credited with more.
+
+    Parameters
+    ----------
+    resid : ndarray
+        The residuals in row order.
+    window : float
+        Sokal's ``c``.
+
+    Examples
+    --------
+    >>> from scipy.signal import lfilter
+    >>> e = np.random.default_rng(0).normal(size=200_000)
+    >>> ar = lfilter([1.0], [1.0, -0.8], e)  # AR(1): tau = (1 + 0.8) / (1 - 0.8) = 9
+    >>> bool(abs(correlation_time(ar) - 9.0) < 0.8), correlation_time(e)
+    (True, 1.0)
+    """
+    n = resid.size
+    r = resid - resid.mean()
+    spec = np.fft.rfft(r, 2 * n)
+    acf = np.fft.irfft(spec * np.conj(spec))[:n]
+    if not acf[0] > 0:
+        return 1.0
+    acf = acf / acf[0]
+    tau = 1.0
+    for k in range(1, n):
+        tau += 2.0 * float(acf[k])
+        if k >= window * tau:
+            break
+    return float(min(max(tau, 1.0), n))
 
 
 def _indices(n: int, block: int, rng: np.random.Generator) -> np.ndarray:
@@ -148,7 +190,7 @@ def column_noise(white: float, sos: np.ndarray, dec_sos: np.ndarray | None, q: i
         return np.gradient(signal.sosfiltfilt(sos, h), dt)
 
     return {"v": eta2 * noise_variance(lambda h: smooth(vel(h)), length),
-            "a": eta2 * noise_variance(lambda h: smooth(np.gradient(vel(h), dt)), length)}
+            "a": eta2 * noise_variance(lambda h: smooth(second_difference(signal.sosfiltfilt(sos, h), dt)), length)}
 
 
 def eiv_shift(jac: np.ndarray, theta: np.ndarray, noisy: dict[int, float]) -> np.ndarray:
