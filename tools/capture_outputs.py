@@ -41,6 +41,15 @@ CASES["simulate-excitation-json"] = ["simulate", "excitation", "--json", "--dura
 CASES["simulate-tracking-kalman-json"] = ["simulate", "tracking", "--estimator", "kalman", "--json",
                                           "--duration", "0.5"]
 CASES["config-vcm"] = ["config", "--preset", "vcm"]
+# issue 17, the axis's units: the other controller exports, the friction table and the report of a preset
+for fmt in ("python", "octave", "js"):
+    CASES[f"export-controller-{fmt}-vcm"] = ["export", "--format", fmt, "--what", "controller", "--preset", "vcm",
+                                             "-o", "{out}"]
+for fmt in ("c", "python"):
+    CASES[f"export-friction-table-{fmt}-vcm"] = ["export", "--format", fmt, "--what", "friction-table",
+                                                 "--preset", "vcm", "--motor-constant", "3.28", "-o", "{out}"]
+CASES["config-table1"] = ["config", "--preset", "table1"]
+CASES["report-vcm"] = ["report", "--preset", "vcm", "--no-circle", "--quiet", "-o", "{out}/report.html"]
 
 
 def main(out: str, only: list[str]) -> None:
