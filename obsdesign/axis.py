@@ -27,6 +27,7 @@ ValueError: axis.kind: expected one of 'linear', 'rotary', found 'angular'
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from dataclasses import dataclass
 from typing import Any, Mapping
@@ -177,19 +178,18 @@ class AxisSpec:
 
     @classmethod
     def from_dict(cls, table: Mapping[str, Any]) -> "AxisSpec":
-        """Build from the parsed ``[axis]`` table (unknown keys are an error).
+        """Build from the parsed ``[axis]`` table (unknown keys are an error, as in every section)."""
+        from ._validate import section_from_table
 
-        >>> AxisSpec.from_dict({"kind": "rotary", "unit": "A"})
-        Traceback (most recent call last):
-        ...
-        ValueError: axis.unit: unknown key; expected one of input, kind
-        """
-        if not isinstance(table, Mapping):
-            raise TypeError(f"axis: expected a table, found {type(table).__name__} {table!r}")
-        bad = sorted(set(table) - {"kind", "input"})
-        if bad:
-            raise ValueError(f"axis.{bad[0]}: unknown key; expected one of input, kind")
-        return cls(**table)
+        return section_from_table(cls, table)
+
+    def toml_lines(self) -> list[str]:
+        """The ``[axis]`` table as TOML lines (a blank line first), each key with its meaning."""
+        from ._format import toml_value
+
+        meta = {f.name: f.metadata for f in dataclasses.fields(self)}
+        return ["", "[axis]  # the units of every value below (docs/measured-data.md#units-delimiters-comments)"] + [
+            f"{k} = {toml_value(v)}  # {meta[k]['doc']}" for k, v in self.to_dict().items()]
 
 
 #: The axis of a config without ``[axis]``: linear, driven in V (the presets).

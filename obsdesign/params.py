@@ -36,7 +36,7 @@ from typing import Any, Mapping, NamedTuple
 from ._format import toml_value
 from ._io import atomic_write
 from ._validate import (FINITE, NONNEGATIVE, POSITIVE, SAMPLE_TIME, Choice, FrozenMap, Integer, Range, Text,
-                        document_fields, param_field, validate_fields)
+                        document_fields, param_field, section_from_table, validate_fields)
 from .axis import LINEAR, AxisSpec
 from .compensation import CompensationSpec
 from .plant_spec import PlantFrictionSpec
@@ -256,11 +256,7 @@ class Config:
 
     @property
     def units(self) -> AxisSpec:
-        """The axis's units: :attr:`axis`, or linear in V without an ``[axis]`` table.
-
-        >>> load_preset("vcm").units.unit("N s/m")
-        'N s/m'
-        """
+        """The axis's units: :attr:`axis`, or :data:`obsdesign.axis.LINEAR` (in V) without ``[axis]``."""
         return self.axis if self.axis is not None else LINEAR
 
     @property
@@ -332,19 +328,7 @@ class Config:
                 if key in _OPTIONAL_SECTIONS:
                     continue
                 raise ValueError(f"{source}: missing section [{key}]")
-            if not isinstance(table, dict):
-                raise TypeError(f"{key}: expected a table, found {type(table).__name__} {table!r}")
-            names = {f.name for f in dataclasses.fields(section)}
-            bad = sorted(set(table) - names)
-            if bad:
-                raise ValueError(
-                    f"{key}.{bad[0]}: unknown key; expected one of {', '.join(sorted(names))}"
-                )
-            for f in dataclasses.fields(section):
-                required = f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
-                if required and f.name not in table:
-                    raise ValueError(f"{key}.{f.name}: required key is missing ({f.metadata['doc']})")
-            kwargs[key] = section(**table)
+            kwargs[key] = section_from_table(section, table)
         return cls(**kwargs)
 
     @classmethod
@@ -376,8 +360,7 @@ class Config:
 
     def to_toml(self) -> str:
         """Serialise to TOML; ``Config.from_toml(c.to_toml()) == c``."""
-        lines = [f"name = {toml_value(self.name)}"] + self.axis_toml()
-        unit = self.units.unit
+        lines, unit = [f"name = {toml_value(self.name)}"] + self.axis_toml(), self.units.unit
         for key, table in self.to_dict().items():
             if key in ("name", "sources", "plant_friction", "axis"):
                 continue
@@ -389,12 +372,8 @@ class Config:
         return "\n".join(lines + self.extra_tables_toml()) + "\n"
 
     def axis_toml(self) -> list[str]:
-        """TOML lines of the ``[axis]`` table (empty when unset); it comes first, the units below follow it."""
-        if self.axis is None:
-            return []
-        meta = {f.name: f.metadata for f in dataclasses.fields(AxisSpec)}
-        return ["", "[axis]  # the units of every value below (docs/measured-data.md#units)"] + [
-            f"{k} = {toml_value(v)}  # {meta[k]['doc']}" for k, v in self.axis.to_dict().items()]
+        """TOML lines of the ``[axis]`` table (empty when unset): first, as the units below follow it."""
+        return self.axis.toml_lines() if self.axis is not None else []
 
     def extra_tables_toml(self) -> list[str]:
         """TOML lines of the ``[plant_friction]`` and ``[sources]`` tables (empty when unset)."""

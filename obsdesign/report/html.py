@@ -40,16 +40,16 @@ from ..symbolic.printing import derivation_html
 from .circle_section import circle_section
 from .data_section import data_section
 from .explorer import explorer_context, explorer_json
-from .figures import figure_svg
+from .figures import figure_svg, relabel
 from .folder_files import read_json, svg_data_url
 from .study_figures import convergence_figure, experiments_figure, friction_loops_figure
 
 __all__ = ["render_report", "write_report", "ReportContentError"]
 
 
-def _svg(fig) -> str:
-    """Inline SVG of a figure: no XML prolog, no RDF metadata block."""
-    text = figure_svg(fig)
+def _svg(fig, units=None) -> str:
+    """Inline SVG of a figure (its units those of ``units``, an AxisSpec): no XML prolog, no RDF metadata block."""
+    text = figure_svg(relabel(fig, units))
     text = text[text.index("<svg"):]
     return re.sub(r"<metadata>.*?</metadata>", "", text, flags=re.S)
 
@@ -219,6 +219,11 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     from .comparison_section import comparison_section
 
     source_label = source_label or f"preset {cfg.name}"
+    units = cfg.units  # every unit the report prints is written for this axis
+
+    def svg(fig):
+        return _svg(fig, units)
+
     sweep_section = _sweep_section(sweep_dir)
     compare_section = comparison_section(compare_dir)
     variant = cfg.observer.variant
@@ -245,23 +250,23 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
         warnings.simplefilter("ignore")
         rep = check_stability(cfg)
     ctx["stability"] = rep
-    ctx["eigen_svg"] = _svg(_eigen_figure(rep.design))
+    ctx["eigen_svg"] = svg(_eigen_figure(rep.design))
     bar.update()
 
     bar.set_postfix_str(steps[2])
     pid = pid_from_config(cfg)
     ctx["pid"] = pid
-    ctx["pid_svg"] = _svg(_bode_figure([("|S| = |H/(1+HC)|", pid.S)], bound=1 / pid.k, ylabel="|S| [m/V]"))
+    ctx["pid_svg"] = svg(_bode_figure([("|S| = |H/(1+HC)|", pid.S)], bound=1 / pid.k, ylabel="|S| [m/V]"))
     from ..design.loop import loop_analysis, loop_figure
 
     ctx["loop_view"] = loop_analysis(cfg)
-    ctx["loop_svg"] = _svg(loop_figure(ctx["loop_view"]))
+    ctx["loop_svg"] = svg(loop_figure(ctx["loop_view"]))
     bar.update()
 
     bar.set_postfix_str(steps[3])
     na = noise_analysis(cfg)
     ctx["noise"] = na
-    ctx["noise_svg"] = _svg(_bode_figure([("noise -> friction estimate", na.G_friction),
+    ctx["noise_svg"] = svg(_bode_figure([("noise -> friction estimate", na.G_friction),
                                           ("after the low-pass eq:3:4:5", na.lowpass * na.G_friction)],
                                          ylabel="gain [N/m]"))
     bar.update()
@@ -273,20 +278,20 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
         bar.set_postfix_str("convergence (Table 1)")
         conv = studies.convergence_study(seeds=3)
         claims += conv.claims
-        ctx["convergence_svg"] = _svg(convergence_figure(conv))
+        ctx["convergence_svg"] = svg(convergence_figure(conv))
         bar.update()
 
     bar.set_postfix_str("experiments")
     exp = studies.experiments_study(cfg)
     claims += exp.claims
     ctx["experiments"] = exp
-    ctx["experiments_svg"] = _svg(experiments_figure(exp))
+    ctx["experiments_svg"] = svg(experiments_figure(exp))
     bar.update()
 
     bar.set_postfix_str("friction loops")
     loops = studies.friction_loops_study(cfg)
     claims += loops.claims
-    ctx["loops_svg"] = _svg(friction_loops_figure(loops))
+    ctx["loops_svg"] = svg(friction_loops_figure(loops))
     bar.update()
 
     if paper:
@@ -299,7 +304,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
         bar.set_postfix_str("circle test")
         ctx["circle"] = circle_section(cfg)
         fig = ctx["circle"].pop("figure")
-        ctx["circle"]["svg"] = _svg(fig) if fig is not None else None
+        ctx["circle"]["svg"] = svg(fig) if fig is not None else None
         bar.update()
     ctx["criteria"] = judge_design(cfg, sampled_loop=ctx["loop_view"].sampled, experiments=exp, noise=na,
                                    stability=rep)
@@ -313,7 +318,8 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     env = Environment(loader=PackageLoader("obsdesign.report", "templates"), undefined=StrictUndefined,
                       autoescape=select_autoescape(default=True, default_for_string=True))
     env.filters["num"] = _quantity  # one number format in the whole report: 4 significant digits
-    env.filters["qty"] = _quantity
+    env.filters["qty"] = lambda value, unit="": _quantity(value, units.unit(unit))
+    env.filters["unit"] = units.unit
     env.filters["log10"] = math.log10
     env.filters["explorer_json"] = explorer_json
     html = _with_csp(env.get_template("report.html.j2").render(csp=_CSP_MARK, **ctx))
