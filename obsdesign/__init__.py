@@ -14,6 +14,7 @@ from __future__ import annotations
 import importlib
 
 from ._version import __version__ as __version__
+from .axis import AxisSpec as AxisSpec
 from .params import Config as Config
 from .params import FrictionParams as FrictionParams
 from .params import ObserverSpec as ObserverSpec
@@ -47,6 +48,7 @@ _LAZY = {
 }
 
 __all__ = [
+    "AxisSpec",
     "Config",
     "FrictionParams",
     "ObserverSpec",

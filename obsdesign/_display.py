@@ -2,7 +2,10 @@
 
 Every result object of the package (stability report, PID, noise analysis,
 simulation, ...) mixes in :class:`ResultDisplay` and provides ``_title`` and
-``_rows()``; numbers are formatted by :func:`obsdesign._format.short`.
+``_rows()``; numbers are formatted by :func:`obsdesign._format.short`. The rows'
+labels carry their unit in brackets, written for a linear axis driven in V
+(``'kappa [N/m]'``); :meth:`ResultDisplay.text` writes them for the config's axis
+(:meth:`obsdesign.axis.AxisSpec.label`).
 """
 
 from __future__ import annotations
@@ -66,7 +69,18 @@ class ResultDisplay:
         return ()
 
     def __str__(self) -> str:
-        rows = [(label, fmt(value)) for label, value in self._rows()]
+        return self.text()
+
+    def text(self, units=None) -> str:
+        """The plain-text table, its units those of ``units`` (an :class:`~obsdesign.axis.AxisSpec`; None: linear, V).
+
+        Parameters
+        ----------
+        units : AxisSpec, optional
+            The axis the numbers are about (``Config.units``).
+        """
+        label_of = units.label if units is not None else str
+        rows = [(label_of(label), fmt(value)) for label, value in self._rows()]
         width = max((len(label) for label, _ in rows), default=0)
         lines = [self._title, "=" * len(self._title)]
         lines += [f"{label.ljust(width)}  {value}" for label, value in rows]

@@ -39,7 +39,7 @@ from typing import Any, Mapping
 __all__ = [
     "Range", "Choice", "Text", "Integer", "POSITIVE", "NONNEGATIVE", "FINITE", "SAMPLE_TIME",
     "check_choice", "check_integer", "parse_number", "as_float", "FrozenMap",
-    "param_field", "validate_fields", "document_fields",
+    "param_field", "validate_fields", "document_fields", "section_from_table",
 ]
 
 
@@ -266,6 +266,32 @@ def validate_fields(obj: Any) -> None:
         rule = f.metadata.get("check")
         if rule is not None:
             object.__setattr__(obj, f.name, rule.check(f"{obj._section}.{f.name}", getattr(obj, f.name)))
+
+
+def section_from_table(cls: type, table: Any) -> Any:
+    """Build the :func:`param_field` dataclass ``cls`` (its ``_section`` names it) from a parsed TOML table.
+
+    Unknown keys and missing required keys are a ``ValueError`` naming ``section.key``; the values are
+    checked by the class's own validation.
+
+    >>> from obsdesign.axis import AxisSpec
+    >>> section_from_table(AxisSpec, {"kind": "rotary", "unit": "A"})
+    Traceback (most recent call last):
+    ...
+    ValueError: axis.unit: unknown key; expected one of input, kind
+    """
+    key = cls._section
+    if not isinstance(table, Mapping):
+        raise TypeError(f"{key}: expected a table, found {type(table).__name__} {table!r}")
+    names = {f.name for f in dataclasses.fields(cls)}
+    bad = sorted(set(table) - names)
+    if bad:
+        raise ValueError(f"{key}.{bad[0]}: unknown key; expected one of {', '.join(sorted(names))}")
+    for f in dataclasses.fields(cls):
+        required = f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+        if required and f.name not in table:
+            raise ValueError(f"{key}.{f.name}: required key is missing ({f.metadata['doc']})")
+    return cls(**table)
 
 
 def document_fields(cls: type) -> type:

@@ -36,11 +36,12 @@ from typing import Any, Mapping, NamedTuple
 from ._format import toml_value
 from ._io import atomic_write
 from ._validate import (FINITE, NONNEGATIVE, POSITIVE, SAMPLE_TIME, Choice, FrozenMap, Integer, Range, Text,
-                        document_fields, param_field, validate_fields)
+                        document_fields, param_field, section_from_table, validate_fields)
+from .axis import LINEAR, AxisSpec
 from .compensation import CompensationSpec
 from .plant_spec import PlantFrictionSpec
 
-__all__ = ["PlantParams", "FrictionParams", "SensorSpec", "ObserverSpec", "PIDSpec", "CompensationSpec", "Config",
+__all__ = ["PlantParams", "FrictionParams", "SensorSpec", "ObserverSpec", "PIDSpec", "CompensationSpec", "AxisSpec", "Config",
            "load_preset", "load_config", "preset_names", "VARIANTS", "PARAMETERS", "SECTIONS", "FieldRow"]
 
 VARIANTS = ("lag", "static")
@@ -213,6 +214,9 @@ class Config:
         Where values come from (``"plant.m"`` -> text); not compared.
     plant_friction : PlantFrictionSpec or None
         ``[plant_friction]``: the simulated plant's friction model (None: the paper's).
+    axis : AxisSpec or None
+        ``[axis]``: linear or rotary and the command's unit (None: linear, in V, as the presets);
+        :attr:`units` resolves it. Every printed unit comes from it (:meth:`AxisSpec.unit`).
 
     Examples
     --------
@@ -231,11 +235,14 @@ class Config:
     compensation: CompensationSpec = field(default_factory=CompensationSpec)
     sources: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
     plant_friction: PlantFrictionSpec | None = None  # [plant_friction]: the simulated plant's model
+    axis: AxisSpec | None = None  # [axis]: linear or rotary, the command's unit (None: linear, V)
 
     def __post_init__(self) -> None:
         validate_fields(self)
         if not isinstance(self.plant_friction, (PlantFrictionSpec, type(None))):
             raise TypeError(f"config.plant_friction: expected PlantFrictionSpec or None, found {self.plant_friction!r}")
+        if not isinstance(self.axis, (AxisSpec, type(None))):
+            raise TypeError(f"config.axis: expected AxisSpec or None, found {self.axis!r}")
         object.__setattr__(self, "sources", FrozenMap(_check_sources(self.sources)))
         for key, cls in SECTIONS.items():
             value = getattr(self, key)
@@ -246,6 +253,11 @@ class Config:
                 "friction.beta: expected a finite number > 0 for observer.variant 'lag', found None "
                 "(use variant 'static' for friction without lag)"
             )
+
+    @property
+    def units(self) -> AxisSpec:
+        """The axis's units: :attr:`axis`, or :data:`obsdesign.axis.LINEAR` (in V) without ``[axis]``."""
+        return self.axis if self.axis is not None else LINEAR
 
     @property
     def phi(self) -> float:
@@ -295,7 +307,7 @@ class Config:
         """
         if not isinstance(data, dict):
             raise TypeError(f"{source}: expected a table, found {type(data).__name__}")
-        allowed = set(SECTIONS) | {"name", "sources", "plant_friction"}
+        allowed = set(SECTIONS) | {"name", "sources", "plant_friction", "axis"}
         unknown = sorted(set(data) - allowed)
         if unknown:
             raise ValueError(
@@ -308,25 +320,15 @@ class Config:
             kwargs["sources"] = data["sources"]
         if "plant_friction" in data:
             kwargs["plant_friction"] = PlantFrictionSpec.from_dict(data["plant_friction"])
+        if "axis" in data:
+            kwargs["axis"] = AxisSpec.from_dict(data["axis"])
         for key, section in SECTIONS.items():
             table = data.get(key)
             if table is None:
                 if key in _OPTIONAL_SECTIONS:
                     continue
                 raise ValueError(f"{source}: missing section [{key}]")
-            if not isinstance(table, dict):
-                raise TypeError(f"{key}: expected a table, found {type(table).__name__} {table!r}")
-            names = {f.name for f in dataclasses.fields(section)}
-            bad = sorted(set(table) - names)
-            if bad:
-                raise ValueError(
-                    f"{key}.{bad[0]}: unknown key; expected one of {', '.join(sorted(names))}"
-                )
-            for f in dataclasses.fields(section):
-                required = f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
-                if required and f.name not in table:
-                    raise ValueError(f"{key}.{f.name}: required key is missing ({f.metadata['doc']})")
-            kwargs[key] = section(**table)
+            kwargs[key] = section_from_table(section, table)
         return cls(**kwargs)
 
     @classmethod
@@ -341,6 +343,8 @@ class Config:
     def to_dict(self) -> dict[str, Any]:
         """Nested mapping of all set values (``None`` fields are left out)."""
         out: dict[str, Any] = {"name": self.name}
+        if self.axis is not None:
+            out["axis"] = self.axis.to_dict()
         if self.sources:
             out["sources"] = dict(self.sources)
         for key in SECTIONS:
@@ -356,16 +360,20 @@ class Config:
 
     def to_toml(self) -> str:
         """Serialise to TOML; ``Config.from_toml(c.to_toml()) == c``."""
-        lines = [f"name = {toml_value(self.name)}"]
+        lines, unit = [f"name = {toml_value(self.name)}"] + self.axis_toml(), self.units.unit
         for key, table in self.to_dict().items():
-            if key in ("name", "sources", "plant_friction"):
+            if key in ("name", "sources", "plant_friction", "axis"):
                 continue
             section = getattr(self, key)
             meta = {f.name: f.metadata for f in dataclasses.fields(section)}
             lines += ["", f"[{key}]"]
             for name, value in table.items():
-                lines.append(f"{name} = {toml_value(value)}  # [{meta[name]['unit']}] {meta[name]['doc']}")
+                lines.append(f"{name} = {toml_value(value)}  # [{unit(meta[name]['unit'])}] {meta[name]['doc']}")
         return "\n".join(lines + self.extra_tables_toml()) + "\n"
+
+    def axis_toml(self) -> list[str]:
+        """TOML lines of the ``[axis]`` table (empty when unset): first, as the units below follow it."""
+        return self.axis.toml_lines() if self.axis is not None else []
 
     def extra_tables_toml(self) -> list[str]:
         """TOML lines of the ``[plant_friction]`` and ``[sources]`` tables (empty when unset)."""
@@ -393,7 +401,7 @@ class Config:
         return self.sources.get(name)
 
     def describe_fields(self) -> list[FieldRow]:
-        """One :class:`FieldRow` per parameter, in section order, for tables.
+        """One :class:`FieldRow` per parameter, in section order, for tables (units of :attr:`units`).
 
         >>> load_preset("vcm").describe_fields()[0]
         FieldRow(name='plant.m', value=0.538, unit='kg', doc='moving mass', is_default=False)
@@ -404,7 +412,8 @@ class Config:
             for f in dataclasses.fields(section):
                 value = getattr(section, f.name)
                 default = f.default is not dataclasses.MISSING and value == f.default
-                rows.append(FieldRow(f"{key}.{f.name}", value, f.metadata["unit"], f.metadata["doc"], default))
+                rows.append(FieldRow(f"{key}.{f.name}", value, self.units.unit(f.metadata["unit"]), f.metadata["doc"],
+                                     default))
         return rows
 
 

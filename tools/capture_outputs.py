@@ -8,6 +8,8 @@ Used to show that a change leaves every output byte-identical (issue 19, "output
 
 Each case gets a folder ``<out>/<name>/`` holding ``stdout``, ``stderr``, ``status`` and the files the
 command wrote (its ``-o``/``--out`` target). Paths of the temporary folder are replaced by ``<OUT>``.
+Each command runs in its case's folder: ``python -m`` puts the working directory first on ``sys.path``,
+so a run from inside a source tree would import that tree's package instead of ``PYTHONPATH``'s.
 """
 
 from __future__ import annotations
@@ -41,6 +43,15 @@ CASES["simulate-excitation-json"] = ["simulate", "excitation", "--json", "--dura
 CASES["simulate-tracking-kalman-json"] = ["simulate", "tracking", "--estimator", "kalman", "--json",
                                           "--duration", "0.5"]
 CASES["config-vcm"] = ["config", "--preset", "vcm"]
+# issue 17, the axis's units: the other controller exports, the friction table and the report of a preset
+for fmt in ("python", "octave", "js"):
+    CASES[f"export-controller-{fmt}-vcm"] = ["export", "--format", fmt, "--what", "controller", "--preset", "vcm",
+                                             "-o", "{out}"]
+for fmt in ("c", "python"):
+    CASES[f"export-friction-table-{fmt}-vcm"] = ["export", "--format", fmt, "--what", "friction-table",
+                                                 "--preset", "vcm", "--motor-constant", "3.28", "-o", "{out}"]
+CASES["config-table1"] = ["config", "--preset", "table1"]
+CASES["report-vcm"] = ["report", "--preset", "vcm", "--no-circle", "--quiet", "-o", "{out}/report.html"]
 
 
 def main(out: str, only: list[str]) -> None:
@@ -53,7 +64,7 @@ def main(out: str, only: list[str]) -> None:
         files.mkdir(parents=True, exist_ok=True)
         argv = [a.replace("{out}", str(files)) for a in args]
         proc = subprocess.run([sys.executable, "-m", "obsdesign", *argv], capture_output=True, text=True,
-                              env={**os.environ, "COLUMNS": "100"})
+                              env={**os.environ, "COLUMNS": "100"}, cwd=folder)
         for stream, text in (("stdout", proc.stdout), ("stderr", proc.stderr)):
             (folder / stream).write_text(text.replace(str(files), "<OUT>"))
         (folder / "status").write_text(f"{proc.returncode}\n")

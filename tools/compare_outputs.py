@@ -1,7 +1,7 @@
 """Compare two folders written by tools/capture_outputs.py byte for byte.
 
-The one field that is a measurement, not a result (``sim_wall_s``, the simulation's wall time), is
-masked in stdout. Prints each differing file; exit status 1 if any differs.
+The fields that are measurements or dates, not results, are masked: ``sim_wall_s`` (the simulation's
+wall time) in stdout, the date and the rendering time in a report's HTML. Prints each differing file; exit status 1 if any differs.
 
     python tools/compare_outputs.py /tmp/before /tmp/after
 """
@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 _WALL = [re.compile(r'("sim_wall_s": )[0-9.e+-]+'), re.compile(r"(sim_wall_s: )[0-9.e+-]+")]
+_HTML = [re.compile(r"(Generated )\d{4}-\d{2}-\d{2}( by obsdesign \S+ in )[0-9.]+( s)")]
 
 
 def _masked(path: Path) -> bytes:
@@ -21,6 +22,11 @@ def _masked(path: Path) -> bytes:
         text = data.decode()
         for pattern in _WALL:
             text = pattern.sub(r"\1<WALL>", text)
+        data = text.encode()
+    elif path.suffix == ".html":
+        text = data.decode()
+        for pattern in _HTML:
+            text = pattern.sub(r"\1<DATE>\2<TIME>\3", text)
         data = text.encode()
     return data
 

@@ -213,14 +213,17 @@ def print_warnings(notes, what: str = "") -> None:
         print(f"obsdesign: warning: {note}", file=sys.stderr)
 
 
-def emit(args: argparse.Namespace, result, payload: dict) -> None:
-    """Print the result as text, or its payload as one strict JSON object with ``--json``."""
+def emit(args: argparse.Namespace, result, payload: dict, *, units=None) -> None:
+    """Print the result as text, or its payload as one strict JSON object with ``--json``.
+
+    ``units`` (the config's :class:`~obsdesign.axis.AxisSpec`) writes the text's units for its axis.
+    """
     if args.json:
         from .._format import jsonable  # numpy: loaded only when a command prints
 
         print(json.dumps(jsonable(payload), allow_nan=False))
     else:
-        print(result)
+        print(result.text(units) if units is not None and hasattr(result, "text") else result)
 
 
 def _probe(folder: Path, name: str, command: str, flag: str, path: str) -> None:

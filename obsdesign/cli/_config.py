@@ -50,13 +50,13 @@ def config_toml(cfg, *, label: str | None = None) -> str:
         A TOML document with ``Config.from_toml(text) == cfg`` (sources included).
     """
     label = label or f"design {cfg.name!r}"
-    lines = [_HEADER.format(label=_comment(label)), "", f"name = {_toml_value(cfg.name)}"]
+    lines = [_HEADER.format(label=_comment(label)), "", f"name = {_toml_value(cfg.name)}", *cfg.axis_toml()]
     for key in SECTIONS:
         section = getattr(cfg, key)
         lines += ["", f"[{key}]"]
         for f in dataclasses.fields(section):
             value = getattr(section, f.name)
-            unit, doc = f.metadata["unit"], f.metadata["doc"]
+            unit, doc = cfg.units.unit(f.metadata["unit"]), f.metadata["doc"]
             if value is None:
                 lines.append(f"# {f.name} = ...  # [{unit}] {doc} (not set)")
             else:

@@ -37,7 +37,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
         warnings.simplefilter("ignore")  # reported in the output instead
         with finite_design(args, ("rho", "kappa")):
             report = check_stability(cfg)
-    emit(args, report, report.to_dict())
+    emit(args, report, report.to_dict(), units=cfg.units)
     if not args.json:
         for note in report.warnings:
             print(f"warning: {note}")
@@ -50,7 +50,7 @@ def _cmd_pid(args: argparse.Namespace) -> int:
     cfg = load(args)
     with finite_design(args, ("phi", "tau", "max_s", "phase_margin")):
         pid = _design_pid(args, cfg, design_pid)
-    emit(args, pid, pid.to_dict())
+    emit(args, pid, pid.to_dict(), units=cfg.units)
     return 0
 
 
@@ -71,7 +71,7 @@ def _cmd_noise(args: argparse.Namespace) -> int:
         na = noise_analysis(cfg, noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
                             stiffness=args.stiffness)
         warn_unstable(cfg, "the noise variance of an unstable observer is unbounded, the values are not meaningful")
-    emit(args, na, na.to_dict())
+    emit(args, na, na.to_dict(), units=cfg.units)
     return 0
 
 

@@ -28,7 +28,7 @@ def _cmd_loop(args: argparse.Namespace) -> int:
         from ..report.figures import save_figure
 
         save_figure(loop_figure(analysis), args.plot)
-    emit(args, analysis, analysis.to_dict())
+    emit(args, analysis, analysis.to_dict(), units=cfg.units)
     return 0
 
 

@@ -6,6 +6,7 @@ sensor; everything else follows from documented rules tied to the sample time ``
 =================  ==========================================================================
 field              rule
 =================  ==========================================================================
+axis               the log's units: ``kind`` linear or rotary, ``input`` the logged input's unit
 plant.K            the trace's input gain (|gain|; 1.0 when the input was logged in N)
 plant.G            the identified offset (a constant load force)
 plant.u_max        the actuator limit given (``u_max``, in the input unit); else 1.2 x the largest
@@ -184,5 +185,6 @@ def _build(ident, *, name, K, u_max, rho, presliding_window):
         observer=ObserverSpec(rho=float(rho), omega_co=omega_co, variant="static", dt=dt),
         pid=PIDSpec(max_S=max_S, phase_margin_deg=PHASE_MARGIN_DEG, tau=tau),
         sources={key: f"{rule} [{unit}]" if unit else rule for key, _, unit, rule in rules},
+        axis=units.axis_spec(ident.input_gain),
     )
     return cfg, rules

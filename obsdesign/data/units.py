@@ -21,14 +21,16 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ..axis import INPUT_UNITS, AxisSpec
+
 __all__ = ["Units", "TIME_UNITS", "POSITION_UNITS", "INPUT_UNITS", "check_plausible", "PLAUSIBLE"]
 
 #: Time units and their factor to seconds.
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
 #: Position units and their factor to m (rad for ``rad``); ``counts`` takes the resolution.
 POSITION_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "rad": 1.0, "counts": None}
-#: Logged input units; ``N`` and ``N m`` are force and torque themselves (gain 1 by default).
-INPUT_UNITS = ("V", "A", "N", "N m")
+# INPUT_UNITS (the logged input's units; ``N`` and ``N m`` are force and torque themselves, gain 1 by
+# default) is the config's one list, :data:`obsdesign.axis.INPUT_UNITS`.
 #: Plausible ranges (SI) of a servo axis record; outside, :func:`check_plausible` warns.
 PLAUSIBLE = {"sample_time": (1e-6, 0.02), "position_range": (1e-7, 5.0), "speed": (0.0, 10.0),
              "mass": (1e-4, 1000.0)}
@@ -124,6 +126,14 @@ class Units:
         if self.input is not None:
             return self.input
         return self.force_unit if gain == 1.0 else "V"
+
+    def axis_spec(self, gain: float) -> AxisSpec:
+        """The config's ``[axis]`` table of this log: the axis kind and the input unit for ``gain``.
+
+        >>> Units(position="rad", input="A").axis_spec(0.3)
+        AxisSpec(kind='rotary', input='A')
+        """
+        return AxisSpec(kind=self.axis, input=self.input_unit(gain))
 
     def describe(self, gain: float = 1.0) -> str:
         """One line: the unit of each column and the axis kind."""

@@ -137,8 +137,9 @@ class LoopAnalysis(ResultDisplay):
             "sampled": self.sampled.to_dict(),
         }
 
-    def __str__(self) -> str:
-        return super().__str__() + "\n\n" + str(self.sampled)
+    def text(self, units=None) -> str:
+        """Both tables as text (units of ``units``, an :class:`~obsdesign.axis.AxisSpec`)."""
+        return super().text(units) + "\n\n" + self.sampled.text(units)
 
     def _repr_html_(self) -> str:
         return super()._repr_html_() + self.sampled._repr_html_()

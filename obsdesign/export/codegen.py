@@ -253,6 +253,26 @@ def _c_core() -> str:
     return resources.files("obsdesign.export").joinpath("c/obsdesign_core.inc").read_text(encoding="utf-8")
 
 
+def axis_note(cfg) -> str:
+    """One comment line naming the axis and the command's unit with its gain; empty without ``[axis]``.
+
+    Only validated choices and numbers go into it (no user text), so it is safe in any comment.
+
+    Examples
+    --------
+    >>> import dataclasses, obsdesign as od
+    >>> cfg = dataclasses.replace(od.load_preset("vcm"), axis=od.AxisSpec(kind="rotary", input="A"))
+    >>> axis_note(cfg)
+    'rotary axis (inertia kg m^2, torque N m, angle rad), command in A; K = 3.28 N m/A turns it into torque'
+    >>> axis_note(od.load_preset("vcm"))
+    ''
+    """
+    if cfg.axis is None:
+        return ""
+    u = cfg.units
+    return f"{u.describe()}; K = {float(cfg.plant.K)!r} {u.unit('N/V')} turns it into {u.force_word}"
+
+
 def c_files(spec: ExportSpec) -> dict[str, str]:
     """``obsdesign_observer.h`` and ``obsdesign_observer.c`` (C99, no allocation, no globals).
 
@@ -265,6 +285,7 @@ def c_files(spec: ExportSpec) -> dict[str, str]:
 
     env = Environment(loader=PackageLoader("obsdesign.export", "templates"), undefined=StrictUndefined,
                       keep_trailing_newline=True, autoescape=False)
+    env.filters["unit"] = spec.cfg.units.unit  # the template's units, written for a linear axis in V
     fr = spec.cfg.friction
     consts = {
         "L1": spec.L1, "L2": spec.L2, "DT": spec.dt, "CF": fr.Cf, "S": fr.s, "KAPPA": fr.kappa,
@@ -277,7 +298,7 @@ def c_files(spec: ExportSpec) -> dict[str, str]:
         "name": comment_text(spec.cfg.name), "name_literal": c_string(spec.cfg.name), "variant": spec.variant, "rho": spec.rho,
         "consts": {k: f"{float(v):.17g}" for k, v in consts.items()},
         "gain_formulas": [f"{s} = {e}" for s, e in zip((form["L1"], form["L2"]), form["ccode"]["gains"])],
-        "core": _c_core(),
+        "core": _c_core(), "axis": axis_note(spec.cfg),
     }
     return {name: env.get_template(name + ".j2").render(**ctx)
             for name in ("obsdesign_observer.h", "obsdesign_observer.c")}

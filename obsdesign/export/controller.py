@@ -72,7 +72,8 @@ from ..friction import presliding as friction
 from ..params import CompensationSpec, Config
 from ..sampled.choices import CONTROLLERS, ESTIMATORS, SCHEDULES
 from ..sampled.controller import REVERSAL_NOISE_FACTOR, SampledController, sampled_controller
-from .codegen import _plain_source
+from ..axis import LINEAR
+from .codegen import _plain_source, axis_note
 from .literals import NAME_MAX as _NAME_MAX
 from .literals import comment_text
 
@@ -267,11 +268,13 @@ def _literal(value: float) -> str:
     return repr(float(value))
 
 
-def _environment():
+def _environment(units=LINEAR):
     from jinja2 import Environment, PackageLoader, StrictUndefined
 
-    return Environment(loader=PackageLoader("obsdesign.export", "templates"), undefined=StrictUndefined,
-                       keep_trailing_newline=True, autoescape=False, trim_blocks=True, lstrip_blocks=True)
+    env = Environment(loader=PackageLoader("obsdesign.export", "templates"), undefined=StrictUndefined,
+                      keep_trailing_newline=True, autoescape=False, trim_blocks=True, lstrip_blocks=True)
+    env.filters["unit"] = units.unit  # the templates' units, written for a linear axis in V
+    return env
 
 
 def _c_core() -> str:
@@ -382,6 +385,7 @@ def controller_files(cfg, language: str, *, controller: str | None = None,
         "ffmode": compensation.mode != "observer" and controller == "pid+observer",
         "blend": compensation.mode == "blend" and controller == "pid+observer",
         "blend_viscous": cfg.observer.variant == "lag",
+        "axis": axis_note(cfg),
     }
-    env = _environment()
+    env = _environment(cfg.units)
     return {name: env.get_template(name + ".j2").render(**ctx) for name in _TEMPLATES[language]}

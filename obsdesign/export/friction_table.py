@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._validate import POSITIVE, check_integer
+from ..axis import LINEAR, AxisSpec
 from ..params import Config
 from .literals import comment_text
 
@@ -61,6 +62,9 @@ class FrictionTable:
         The controller's sample time [s] (the look-ahead's unit).
     name : str
         The config's name.
+    units : AxisSpec
+        The config's axis (``Config.units``): the files' units and column names (a rotary axis's table is
+        velocity [rad/s] -> torque [N m]); the arrays are SI either way.
     """
 
     velocity: np.ndarray = field(repr=False)
@@ -73,6 +77,7 @@ class FrictionTable:
     motor_constant: "float | None"
     dt: float
     name: str
+    units: AxisSpec = LINEAR
 
 
 def _model(cfg: Config):
@@ -175,7 +180,7 @@ def friction_table(cfg: Config, *, points: int = 20, v_max: float | None = None,
     vel, frc = grid[bp], f_grid[bp]
     return FrictionTable(velocity=vel, force=frc, current=None if motor_constant is None else frc / motor_constant,
                          max_error=err, offset=comp.ff_offset, lookahead=comp.lookahead, buildup=comp.buildup,
-                         motor_constant=motor_constant, dt=cfg.observer.dt, name=cfg.name)
+                         motor_constant=motor_constant, dt=cfg.observer.dt, name=cfg.name, units=cfg.units)
 
 
 def table_files(tab: FrictionTable) -> dict[str, str]:
@@ -190,11 +195,17 @@ def table_files(tab: FrictionTable) -> dict[str, str]:
     dict of str to str
     """
     name = comment_text(tab.name)
-    head = [f"friction table of config {name}: force = table(|v|) sign(v) + offset, linear interpolation",
-            f"max interpolation error {tab.max_error!r} N on {GRID} velocities",
-            f"offset {tab.offset!r} N; lookahead {tab.lookahead} samples of dt {tab.dt!r} s; buildup {tab.buildup!r} m",
-            f"motor constant {tab.motor_constant!r} N/A" if tab.motor_constant else "no motor constant: no current"]
-    cols = ["velocity_m_s", "force_N"] + (["current_A"] if tab.current is not None else [])
+    ax = tab.units
+    u, word = ax.unit, ax.force_word
+    head = [f"friction table of config {name}: {word} = table(|v|) sign(v) + offset, linear interpolation",
+            f"max interpolation error {tab.max_error!r} {u('N')} on {GRID} velocities",
+            f"offset {tab.offset!r} {u('N')}; lookahead {tab.lookahead} samples of dt {tab.dt!r} s; buildup "
+            f"{tab.buildup!r} {u('m')}",
+            f"motor constant {tab.motor_constant!r} {u('N')}/A" if tab.motor_constant else "no motor constant: no current"]
+    if ax.rotary:
+        head.insert(1, f"{ax.describe()}: velocity in rad/s, torque in N m")
+    cols = [f"velocity_{u('m')}_s", f"{word}_{u('N').replace(' ', '_')}"] + (["current_A"] if tab.current is not None
+                                                                               else [])
     data = [tab.velocity, tab.force] + ([tab.current] if tab.current is not None else [])
     csv = "".join(f"# {h}\n" for h in head) + ",".join(cols) + "\n"
     csv += "".join(",".join(repr(float(c[i])) for c in data) + "\n" for i in range(len(tab.velocity)))

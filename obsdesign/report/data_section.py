@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .figures import figure_svg, plt
+from .figures import figure_svg, plt, relabel
 
 __all__ = ["observation_figure", "fit_figure", "data_section", "MOVING_FRACTION", "moving_mask"]
 
@@ -110,10 +110,10 @@ def fit_figure(ident, trace):
     return fig
 
 
-def _svg(fig) -> str:
+def _svg(fig, units=None) -> str:
     import re
 
-    text = figure_svg(fig)
+    text = figure_svg(relabel(fig, units))
     return re.sub(r"<metadata>.*?</metadata>", "", text[text.index("<svg"):], flags=re.S)
 
 
@@ -174,7 +174,8 @@ def data_section(trace, *, moving_speed: float | None = None) -> dict:
         ``condition_number``, ``s_note``, ``rms_error`` (whole record), ``rms_error_moving`` and
         ``rms_error_standstill`` [N] (None where no sample is in that class), ``moving_speed`` [m/s],
         ``moving_fraction`` (of the samples), ``rms_residual`` [N],
-        ``observer`` (the :class:`~obsdesign.data.Observation`), ``fit_svg`` and ``observe_svg``.
+        ``observer`` (the :class:`~obsdesign.data.Observation`), ``fit_svg`` and ``observe_svg``; ``units``
+        (the record's :class:`~obsdesign.axis.AxisSpec`: the units above are SI of that axis).
         Strings are user text: the template escapes them.
     """
     from ..data import identify, model_friction_state, observe
@@ -189,8 +190,9 @@ def data_section(trace, *, moving_speed: float | None = None) -> dict:
                                     moving_speed)
     error = obs.f_hat - w3
     measured, model = _model_force(ident, trace)
-    params = [("m", ident.m, ident.m_std, "kg"), ("sigma", ident.sigma, ident.sigma_std, "N s/m"),
-              ("Cf", ident.Cf, ident.Cf_std, "N"), ("offset", ident.offset, ident.offset_std, "N")]
+    u = cfg.units.unit  # the record's axis (linear or rotary, from its units)
+    params = [("m", ident.m, ident.m_std, u("kg")), ("sigma", ident.sigma, ident.sigma_std, u("N s/m")),
+              ("Cf", ident.Cf, ident.Cf_std, u("N")), ("offset", ident.offset, ident.offset_std, u("N"))]
     return {"source": trace.source, "names": dict(trace.names), "samples": trace.samples,
             "sample_time": trace.sample_time, "parameters": params, "nrmse_percent": ident.nrmse_percent,
             "condition_number": ident.condition_number, "s_note": ident.s_note,
@@ -198,5 +200,5 @@ def data_section(trace, *, moving_speed: float | None = None) -> dict:
             "rms_error_standstill": _rms(error[~moving]), "moving_speed": threshold, "moving_speed_given": moving_speed is not None,
             "moving_fraction": float(np.mean(moving)),
             "rms_residual": float(np.sqrt(np.mean((measured - model) ** 2))),
-            "observer": obs, "fit_svg": _svg(fit_figure(ident, trace)),
-            "observe_svg": _svg(observation_figure(obs, w3))}
+            "observer": obs, "fit_svg": _svg(fit_figure(ident, trace), cfg.units),
+            "observe_svg": _svg(observation_figure(obs, w3), cfg.units), "units": cfg.units}

@@ -53,7 +53,7 @@ def explorer_params(cfg: Config) -> list[dict]:
             {"name": "sigma", "label": "sigma [N s/m]", "value": fr.sigma, "min": fr.sigma / 10, "max": fr.sigma * 10, "log": True},
             {"name": "beta", "label": "beta [s]", "value": fr.beta, "min": fr.beta / 100, "max": fr.beta * 100, "log": True},
         ]
-    return rows
+    return [dict(row, label=cfg.units.label(str(row["label"]))) for row in rows]  # the units of the config's axis
 
 
 def _observer_arrays_js(variant: str) -> str:
@@ -241,4 +241,5 @@ class Explorer:
                           autoescape=select_autoescape(default=True, default_for_string=True))
         env.filters["log10"] = math.log10
         env.filters["explorer_json"] = explorer_json
+        env.filters["unit"] = self.config.units.unit
         return env.get_template("_explorer.html.j2").render(**explorer_context(self.config))

@@ -26,7 +26,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 #: No creation date in the files, so that identical figures are identical files.
 _METADATA = {"svg": {"Date": None}, "png": {}, "pdf": {"CreationDate": None}}
 
-__all__ = ["trace_figure", "save_figure", "save_trace_figure", "trace_figure_svg", "figure_svg", "envelope"]
+__all__ = ["trace_figure", "save_figure", "save_trace_figure", "trace_figure_svg", "figure_svg", "envelope", "relabel"]
 
 #: Columns of :func:`envelope`: more than a figure's width in pixels (8 in at 100 dpi: 800).
 ENVELOPE_COLUMNS = 2000
@@ -76,6 +76,38 @@ def envelope(t, y, columns: int = ENVELOPE_COLUMNS):
     return t[idx], y[idx]
 
 
+def relabel(fig, units):
+    """Write the bracketed units of a figure's axis labels, titles and legends for ``units`` (in place).
+
+    The figures label their axes for a linear axis driven in V (``'friction [N]'``); a rotary
+    config's figure reads ``'friction [N m]'`` (:meth:`obsdesign.axis.AxisSpec.label`).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    units : AxisSpec or None
+        The config's axis (``Config.units``); None leaves the figure as it is.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        ``fig``.
+    """
+    if units is None:
+        return fig
+    texts = [fig._suptitle] if getattr(fig, "_suptitle", None) is not None else []
+    for ax in fig.axes:
+        texts += [ax.xaxis.label, ax.yaxis.label, ax.title]
+        legend = ax.get_legend()
+        if legend is not None:
+            texts += list(legend.get_texts())
+    for text in texts:
+        new = units.label(text.get_text())
+        if new != text.get_text():
+            text.set_text(new)
+    return fig
+
+
 def trace_figure(res):
     """Displacement, error, friction and force of a :class:`~obsdesign.sim.SimResult`.
 
@@ -105,7 +137,7 @@ def trace_figure(res):
     axes[3].set_xlabel("time [s]")
     fig.suptitle(f"{res.scenario}: {res.controller}, variant {res.config.observer.variant}, "
                  f"rho {res.config.observer.rho:g}")
-    return fig
+    return relabel(fig, res.config.units)
 
 
 def save_figure(fig, path: str | os.PathLike) -> None:

@@ -42,16 +42,16 @@ from .circle_section import FEEDS as CIRCLE_FEEDS
 from .circle_section import circle_section, feed_runs
 from .data_section import data_section
 from .explorer import explorer_context, explorer_json
-from .figures import figure_svg
+from .figures import figure_svg, relabel
 from .folder_files import read_json, svg_data_url
 from .study_figures import convergence_figure, experiments_figure, friction_loops_figure
 
 __all__ = ["render_report", "write_report", "ReportContentError"]
 
 
-def _svg(fig) -> str:
-    """Inline SVG of a figure: no XML prolog, no RDF metadata block."""
-    text = figure_svg(fig)
+def _svg(fig, units=None) -> str:
+    """Inline SVG of a figure (its units those of ``units``, an AxisSpec): no XML prolog, no RDF metadata block."""
+    text = figure_svg(relabel(fig, units))
     text = text[text.index("<svg"):]
     return re.sub(r"<metadata>.*?</metadata>", "", text, flags=re.S)
 
@@ -188,7 +188,7 @@ def _circle_part(cfg: Config, runs: dict) -> dict:
     """The circle section with its figure as inline SVG; ``runs``: feeds computed by the helper."""
     section = circle_section(cfg, runs=runs)
     fig = section.pop("figure")
-    section["svg"] = _svg(fig) if fig is not None else None
+    section["svg"] = _svg(fig, cfg.units) if fig is not None else None
     return section
 
 
@@ -317,6 +317,11 @@ def _render(cfg, pool, steps, paper, circle, *, source_label, progress, data, sw
     from ..provenance import parameter_sources
 
     variant = cfg.observer.variant
+    units = cfg.units  # every unit the report prints is written for this axis
+
+    def svg(fig):
+        return _svg(fig, units)
+
     # the independent heavy studies go to the helper first, so that they run while this process works
     # (on vcm: the convergence study 3.8 s and the slowest feed of the circle test, 2.5 s, against
     # about 6.5 s here; the circle's lowest feed has the longest contour)
@@ -341,23 +346,23 @@ def _render(cfg, pool, steps, paper, circle, *, source_label, progress, data, sw
         warnings.simplefilter("ignore")
         rep = check_stability(cfg)
     ctx["stability"] = rep
-    ctx["eigen_svg"] = _svg(_eigen_figure(rep.design))
+    ctx["eigen_svg"] = svg(_eigen_figure(rep.design))
     bar.update()
 
     bar.set_postfix_str(steps[2])
     pid = pid_from_config(cfg)
     ctx["pid"] = pid
-    ctx["pid_svg"] = _svg(_bode_figure([("|S| = |H/(1+HC)|", pid.S)], bound=1 / pid.k, ylabel="|S| [m/V]"))
+    ctx["pid_svg"] = svg(_bode_figure([("|S| = |H/(1+HC)|", pid.S)], bound=1 / pid.k, ylabel="|S| [m/V]"))
     from ..design.loop import loop_analysis, loop_figure
 
     ctx["loop_view"] = loop_analysis(cfg)
-    ctx["loop_svg"] = _svg(loop_figure(ctx["loop_view"]))
+    ctx["loop_svg"] = svg(loop_figure(ctx["loop_view"]))
     bar.update()
 
     bar.set_postfix_str(steps[3])
     na = noise_analysis(cfg)
     ctx["noise"] = na
-    ctx["noise_svg"] = _svg(_bode_figure([("noise -> friction estimate", na.G_friction),
+    ctx["noise_svg"] = svg(_bode_figure([("noise -> friction estimate", na.G_friction),
                                           ("after the low-pass eq:3:4:5", na.lowpass * na.G_friction)],
                                          ylabel="gain [N/m]"))
     bar.update()
@@ -372,13 +377,13 @@ def _render(cfg, pool, steps, paper, circle, *, source_label, progress, data, sw
     exp = studies.experiments_study(cfg)
     claims += exp.claims
     ctx["experiments"] = exp
-    ctx["experiments_svg"] = _svg(experiments_figure(exp))
+    ctx["experiments_svg"] = svg(experiments_figure(exp))
     bar.update()
 
     bar.set_postfix_str("friction loops")
     loops = studies.friction_loops_study(cfg)
     claims += loops.claims
-    ctx["loops_svg"] = _svg(friction_loops_figure(loops))
+    ctx["loops_svg"] = svg(friction_loops_figure(loops))
     bar.update()
 
     if paper:
@@ -407,7 +412,8 @@ def _render(cfg, pool, steps, paper, circle, *, source_label, progress, data, sw
     env = Environment(loader=PackageLoader("obsdesign.report", "templates"), undefined=StrictUndefined,
                       autoescape=select_autoescape(default=True, default_for_string=True))
     env.filters["num"] = _quantity  # one number format in the whole report: 4 significant digits
-    env.filters["qty"] = _quantity
+    env.filters["qty"] = lambda value, unit="": _quantity(value, units.unit(unit))
+    env.filters["unit"] = units.unit
     env.filters["log10"] = math.log10
     env.filters["explorer_json"] = explorer_json
     html = _with_csp(env.get_template("report.html.j2").render(csp=_CSP_MARK, **ctx))

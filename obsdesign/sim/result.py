@@ -88,7 +88,7 @@ class SimResult(ResultDisplay):
 
         rows = []
         for key, value in self.metrics.items():
-            unit = METRIC_UNITS.get(key, "")
+            unit = self.config.units.unit(METRIC_UNITS.get(key, ""))
             unit = "" if unit == "-" else unit
             if isinstance(value, list):
                 value = "[" + ", ".join(short(v) for v in value) + "]" + (f" {unit}" if unit else "")
@@ -99,8 +99,12 @@ class SimResult(ResultDisplay):
             rows.append((key, value))
         return rows
 
-    def __str__(self) -> str:
+    def text(self, units=None) -> str:
+        """The metrics, one per line, in the units of the run's config (``units`` is ignored: it is that)."""
         lines = [f"Simulation: {self.scenario} ({self.controller}, plant {self.plant}, "
                  f"stiffness {self.stiffness_schedule}, variant {self.config.observer.variant})"]
         lines += [f"  {key}: {value}" for key, value in self._rows()]
         return "\n".join(lines)
+
+    def __str__(self) -> str:
+        return self.text()
