@@ -226,18 +226,18 @@ class _Deferred:
 def _helper_pool(workers: int | None):
     """A pool of one forked helper process for the report's independent studies, or :class:`_Serial`.
 
-    The helper is forked (it inherits the imported modules, so it starts in milliseconds) and only
-    while this process runs no other thread (a fork copies one thread; a lock held by another one
-    could deadlock the copy): otherwise, on a one-core machine, with ``workers=1`` or where fork
-    does not exist, the tasks run here, one after another. Either way the results are the same
-    floats and the same SVG bytes (same code, same inputs; tests/test_report.py compares the pages).
+    The helper is forked (it inherits the imported modules, so it starts in milliseconds) where
+    :func:`obsdesign.sweeps.pool.can_fork` allows it (Linux, no other thread in this process):
+    otherwise, on a one-core machine or with ``workers=1``, the tasks run here, one after another.
+    Either way the results are the same floats and the same SVG bytes (same code, same inputs;
+    tests/test_report.py compares the pages).
     """
-    import multiprocessing
-    import threading
+    from ..sweeps.pool import can_fork
 
     n = workers if workers is not None else (os.cpu_count() or 1)
-    if n < 2 or threading.active_count() > 1 or "fork" not in multiprocessing.get_all_start_methods():
+    if n < 2 or not can_fork():
         return _Serial()
+    import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     return ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("fork"))
