@@ -365,29 +365,29 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
     rule = check_choice("rule", rule, RULES)
     check_comparison_runs(len(plants) * len(estimators) * len(scenarios), seeds)
     t0 = time.perf_counter()
+    pool = Executor(executor, workers)  # first: our own workers start (and warm) while the baselines are tuned
     tuned: dict[str, Any] = {}
-    eta, band = noise_level(cfg)
     noise: dict[str, float] = {}
     design = {name: cfg for name in estimators}  # the design each estimator's controller is built from
-    for name in estimators:
-        if not ESTIMATORS[name].baseline:  # the paper's observer: run by name, the kernel schedules it
-            design[name] = paper_design(cfg, rule)
-            tuned[name] = name
-            noise[name] = reference_noise_rms(design[name]) if eta > 0 else 0.0
-        else:
-            try:
-                tuned[name] = tune(name, cfg, rule=rule)
-            except ValueError as e:  # a row with its reason, and the others run (issue 17 item 8)
-                tuned[name] = e
-                continue
-            noise[name] = friction_noise_rms(tuned[name], eta, band)
-    cases = [(p, e, s, seed) for p in plants for e in estimators for s in scenarios for seed in range(seeds)]
-    tasks = [(design[e], plant_config(cfg, p), tuned[e], s, seed, noise[e])
-             for p, e, s, seed in cases if not isinstance(tuned[e], Exception)]
-    pool = Executor(executor, workers)
     done: dict[int, dict] = {}
-    indexed = list(enumerate(tasks))
     try:
+        eta, band = noise_level(cfg)
+        for name in estimators:
+            if not ESTIMATORS[name].baseline:  # the paper's observer: run by name, the kernel schedules it
+                design[name] = paper_design(cfg, rule)
+                tuned[name] = name
+                noise[name] = reference_noise_rms(design[name]) if eta > 0 else 0.0
+            else:
+                try:
+                    tuned[name] = tune(name, cfg, rule=rule)
+                except ValueError as e:  # a row with its reason, and the others run (issue 17 item 8)
+                    tuned[name] = e
+                    continue
+                noise[name] = friction_noise_rms(tuned[name], eta, band)
+        cases = [(p, e, s, seed) for p in plants for e in estimators for s in scenarios for seed in range(seeds)]
+        tasks = [(design[e], plant_config(cfg, p), tuned[e], s, seed, noise[e])
+                 for p, e, s, seed in cases if not isinstance(tuned[e], Exception)]
+        indexed = list(enumerate(tasks))
         for batch in pool.map_batches(_run_batch, [indexed[i:i + 4] for i in range(0, len(indexed), 4)]):
             done.update(batch)
     except BaseException:
