@@ -24,6 +24,17 @@ from obsdesign.report.circle_section import FEEDS
 from obsdesign.sim.circle import circle_modes
 
 
+def print_rows(rows, feeds, name, prefix=""):
+    """One Markdown row per mode: the glitch peak [um] per feed, mean (min-max) over the runs."""
+    for mode in dict.fromkeys(r["mode"] for r in rows):
+        cells = []
+        for f in feeds:
+            g = np.array([r["glitch_peak"] for r in rows if r["mode"] == mode and r["feed"] == f]) * 1e6
+            cells.append(f"{g.mean():.2f} ({g.min():.2f}-{g.max():.2f})")
+        tag = mode if name is None else f"{mode}, {name}"
+        print(f"| {prefix}{tag} | " + " | ".join(cells) + " |")
+
+
 def table(cfg, plant, seeds, label):
     variants = [(None, cfg, None)]
     ff = ("feedforward", "blend")
@@ -35,13 +46,7 @@ def table(cfg, plant, seeds, label):
     print("|---|" + "---|" * len(FEEDS))
     for name, c, modes in variants:
         rows = circle_modes(c, modes=modes, feeds=FEEDS, directions=("ccw", "cw"), seeds=seeds, plant=plant)
-        for mode in dict.fromkeys(r["mode"] for r in rows):
-            cells = []
-            for f in FEEDS:
-                g = np.array([r["glitch_peak"] for r in rows if r["mode"] == mode and r["feed"] == f]) * 1e6
-                cells.append(f"{g.mean():.2f} ({g.min():.2f}-{g.max():.2f})")
-            tag = mode if name is None else f"{mode}, {name}"
-            print(f"| {tag} | " + " | ".join(cells) + " |")
+        print_rows(rows, FEEDS, name)
 
 
 def mismatch(cfg, seeds=(0, 1)):
@@ -58,13 +63,7 @@ def mismatch(cfg, seeds=(0, 1)):
         for name, c, modes in ((None, cfg, None),
                                ("velocity function", cfg.override(ff_presliding=False), ("feedforward", "blend"))):
             rows = circle_modes(c, modes=modes, feeds=feeds, seeds=seeds, plant=plant)
-            for mode in dict.fromkeys(r["mode"] for r in rows):
-                cells = []
-                for f in feeds:
-                    g = np.array([r["glitch_peak"] for r in rows if r["mode"] == mode and r["feed"] == f]) * 1e6
-                    cells.append(f"{g.mean():.2f} ({g.min():.2f}-{g.max():.2f})")
-                tag = mode if name is None else f"{mode}, {name}"
-                print(f"| {model} | {tag} | " + " | ".join(cells) + " |")
+            print_rows(rows, feeds, name, prefix=f"{model} | ")
 
 
 def main():
