@@ -34,7 +34,7 @@ from typing import Any, Mapping
 
 from ._validate import Choice, document_fields, param_field, validate_fields
 
-__all__ = ["AxisSpec", "AXIS_KINDS", "INPUT_UNITS", "LINEAR"]
+__all__ = ["AxisSpec", "AxisWords", "AXIS_KINDS", "INPUT_UNITS", "LINEAR"]
 
 #: Kinds of axis.
 AXIS_KINDS = ("linear", "rotary")
@@ -49,9 +49,50 @@ _WORD = re.compile(r"[A-Za-z]+")
 _BRACKET = re.compile(r"\[([^\[\]]*)\]")
 
 
+class AxisWords:
+    """The unit names of a linear or rotary axis, from its ``rotary`` flag (a mixin of
+    :class:`AxisSpec` and of the log's :class:`obsdesign.data.units.Units`).
+
+    Examples
+    --------
+    >>> AxisSpec(kind="rotary").mass_unit, AxisSpec().force_word
+    ('kg m^2', 'force')
+    """
+
+    @property
+    def rotary(self) -> bool:
+        """Whether the axis is rotary (given by the class that mixes these in)."""
+        raise NotImplementedError
+
+    @property
+    def force_unit(self) -> str:
+        """``'N'`` or ``'N m'``."""
+        return "N m" if self.rotary else "N"
+
+    @property
+    def length_unit(self) -> str:
+        """``'m'`` or ``'rad'``."""
+        return "rad" if self.rotary else "m"
+
+    @property
+    def mass_unit(self) -> str:
+        """``'kg'`` or ``'kg m^2'``."""
+        return "kg m^2" if self.rotary else "kg"
+
+    @property
+    def mass_word(self) -> str:
+        """``'mass'`` or ``'inertia'``."""
+        return "inertia" if self.rotary else "mass"
+
+    @property
+    def force_word(self) -> str:
+        """``'force'`` or ``'torque'``."""
+        return "torque" if self.rotary else "force"
+
+
 @document_fields
 @dataclass(frozen=True, kw_only=True)
-class AxisSpec:
+class AxisSpec(AxisWords):
     """An axis's kind and the unit of its actuator command (the ``[axis]`` table).
 
     ``input`` ``'N'`` is for a linear axis, ``'N m'`` for a rotary one (the command is then the
@@ -82,31 +123,6 @@ class AxisSpec:
     def rotary(self) -> bool:
         """Whether the axis is rotary."""
         return self.kind == "rotary"
-
-    @property
-    def force_unit(self) -> str:
-        """``'N'`` or ``'N m'``."""
-        return "N m" if self.rotary else "N"
-
-    @property
-    def length_unit(self) -> str:
-        """``'m'`` or ``'rad'``."""
-        return "rad" if self.rotary else "m"
-
-    @property
-    def mass_unit(self) -> str:
-        """``'kg'`` or ``'kg m^2'``."""
-        return "kg m^2" if self.rotary else "kg"
-
-    @property
-    def mass_word(self) -> str:
-        """``'mass'`` or ``'inertia'``."""
-        return "inertia" if self.rotary else "mass"
-
-    @property
-    def force_word(self) -> str:
-        """``'force'`` or ``'torque'``."""
-        return "torque" if self.rotary else "force"
 
     def unit(self, text: str) -> str:
         """The unit ``text``, written for a linear axis driven in V, for this axis.

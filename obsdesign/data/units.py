@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..axis import INPUT_UNITS, AxisSpec
+from ..axis import INPUT_UNITS, AxisSpec, AxisWords
 
 __all__ = ["Units", "TIME_UNITS", "POSITION_UNITS", "INPUT_UNITS", "check_plausible", "PLAUSIBLE"]
 
@@ -43,7 +43,7 @@ def _choice(param: str, value: object, choices) -> str:
 
 
 @dataclass(frozen=True, kw_only=True)
-class Units:
+class Units(AxisWords):
     """The units of a log's columns.
 
     Attributes
@@ -105,21 +105,6 @@ class Units:
     def position_scale(self) -> float:
         """SI length (m or rad) per logged position unit."""
         return self.resolution if self.position == "counts" else POSITION_UNITS[self.position]
-
-    @property
-    def length_unit(self) -> str:
-        """``'rad'`` or ``'m'``."""
-        return "rad" if self.rotary else "m"
-
-    @property
-    def force_unit(self) -> str:
-        """``'N m'`` (rotary) or ``'N'``."""
-        return "N m" if self.rotary else "N"
-
-    @property
-    def mass_unit(self) -> str:
-        """``'kg m^2'`` (rotary) or ``'kg'``."""
-        return "kg m^2" if self.rotary else "kg"
 
     def input_unit(self, gain: float) -> str:
         """The logged input's unit, with the default of :attr:`input` for ``gain``."""
