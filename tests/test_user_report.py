@@ -143,3 +143,38 @@ def test_a_users_report_judges_the_design_and_leaves_the_paper_out(tmp_path):
     assert f"<code>plant.K</code></td><td>3.28</td><td>N/V</td><td>actuator force constant</td><td>config file {path}: paper section 4</td>" in page
     for rule, _ in [THRESHOLDS[k][1:] + (None,) for k in THRESHOLDS]:
         assert rule.replace(">=", "&gt;=").replace("<=", "&lt;=").replace("'", "&#39;").replace("<", "&lt;") in page
+
+
+@pytest.mark.slow
+def test_the_data_check_runs_the_observer_of_the_reported_design():
+    """The user's design (another rho, load, sample time) is what runs over the log, and the section says so."""
+    import obsdesign as od
+    from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
+
+    from obsdesign.data import identify, model_friction_state, observe
+    from obsdesign.report.data_section import data_section
+    from obsdesign.report.html import _quantity
+
+    trace, _ = _dwell_trace()
+    ident = identify(trace)
+    identified = ident.to_config(name="identified")
+    design = identified.override(rho=1.5, G=0.0)  # the user's: slower observer, no load fed forward
+    d = data_section(trace, design, label="the report's config (config file <axis>.toml)")
+    assert d["observer"].config == design and d["observer_note"] == ""
+    # the section's error is the design's observer against the identified model, computed here independently
+    expected = observe(design, trace).f_hat - model_friction_state(ident, trace, design)
+    assert d["rms_error"] == pytest.approx(float(np.sqrt(np.mean(expected**2))), rel=1e-12)
+    own = data_section(trace)
+    assert own["observer"].config == identified and own["observer_label"] == "the identified config"
+    assert abs(d["rms_error_moving"] - own["rms_error_moving"]) > 1e-3  # the two designs differ on this log
+    # a design at another sample time runs at the record's, said in the section
+    fast = data_section(trace, od.load_preset("vcm"))
+    assert fast["observer"].config.observer.dt == trace.sample_time
+    assert fast["observer_note"] == "observer.dt 0.0001 s set to the record's sample time 0.001 s"
+    env = Environment(loader=PackageLoader("obsdesign.report", "templates"), undefined=StrictUndefined,
+                      autoescape=select_autoescape(default=True, default_for_string=True))
+    env.filters["num"] = _quantity
+    env.filters["qty"] = lambda value, unit="": _quantity(value, unit)
+    html = env.get_template("_data.html.j2").render(data=d)
+    assert "The observer of the report&#39;s config (config file &lt;axis&gt;.toml) (variant" in html
+    assert "rho 1.5," in html
