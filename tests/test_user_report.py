@@ -148,9 +148,9 @@ def test_a_users_report_judges_the_design_and_leaves_the_paper_out(tmp_path):
 @pytest.mark.slow
 def test_the_data_check_runs_the_observer_of_the_reported_design():
     """The user's design (another rho, load, sample time) is what runs over the log, and the section says so."""
-    import obsdesign as od
     from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
 
+    import obsdesign as od
     from obsdesign.data import identify, model_friction_state, observe
     from obsdesign.report.data_section import data_section
     from obsdesign.report.html import _quantity
