@@ -479,11 +479,20 @@ def load_config(path: str | os.PathLike) -> Config:
     path : str or os.PathLike
         A TOML file (see :meth:`Config.to_toml`).
 
+    Returns
+    -------
+    Config
+        The file's design; its ``[sources]`` through :func:`obsdesign.provenance.verified_sources` (an
+        entry that credits a preset's source, or the value ``identify`` wrote, to a value edited since is
+        dropped: the rule of the report and of every command).
+
     Raises
     ------
     ValueError
         If the file does not exist, cannot be read, is not UTF-8 TOML, or holds invalid values.
     """
+    from .provenance import verified_sources
+
     p = Path(path)
     try:
         data = p.read_bytes() if p.is_file() else None
@@ -496,4 +505,4 @@ def load_config(path: str | os.PathLike) -> Config:
     except UnicodeDecodeError as e:
         raise ValueError(f"{p}: expected UTF-8 text (TOML), found the byte 0x{data[e.start]:02x} at offset "
                          f"{e.start}") from None
-    return Config.from_toml(text, source=str(p))
+    return verified_sources(Config.from_toml(text, source=str(p)))

