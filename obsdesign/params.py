@@ -42,7 +42,7 @@ from .compensation import CompensationSpec
 from .plant_spec import PlantFrictionSpec
 
 __all__ = ["PlantParams", "FrictionParams", "SensorSpec", "ObserverSpec", "PIDSpec", "CompensationSpec", "AxisSpec", "Config",
-           "load_preset", "load_config", "preset_names", "VARIANTS", "PARAMETERS", "SECTIONS", "FieldRow"]
+           "load_preset", "read_config", "preset_names", "VARIANTS", "PARAMETERS", "SECTIONS", "FieldRow"]
 
 VARIANTS = ("lag", "static")
 
@@ -471,28 +471,19 @@ def load_preset(name: str) -> Config:
     return Config.from_toml(text, source=f"preset {name}")
 
 
-def load_config(path: str | os.PathLike) -> Config:
-    """Load a config from a TOML file.
+def read_config(path: str | os.PathLike) -> Config:
+    """A config from a TOML file, its ``[sources]`` as written (:func:`obsdesign.load_config` verifies them).
 
     Parameters
     ----------
     path : str or os.PathLike
         A TOML file (see :meth:`Config.to_toml`).
 
-    Returns
-    -------
-    Config
-        The file's design; its ``[sources]`` through :func:`obsdesign.provenance.verified_sources` (an
-        entry that credits a preset's source, or the value ``identify`` wrote, to a value edited since is
-        dropped: the rule of the report and of every command).
-
     Raises
     ------
     ValueError
         If the file does not exist, cannot be read, is not UTF-8 TOML, or holds invalid values.
     """
-    from .provenance import verified_sources
-
     p = Path(path)
     try:
         data = p.read_bytes() if p.is_file() else None
@@ -505,4 +496,4 @@ def load_config(path: str | os.PathLike) -> Config:
     except UnicodeDecodeError as e:
         raise ValueError(f"{p}: expected UTF-8 text (TOML), found the byte 0x{data[e.start]:02x} at offset "
                          f"{e.start}") from None
-    return verified_sources(Config.from_toml(text, source=str(p)))
+    return Config.from_toml(text, source=str(p))

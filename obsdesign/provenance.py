@@ -14,11 +14,12 @@ the paper's reproduction studies for those).
 from __future__ import annotations
 
 import dataclasses
+import os
 from collections.abc import Mapping
 
-from .params import Config, load_preset, preset_names
+from .params import Config, load_preset, preset_names, read_config
 
-__all__ = ["verified_sources", "parameter_sources", "matching_preset", "WRITTEN_AS"]
+__all__ = ["load_config", "verified_sources", "parameter_sources", "matching_preset", "WRITTEN_AS"]
 
 #: Separator of a ``[sources]`` entry and the value it was written for (``repr`` of the value).
 WRITTEN_AS = "; written as "
@@ -74,6 +75,26 @@ def verified_sources(cfg: Config) -> Config:
     if not stale:
         return cfg
     return dataclasses.replace(cfg, sources={k: v for k, v in cfg.sources.items() if k not in stale})
+
+
+def load_config(path: str | os.PathLike) -> Config:
+    """Load a config from a TOML file, its ``[sources]`` through :func:`verified_sources`.
+
+    The one reading of a config file: ``obsdesign.load_config``, every command's ``--config`` and the
+    report. An entry that credits a preset's source, or the value ``identify`` wrote, to a value
+    edited since is dropped.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A TOML file (see :meth:`obsdesign.Config.to_toml`).
+
+    Raises
+    ------
+    ValueError
+        If the file does not exist, cannot be read, is not UTF-8 TOML, or holds invalid values.
+    """
+    return verified_sources(read_config(path))
 
 
 def matching_preset(cfg: Config) -> str | None:

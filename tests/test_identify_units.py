@@ -257,7 +257,7 @@ def test_u_max_given_and_every_rule_shown(logs, tmp_path):
     code, out, err = run("identify", mm, "--position", "pos_mm", "--input", "i_A", "--time", "time_ms", *UNIT_FLAGS,
                          "--u-max", "6", "-o", tmp_path / "fast.toml", "--bootstrap", "0")
     assert code == 0, err
-    from obsdesign.params import load_config
+    from obsdesign import load_config
 
     cfg = load_config(tmp_path / "fast.toml")
     assert cfg.plant.u_max == 6.0 and "--u-max" not in err

@@ -11,7 +11,8 @@ import tempfile
 from pathlib import Path
 
 from .._validate import FINITE, NONNEGATIVE, POSITIVE, Range, parse_number
-from ..params import VARIANTS, load_config, load_preset, preset_names
+from ..params import VARIANTS, load_preset, preset_names
+from ..provenance import load_config
 
 __all__ = ["print_warnings", "UsageError", "Parser", "number", "POSITIVE_ARG", "NONNEGATIVE_ARG", "FINITE_ARG", "PHASE_ARG",
            "integer", "workers_arg", "nonempty", "INPUT_FILE", "INPUT_DIR", "add_config_flags", "add_design_flags",

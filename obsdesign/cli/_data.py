@@ -122,7 +122,8 @@ def _window_arg(text: str) -> tuple[float, float]:
 
 
 def _load_config(args: argparse.Namespace):
-    from ..params import load_config, load_preset
+    from ..params import load_preset
+    from ..provenance import load_config
 
     return load_config(args.config) if args.config else load_preset(args.preset)
 
