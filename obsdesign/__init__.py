@@ -21,9 +21,9 @@ from .params import ObserverSpec as ObserverSpec
 from .params import PIDSpec as PIDSpec
 from .params import PlantParams as PlantParams
 from .params import SensorSpec as SensorSpec
-from .params import load_config as load_config
 from .params import load_preset as load_preset
 from .params import preset_names as preset_names
+from .provenance import load_config as load_config
 
 #: Public names provided by subpackages that are imported lazily.
 _LAZY = {

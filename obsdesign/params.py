@@ -42,7 +42,7 @@ from .compensation import CompensationSpec
 from .plant_spec import PlantFrictionSpec
 
 __all__ = ["PlantParams", "FrictionParams", "SensorSpec", "ObserverSpec", "PIDSpec", "CompensationSpec", "AxisSpec", "Config",
-           "load_preset", "load_config", "preset_names", "VARIANTS", "PARAMETERS", "SECTIONS", "FieldRow"]
+           "load_preset", "read_config", "preset_names", "VARIANTS", "PARAMETERS", "SECTIONS", "FieldRow"]
 
 VARIANTS = ("lag", "static")
 
@@ -471,8 +471,8 @@ def load_preset(name: str) -> Config:
     return Config.from_toml(text, source=f"preset {name}")
 
 
-def load_config(path: str | os.PathLike) -> Config:
-    """Load a config from a TOML file.
+def read_config(path: str | os.PathLike) -> Config:
+    """A config from a TOML file, its ``[sources]`` as written (:func:`obsdesign.load_config` verifies them).
 
     Parameters
     ----------

@@ -3,8 +3,10 @@
 A preset's ``[sources]`` table says where its values come from (``"paper section 4"``). A config file
 written from a preset keeps that table; once a value is edited the paper no longer backs it, so
 :func:`verified_sources` drops every entry that cites what a
-preset cites for a value that is not that preset's (every command reads a ``--config`` file through it;
-:func:`obsdesign.load_config` returns the file's table as written). :func:`parameter_sources` gives the source column of
+preset cites for a value that is not that preset's. ``identify -o`` (:func:`obsdesign.data.rules.config_from`)
+writes each rule with the value it gave (``"... [kg]; written as 0.8"``, :data:`WRITTEN_AS`): such an entry
+is dropped once the value differs. :func:`obsdesign.load_config`, every command's ``--config`` and the
+report read a file through this one rule. :func:`parameter_sources` gives the source column of
 the report; :func:`matching_preset` says whether a config is one of the paper's presets (the report shows
 the paper's reproduction studies for those).
 """
@@ -12,11 +14,15 @@ the paper's reproduction studies for those).
 from __future__ import annotations
 
 import dataclasses
+import os
 from collections.abc import Mapping
 
-from .params import Config, load_preset, preset_names
+from .params import Config, load_preset, preset_names, read_config
 
-__all__ = ["verified_sources", "parameter_sources", "matching_preset"]
+__all__ = ["load_config", "verified_sources", "parameter_sources", "matching_preset", "WRITTEN_AS"]
+
+#: Separator of a ``[sources]`` entry and the value it was written for (``repr`` of the value).
+WRITTEN_AS = "; written as "
 
 
 def _value(cfg: Config, key: str):
@@ -28,7 +34,9 @@ def verified_sources(cfg: Config) -> Config:
     """``cfg`` without the ``[sources]`` entries that credit a preset's source to a value the preset does not have.
 
     An entry whose text is the one a shipped preset gives for that parameter is kept only when the
-    value equals that preset's value; every other entry (the file's own words) is kept.
+    value equals that preset's value; an entry ending in ``"; written as V"`` (:data:`WRITTEN_AS`,
+    ``identify -o``) only when the value's ``repr`` is ``V``; every other entry (the file's own words)
+    is kept.
 
     Parameters
     ----------
@@ -49,6 +57,10 @@ def verified_sources(cfg: Config) -> Config:
     ('paper section 4', None)
     >>> verified_sources(edited).source_of("plant.K")       # unchanged: still the paper's value
     'paper section 4'
+    >>> written = dataclasses.replace(vcm, sources={"plant.m": "identified [kg]; written as 0.538",
+    ...                                             "plant.K": "identified [N/V]; written as 1.0"})
+    >>> dict(verified_sources(written).sources)             # K is 3.28, not the 1.0 written
+    {'plant.m': 'identified [kg]; written as 0.538'}
     """
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
@@ -58,9 +70,31 @@ def verified_sources(cfg: Config) -> Config:
         cited = [pre for pre in presets if pre.sources.get(key) == text]
         if cited and all(_value(pre, key) != _value(cfg, key) for pre in cited):
             stale.add(key)
+        elif WRITTEN_AS in text and text.rsplit(WRITTEN_AS, 1)[1] != repr(_value(cfg, key)):
+            stale.add(key)
     if not stale:
         return cfg
     return dataclasses.replace(cfg, sources={k: v for k, v in cfg.sources.items() if k not in stale})
+
+
+def load_config(path: str | os.PathLike) -> Config:
+    """Load a config from a TOML file, its ``[sources]`` through :func:`verified_sources`.
+
+    The one reading of a config file: ``obsdesign.load_config``, every command's ``--config`` and the
+    report. An entry that credits a preset's source, or the value ``identify`` wrote, to a value
+    edited since is dropped.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A TOML file (see :meth:`obsdesign.Config.to_toml`).
+
+    Raises
+    ------
+    ValueError
+        If the file does not exist, cannot be read, is not UTF-8 TOML, or holds invalid values.
+    """
+    return verified_sources(read_config(path))
 
 
 def matching_preset(cfg: Config) -> str | None:

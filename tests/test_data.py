@@ -168,7 +168,7 @@ def test_identify_exact_model_closed_form():
     assert ident.nrmse_percent < 1.0
     assert set(ident.to_dict()) == {"m", "sigma", "Cf", "offset", "m_std", "sigma_std", "Cf_std", "offset_std",
                                     "nrmse_percent", "condition_number", "samples", "s", "s_note", "model",
-                                    "sample_time", "filter_hz", "decimation", "stribeck", "selection",
+                                    "sample_time", "filter_hz", "filter_rule", "decimation", "stribeck", "selection",
                                     "interval_method", "at_bound", "fixed", "min_speed", "window", "intervals",
                                     "eiv_shift", "units"}
     # the rows of the fit: decimated by 10 after cutting 50 samples at both ends, minus low-velocity rows
@@ -202,10 +202,12 @@ def test_identify_recovers_simulated_parameters(synthetic):
 
 def test_asymmetric_on_symmetric_data(synthetic):
     ident = identify(synthetic, model="asymmetric")
+    # Equal within 1 %: the simulated plant is not exactly the model (pre-sliding over 10 um, a held input), which
+    # biases each direction by a few 0.1 % (Cf_pos - Cf_neg = -0.38 %); at the record's own cut-off (312 Hz, was
+    # 1 kHz) the OLS standard errors (0.09 %) no longer hide that, so the test does not compare with them
     for a, b in (("Cf_pos", "Cf_neg"), ("sigma_pos", "sigma_neg")):
         diff = getattr(ident, a) - getattr(ident, b)
-        se = math.hypot(getattr(ident, a + "_std"), getattr(ident, b + "_std"))
-        assert abs(diff) < 3 * se, (a, diff, se)
+        assert abs(diff) < 0.01 * getattr(ident, b), (a, diff)
     assert {"sigma_pos", "sigma_neg", "Cf_pos", "Cf_neg"} <= set(ident.to_dict())
     v = np.array([-0.2, 0.0, 0.3])
     expected = [-ident.Cf_neg - 0.2 * ident.sigma_neg, 0.0, ident.Cf_pos + 0.3 * ident.sigma_pos]

@@ -28,8 +28,11 @@ def _edited_vcm(tmp_path):
 
 def test_an_edited_value_is_never_credited_to_the_paper(tmp_path, capsys):
     path = _edited_vcm(tmp_path)
-    assert od.load_config(path).source_of("plant.m") == "paper section 4"   # the file's table as written
-    cfg = verified_sources(od.load_config(path))
+    import tomllib
+
+    assert tomllib.loads(path.read_text())["sources"]["plant.m"] == "paper section 4"  # the file as written
+    cfg = od.load_config(path)  # the API reads it through the report's rule: the edit is not the paper's
+    assert verified_sources(cfg) is cfg
     assert cfg.source_of("plant.m") is None and cfg.source_of("friction.sigma") is None
     assert cfg.source_of("plant.K") == "paper section 4"        # unchanged: still the paper's value
     src = parameter_sources(cfg, "config file axis.toml", flags={"observer.rho": "--rho"})
@@ -45,6 +48,29 @@ def test_an_edited_value_is_never_credited_to_the_paper(tmp_path, capsys):
     lines = capsys.readouterr().out.splitlines()
     assert "m = 1.733  # [kg] moving mass" in lines and '"plant.m" = "paper section 4"' not in lines
     assert any(line.startswith("K = 3.28  #") and line.endswith("source: paper section 4") for line in lines)
+
+
+def test_a_value_edited_after_identify_is_not_credited_to_the_identification(tmp_path):
+    """identify -o writes each rule with its value; a hand edit drops that entry in the API and the report."""
+    from obsdesign.data import Trace, identify
+
+    t = np.arange(20_000) * 1e-3
+    x = 0.05 * np.sin(2 * np.pi * 0.5 * t) + 0.01 * np.sin(2 * np.pi * 2.3 * t)
+    v = np.gradient(x, 1e-3)
+    u = 2.0 * np.gradient(v, 1e-3) + 30.0 * v + 1.5 * np.sign(v) - 0.4
+    written = identify(Trace(t=t, position=x, force=u, sample_time=1e-3), n_boot=0).to_config(name="axis")
+    path = tmp_path / "axis.toml"
+    written.save(path)
+    assert od.load_config(path).sources == written.sources  # nothing edited: every entry kept
+    m_line = next(line for line in path.read_text().splitlines() if line.startswith("m = "))
+    path.write_text(path.read_text().replace(m_line, "m = 2.5"))
+    cfg = od.load_config(path)
+    assert cfg.plant.m == 2.5 and cfg.source_of("plant.m") is None
+    assert set(written.sources) - set(cfg.sources) == {"plant.m"}
+    assert cfg.source_of("plant.K") == written.source_of("plant.K")
+    src = parameter_sources(cfg, "config file axis.toml")  # the report's column: the same rule
+    assert src["plant.m"] == "config file axis.toml"
+    assert src["friction.sigma"] == "config file axis.toml: " + written.source_of("friction.sigma")
 
 
 def _inputs(pm=45.0, gm=8.0, max_s=1.5, pole=-500.0, settle_obs=(0.1, 0.1), settle_pid=(0.1, 0.1),
@@ -143,3 +169,38 @@ def test_a_users_report_judges_the_design_and_leaves_the_paper_out(tmp_path):
     assert f"<code>plant.K</code></td><td>3.28</td><td>N/V</td><td>actuator force constant</td><td>config file {path}: paper section 4</td>" in page
     for rule, _ in [THRESHOLDS[k][1:] + (None,) for k in THRESHOLDS]:
         assert rule.replace(">=", "&gt;=").replace("<=", "&lt;=").replace("'", "&#39;").replace("<", "&lt;") in page
+
+
+@pytest.mark.slow
+def test_the_data_check_runs_the_observer_of_the_reported_design():
+    """The user's design (another rho, load, sample time) is what runs over the log, and the section says so."""
+    from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
+
+    import obsdesign as od
+    from obsdesign.data import identify, model_friction_state, observe
+    from obsdesign.report.data_section import data_section
+    from obsdesign.report.html import _quantity
+
+    trace, _ = _dwell_trace()
+    ident = identify(trace)
+    identified = ident.to_config(name="identified")
+    design = identified.override(rho=1.5, G=0.0)  # the user's: slower observer, no load fed forward
+    d = data_section(trace, design, label="the report's config (config file <axis>.toml)")
+    assert d["observer"].config == design and d["observer_note"] == ""
+    # the section's error is the design's observer against the identified model, computed here independently
+    expected = observe(design, trace).f_hat - model_friction_state(ident, trace, design)
+    assert d["rms_error"] == pytest.approx(float(np.sqrt(np.mean(expected**2))), rel=1e-12)
+    own = data_section(trace)
+    assert own["observer"].config == identified and own["observer_label"] == "the identified config"
+    assert abs(d["rms_error_moving"] - own["rms_error_moving"]) > 1e-3  # the two designs differ on this log
+    # a design at another sample time runs at the record's, said in the section
+    fast = data_section(trace, od.load_preset("vcm"))
+    assert fast["observer"].config.observer.dt == trace.sample_time
+    assert fast["observer_note"] == "observer.dt 0.0001 s set to the record's sample time 0.001 s"
+    env = Environment(loader=PackageLoader("obsdesign.report", "templates"), undefined=StrictUndefined,
+                      autoescape=select_autoescape(default=True, default_for_string=True))
+    env.filters["num"] = _quantity
+    env.filters["qty"] = lambda value, unit="": _quantity(value, unit)
+    html = env.get_template("_data.html.j2").render(data=d)
+    assert "The observer of the report&#39;s config (config file &lt;axis&gt;.toml) (variant" in html
+    assert "rho 1.5," in html

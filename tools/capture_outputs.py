@@ -52,6 +52,14 @@ for fmt in ("c", "python"):
                                                  "--preset", "vcm", "--motor-constant", "3.28", "-o", "{out}"]
 CASES["config-table1"] = ["config", "--preset", "table1"]
 CASES["report-vcm"] = ["report", "--preset", "vcm", "--no-circle", "--quiet", "-o", "{out}/report.html"]
+# issue 17, identify's default cut-off: the EMPS record ({emps}, skipped where it is missing) and a log given by
+# OBSDESIGN_CAPTURE_LOG (a CSV with columns t, x, u in SI units: e.g. a 10 kHz closed-loop record)
+EMPS = os.environ.get("OBSDESIGN_EMPS", str(Path(__file__).resolve().parents[2] / "shared/data/emps/DATA_EMPS.mat"))
+_EMPS_COLS = ["--position", "qm", "--input", "vir", "--time", "t", "--input-gain", "35.15065188", "--bootstrap", "50"]
+CASES["identify-emps-json"] = ["identify", "{emps}", *_EMPS_COLS, "--json", "-o", "{out}/emps.toml"]
+CASES["identify-emps-filter-hz"] = ["identify", "{emps}", *_EMPS_COLS, "--filter-hz", "50"]
+CASES["identify-log-json"] = ["identify", "{log}", "--position", "x", "--input", "u", "--time", "t", "--bootstrap", "50",
+                              "--json", "-o", "{out}/log.toml"]
 
 
 def main(out: str, only: list[str]) -> None:
@@ -62,7 +70,10 @@ def main(out: str, only: list[str]) -> None:
         folder = root / name
         files = folder / "files"
         files.mkdir(parents=True, exist_ok=True)
-        argv = [a.replace("{out}", str(files)) for a in args]
+        log = os.environ.get("OBSDESIGN_CAPTURE_LOG", "")
+        if ("{emps}" in args and not Path(EMPS).is_file()) or ("{log}" in args and not log):
+            continue
+        argv = [a.replace("{out}", str(files)).replace("{emps}", EMPS).replace("{log}", log) for a in args]
         proc = subprocess.run([sys.executable, "-m", "obsdesign", *argv], capture_output=True, text=True,
                               env={**os.environ, "COLUMNS": "100"}, cwd=folder)
         for stream, text in (("stdout", proc.stdout), ("stderr", proc.stderr)):

@@ -11,7 +11,8 @@ import tempfile
 from pathlib import Path
 
 from .._validate import FINITE, NONNEGATIVE, POSITIVE, Range, parse_number
-from ..params import VARIANTS, load_config, load_preset, preset_names
+from ..params import VARIANTS, load_preset, preset_names
+from ..provenance import load_config
 
 __all__ = ["print_warnings", "UsageError", "Parser", "number", "POSITIVE_ARG", "NONNEGATIVE_ARG", "FINITE_ARG", "PHASE_ARG",
            "integer", "workers_arg", "nonempty", "INPUT_FILE", "INPUT_DIR", "add_config_flags", "add_design_flags",
@@ -149,9 +150,7 @@ def load(args: argparse.Namespace):
         if not config.strip():
             raise UsageError(f"obsdesign {args.command}: argument --config: expected the path of a TOML file, "
                              f"found {config!r}")
-        from ..provenance import verified_sources  # an edited value is never credited to a preset's source
-
-        cfg = verified_sources(load_config(config))
+        cfg = load_config(config)  # its sources verified: an edited value is never credited to its old source
     else:
         cfg = load_preset(args.preset or args.default_preset)
     return cfg.override(**{flag: getattr(args, flag, None) for flag in DESIGN_FLAGS})

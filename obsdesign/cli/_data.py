@@ -122,7 +122,8 @@ def _window_arg(text: str) -> tuple[float, float]:
 
 
 def _load_config(args: argparse.Namespace):
-    from ..params import load_config, load_preset
+    from ..params import load_preset
+    from ..provenance import load_config
 
     return load_config(args.config) if args.config else load_preset(args.preset)
 
@@ -136,9 +137,14 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     fix = _pairs(args, "--fix", args.fix, float)
     bounds = _pairs(args, "--bounds", args.bounds, _bounds_pair)
     trace = load_trace_args(args, args.data)
+    nyquist = 0.5 / trace.sample_time
+    if args.filter_hz is not None and not args.filter_hz < nyquist:
+        raise UsageError(f"obsdesign identify: argument --filter-hz: expected a cut-off below the Nyquist frequency "
+                         f"{nyquist:g} Hz of {args.data!r}, found {args.filter_hz:g}")
     ident = identify(trace, model="asymmetric" if args.asymmetric else "coulomb-viscous", stribeck=args.stribeck,
                      fix=fix, bounds=bounds, min_speed=args.min_speed, window=args.window, n_boot=args.bootstrap,
-                     seed=args.seed, input_timing=args.input_timing)
+                     seed=args.seed, input_timing=args.input_timing, filter_hz=args.filter_hz,
+                     decimation=args.decimation)
     ident, refined = refine_from_args(args, trace, ident)
     payload = dict(ident.to_dict(), **({"refinement": refined} if refined else {}))
     text = str(ident)
@@ -211,6 +217,11 @@ def add_commands(sub) -> None:
     p.add_argument("--min-speed", type=POSITIVE_ARG, metavar="V",
                    help="rows with |v| at or below V [m/s, rad/s] are left out (default 1 %% of the peak)")
     p.add_argument("--window", type=_window_arg, metavar="T0:T1", help="fit only the samples in [T0, T1] s")
+    p.add_argument("--filter-hz", type=POSITIVE_ARG, metavar="HZ",
+                   help="cut-off of the zero-phase low-pass [Hz], below Nyquist (default: from the record, one "
+                        "octave above where the position spectrum meets its noise floor, at most a tenth of the rate)")
+    p.add_argument("--decimation", type=integer(1), metavar="N",
+                   help="decimation factor of the fit's rows (default: the sampling rate / the cut-off, rounded)")
     p.add_argument("--u-max", type=POSITIVE_ARG, metavar="U",
                    help="the actuator limit in the input unit (default 1.2 x the log's peak, with a warning)")
     p.add_argument("--bootstrap", type=integer(0), default=400, metavar="N",

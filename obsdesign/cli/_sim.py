@@ -56,7 +56,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         if plant != "physical":
             raise UsageError("obsdesign simulate: argument --plant-config: needs --plant physical, "
                              f"found --plant {plant}")
-        from ..params import load_config
+        from ..provenance import load_config
         from ..sim.numerics import substeps_for
 
         plant = load_config(args.plant_config)

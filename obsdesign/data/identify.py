@@ -33,6 +33,7 @@ import numpy as np
 
 from ._idim import check_int, implausible, positive_number, quantization, second_difference, time_window
 from .choices import INPUT_TIMINGS, STRIBECK_CHOICES
+from .cutoff import choose_filter
 from .estimate import NO_INTERVAL_REASON, cautions, estimate
 from .friction_fit import check_bounds, check_fix
 from .presliding import MIN_REVERSALS, MIN_ROWS as MIN_PRESLIDING_ROWS, _reversals, fit_presliding
@@ -46,9 +47,8 @@ __all__ = ["Identification", "identify", "MODELS", "FILTER_ORDER", "DEFAULT_DECI
 MODELS = ("coulomb-viscous", "asymmetric")
 #: Order of the zero-phase Butterworth low-pass (the benchmark's choice).
 FILTER_ORDER = 4
-#: Default cut-off of that filter relative to the sampling rate (100 Hz at 1 kHz).
-FILTER_FRACTION = 0.1
-#: Default decimation factor (the benchmark's round(0.8 fnyq / (2 * 20 Hz)) = 10 at 1 kHz).
+#: Decimation factor at the largest default cut-off (a tenth of the sampling rate): the benchmark's
+#: round(0.8 fnyq / (2 * 20 Hz)) = 10 at 1 kHz. The default is ``round(fs / filter_hz)``.
 DEFAULT_DECIMATION = 10
 #: Default pre-sliding window [m]: the largest travel after a reversal still called pre-sliding.
 PRESLIDING_WINDOW = 1e-4
@@ -85,6 +85,8 @@ class Identification:
         How ``s`` was obtained, or why it was not.
     sample_time, filter_hz, decimation :
         The trace's sample time [s], the Butterworth cut-off [Hz], the decimation factor.
+    filter_rule : str
+        How ``filter_hz`` was chosen: ``given``, or the rule of :mod:`obsdesign.data.cutoff` as applied.
     input_gain, force_peak, noise_rms, quantization, reversals :
         Trace facts used by :meth:`to_config`: the input gain [N/unit], the largest |force|
         [N], the position noise RMS [m], the encoder step [m] (0: not quantized), and the
@@ -148,6 +150,7 @@ class Identification:
     sample_time: float = field(default=1e-3)
     filter_hz: float = 100.0
     decimation: int = DEFAULT_DECIMATION
+    filter_rule: str = "given"
     input_gain: float = 1.0
     force_peak: float = 0.0
     noise_rms: float = 0.0
@@ -174,7 +177,7 @@ class Identification:
     _KEYS = ("m", "sigma", "Cf", "offset", "m_std", "sigma_std", "Cf_std", "offset_std", "nrmse_percent",
              "condition_number", "samples")
     _ASYM = ("sigma_pos", "sigma_neg", "Cf_pos", "Cf_neg")
-    _EXTRA = ("s", "s_note", "model", "sample_time", "filter_hz", "decimation", "stribeck", "selection",
+    _EXTRA = ("s", "s_note", "model", "sample_time", "filter_hz", "filter_rule", "decimation", "stribeck", "selection",
               "interval_method", "at_bound", "fixed", "min_speed", "window")
 
     def to_dict(self) -> dict:
@@ -183,7 +186,7 @@ class Identification:
         Keys: ``m, sigma, Cf, offset, m_std, sigma_std, Cf_std, offset_std, nrmse_percent,
         condition_number, samples``; with ``asymmetric`` also ``sigma_pos, sigma_neg, Cf_pos,
         Cf_neg``; with the Stribeck term ``Fs, vs, Fs_std, vs_std``; always ``s, s_note, model,
-        sample_time, filter_hz, decimation, stribeck, selection, interval_method, at_bound, fixed,
+        sample_time, filter_hz, filter_rule, decimation, stribeck, selection, interval_method, at_bound, fixed,
         min_speed, window``, ``intervals`` (name -> [low, high]), ``eiv_shift`` and ``units``
         (``axis``, ``input_unit``, ``mass_unit``, ``force_unit``, ``length_unit``, the logged
         ``time``/``position`` units); ``warnings`` (a list of sentences) when the identification is
@@ -266,7 +269,7 @@ class Identification:
                  ("NRMSE", f"{self.nrmse_percent:.3g} %"), ("condition number", f"{self.condition_number:.4g}"),
                  ("rows in the fit", f"{self.samples} (|v| > {self.min_speed:.3g} {u.si('speed')}"
                   + (f", {self.window}" if self.window else "") + ")"),
-                 ("filter", f"Butterworth {FILTER_ORDER}th order {self.filter_hz:g} Hz, zero phase"),
+                 ("filter", f"Butterworth {FILTER_ORDER}th order {self.filter_hz:.4g} Hz, zero phase ({self.filter_rule})"),
                  ("decimation", f"{self.decimation} (sample time {self.sample_time:g} s)")]
         rows += [("WARNING", w) for w in self.warnings] + [("caution", w) for w in self.notices]
         return rows
@@ -298,10 +301,13 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
         ``asymmetric`` fits separate viscous and Coulomb terms for ``v > 0`` and ``v < 0``
         with one common offset (see Notes for what the data can separate).
     filter_hz : float, optional
-        Cut-off [Hz] of the 4th-order zero-phase Butterworth low-pass. Default: a tenth
-        of the sampling rate (the benchmark's 100 Hz at 1 kHz).
+        Cut-off [Hz] of the 4th-order zero-phase Butterworth low-pass. Default: from the record,
+        one octave above where the position's spectrum meets its noise floor, at most a tenth of
+        the sampling rate (the benchmark's 100 Hz at 1 kHz): :func:`obsdesign.data.cutoff.noise_cutoff`.
     decimation : int, optional
-        Decimation factor, default 10 (the benchmark's factor at 1 kHz).
+        Decimation factor, default ``round(fs / filter_hz)`` (the benchmark's 10 at 100 Hz and
+        1 kHz): the decimation filter (0.4 ``filter_hz``) then band-limits the rows below the
+        low-pass, so the force and the nonlinear Coulomb and Stribeck columns share one filter.
     presliding_window : float
         Largest travel [m] after a reversal still taken as pre-sliding (default 1e-4 m).
     stribeck : {'auto', 'on', 'off'}
@@ -369,7 +375,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
        (:mod:`obsdesign.data.uncertainty`); none for a fitted ``Fs`` and ``vs`` (``docs/measured-data.md``).
     8. ``s`` (eq:2:3:1-2:3:5) is fitted only if at least 5 reversals each stay within
        ``presliding_window`` of the reversal point for 5 rows of the fit grid (``5 decimation``
-       samples) over at least 5 distinct encoder readings; otherwise ``s = None`` and
+       samples; 50 samples, the benchmark's grid, when ``decimation`` is not given) over at least 5 distinct encoder readings; otherwise ``s = None`` and
        ``s_note`` says why.
 
     Examples
@@ -398,21 +404,16 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     both = sorted(set(fix) & set(bounds))
     if both:
         raise ValueError(f"fix, bounds: expected a parameter either fixed or bounded, found {both[0]!r} in both")
-    n_boot = check_int("n_boot", n_boot, 0)
-    seed = check_int("seed", seed, 0)
+    n_boot, seed = check_int("n_boot", n_boot, 0), check_int("seed", seed, 0)
     dt = trace.sample_time
     fs = 1.0 / dt
-    if filter_hz is None:
-        filter_hz = FILTER_FRACTION * fs
-    elif isinstance(filter_hz, bool) or not isinstance(filter_hz, (int, float)) or not 0 < filter_hz < 0.5 * fs:
-        raise ValueError(f"filter_hz: expected a cut-off in (0, {0.5 * fs:g}) Hz (below Nyquist), found {filter_hz!r}")
-    q = DEFAULT_DECIMATION if decimation is None else check_int("decimation", decimation, 1)
+    position, force, span = time_window(trace, window)
+    filter_hz, filter_rule, q = choose_filter(position, dt, filter_hz, decimation)
     presliding_window = positive_number("presliding_window", presliding_window, 0.0, trace.units.length_unit)
     if min_speed is not None:
         min_speed = positive_number("min_speed", min_speed, 0.0, trace.units.si("speed"))
     if input_timing not in INPUT_TIMINGS:
         raise ValueError(f"input_timing: expected one of {', '.join(map(repr, INPUT_TIMINGS))}, found {input_timing!r}")
-    position, force, span = time_window(trace, window)
     if input_timing == "hold":
         force = np.concatenate([force[:1], 0.5 * (force[1:] + force[:-1])])
     n = position.size
@@ -481,12 +482,12 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     noise = math.sqrt(max(0.0, float(np.mean((position - x_f)[keep] ** 2)) - quantum**2 / 12.0))
     s, note = fit_presliding(x=position[keep], x_f=x_f[keep], v=v[keep], a=a[keep], u_f=u_f[keep], dt=dt,
                              m=result["m"], sigma=result["sigma"], Cf=result["Cf"], offset=result["offset"],
-                             rows=q, window=presliding_window)
+                             rows=DEFAULT_DECIMATION if decimation is None else q, window=presliding_window)
     notices = trace.warnings + check_plausible(trace.units, mass=result["m"]) + cautions(
         est, cols, noise_var, trace.units, filter_hz)
     return Identification(model=model, **result, nrmse_percent=est["nrmse"], condition_number=est["condition_number"],
                           samples=int(y.size), s=s, s_note=note, sample_time=dt, filter_hz=float(filter_hz),
-                          decimation=q, input_gain=trace.input_gain, force_peak=float(np.max(np.abs(force))),
+                          filter_rule=filter_rule, decimation=q, input_gain=trace.input_gain, force_peak=float(np.max(np.abs(force))),
                           noise_rms=noise, quantization=quantum,
                           reversals=int(_reversals(v, REVERSAL_THRESHOLD * float(np.max(np.abs(v)))).size),
                           source=trace.source, warnings=notes, notices=notices, stribeck=est["stribeck"], selection=est["selection"],

@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 
 from ..params import Config, FrictionParams, ObserverSpec, PIDSpec, PlantParams, SensorSpec
+from ..provenance import WRITTEN_AS
 
 __all__ = ["config_from", "design_rules", "PHASE_MARGIN_DEG", "FASTEST_POLE_DT", "U_MAX_MARGIN"]
 
@@ -184,7 +185,8 @@ def _build(ident, *, name, K, u_max, rho, presliding_window):
         sensor=SensorSpec(noise_rms=ident.noise_rms, noise_bandwidth=nyquist, quantization=ident.quantization),
         observer=ObserverSpec(rho=float(rho), omega_co=omega_co, variant="static", dt=dt),
         pid=PIDSpec(max_S=max_S, phase_margin_deg=PHASE_MARGIN_DEG, tau=tau),
-        sources={key: f"{rule} [{unit}]" if unit else rule for key, _, unit, rule in rules},
+        sources={key: (f"{rule} [{unit}]" if unit else rule) + f"{WRITTEN_AS}{value!r}"
+                 for key, value, unit, rule in rules},
         axis=units.axis_spec(ident.input_gain),
     )
     return cfg, rules

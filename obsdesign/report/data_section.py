@@ -150,8 +150,14 @@ def _rms(x: np.ndarray) -> float | None:
     return float(np.sqrt(np.mean(x ** 2))) if x.size else None
 
 
-def data_section(trace, *, moving_speed: float | None = None) -> dict:
+def data_section(trace, cfg=None, *, moving_speed: float | None = None, label: str | None = None) -> dict:
     """Everything the report's section "Validation on measured data" shows.
+
+    The observer that runs over the record is ``cfg``'s, the design the report is about (its
+    ``observer.dt`` set to the record's sample time where it differs: the observer runs at the rate
+    the data were sampled); without ``cfg``, the identified config's. The reference friction is the
+    identified model's, seen by that observer (:func:`~obsdesign.data.model_friction_state`: its
+    load ``G`` and, for ``static``, its viscous term).
 
     The friction check is split by speed: the observer's estimate against the identified model where
     the axis moves (:func:`moving_mask`), and separately at standstill, where the model's
@@ -162,6 +168,10 @@ def data_section(trace, *, moving_speed: float | None = None) -> dict:
     ----------
     trace : Trace
         The measured trace (``obsdesign report --data FILE``).
+    cfg : Config, optional
+        The report's config; default the identified one (``Identification.to_config()``).
+    label : str, optional
+        How the section names ``cfg`` (default ``the report's config`` or ``the identified config``).
     moving_speed : float, optional
         The speed [m/s] above which the axis counts as moving (default :data:`MOVING_FRACTION` of the
         record's peak zero-phase speed).
@@ -175,13 +185,23 @@ def data_section(trace, *, moving_speed: float | None = None) -> dict:
         ``rms_error_standstill`` [N] (None where no sample is in that class), ``moving_speed`` [m/s],
         ``moving_fraction`` (of the samples), ``rms_residual`` [N],
         ``observer`` (the :class:`~obsdesign.data.Observation`), ``fit_svg`` and ``observe_svg``; ``units``
-        (the record's :class:`~obsdesign.axis.AxisSpec`: the units above are SI of that axis).
+        (the record's :class:`~obsdesign.axis.AxisSpec`: the units above are SI of that axis);
+        ``observer_label`` (whose observer ran) and ``observer_note`` (the sample time it was set to, or "").
         Strings are user text: the template escapes them.
     """
     from ..data import identify, model_friction_state, observe
 
     ident = identify(trace)
-    cfg = ident.to_config(name="identified")
+    identified = ident.to_config(name="identified")
+    note = ""
+    if cfg is None:
+        cfg, label = identified, label or "the identified config"
+    else:
+        label = label or "the report's config"
+        dt = cfg.observer.dt
+        if abs(dt - trace.sample_time) > 1e-6 * trace.sample_time:
+            cfg = cfg.override(dt=trace.sample_time)
+            note = f"observer.dt {dt:.6g} s set to the record's sample time {trace.sample_time:.6g} s"
     obs = observe(cfg, trace)
     w3 = model_friction_state(ident, trace, cfg)
     from ..data.trace import zero_phase_velocity
@@ -190,7 +210,8 @@ def data_section(trace, *, moving_speed: float | None = None) -> dict:
                                     moving_speed)
     error = obs.f_hat - w3
     measured, model = _model_force(ident, trace)
-    u = cfg.units.unit  # the record's axis (linear or rotary, from its units)
+    units = identified.units  # the record's axis
+    u = units.unit  # the record's axis (linear or rotary, from its units)
     params = [("m", ident.m, ident.m_std, u("kg")), ("sigma", ident.sigma, ident.sigma_std, u("N s/m")),
               ("Cf", ident.Cf, ident.Cf_std, u("N")), ("offset", ident.offset, ident.offset_std, u("N"))]
     return {"source": trace.source, "names": dict(trace.names), "samples": trace.samples,
@@ -200,5 +221,6 @@ def data_section(trace, *, moving_speed: float | None = None) -> dict:
             "rms_error_standstill": _rms(error[~moving]), "moving_speed": threshold, "moving_speed_given": moving_speed is not None,
             "moving_fraction": float(np.mean(moving)),
             "rms_residual": float(np.sqrt(np.mean((measured - model) ** 2))),
-            "observer": obs, "fit_svg": _svg(fit_figure(ident, trace), cfg.units),
-            "observe_svg": _svg(observation_figure(obs, w3), cfg.units), "units": cfg.units}
+            "observer": obs, "fit_svg": _svg(fit_figure(ident, trace), units),
+            "observe_svg": _svg(observation_figure(obs, w3), units), "units": units,
+            "observer_label": label, "observer_note": note}

@@ -406,7 +406,8 @@ def _render(cfg, pool, steps, paper, circle, *, source_label, progress, data, sw
     bar.set_postfix_str("render")
     ctx.update(explorer_context(cfg, certificate=rep.certificate))
     ctx["sweep"] = sweep_section
-    ctx["data"] = data_section(data, moving_speed=moving_speed) if data is not None else None
+    ctx["data"] = data_section(data, cfg, moving_speed=moving_speed,
+                               label=f"the report's config ({source_label})") if data is not None else None
     ctx["comparison"] = compare_section
     ctx["elapsed"] = time.perf_counter() - t0
     env = Environment(loader=PackageLoader("obsdesign.report", "templates"), undefined=StrictUndefined,
