@@ -51,7 +51,7 @@ def design_warnings(cfg: Config) -> tuple[str, ...]:
     """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # returned instead
-        report = check_stability(cfg)
+        report = check_stability(cfg, search=False)  # the verdicts only: no search for the best P
     notes = list(report.warnings)
     failed = report.failed()
     if failed:
