@@ -6,7 +6,9 @@
   (a pair of stable 2x2 matrices has a common quadratic Lyapunov function iff A1 A2 and A1 A2^-1
   have no negative real eigenvalue): never certified where it says none exists, found where it
   says one exists with margin;
-* the paper's pair rho 0.98 / 1.02, a destabilising sequence, and the verdict in ``check``.
+* the paper's pair rho 0.98 / 1.02, a destabilising sequence, and the verdict in ``check``;
+* the verdict without the search (``search=False``, what ``simulate`` and ``export`` use) is the
+  full one, and the closed-form objective gives the bits of its NumPy-scalar form (the same search).
 """
 
 from __future__ import annotations
@@ -17,7 +19,8 @@ import numpy as np
 import pytest
 
 import obsdesign as od
-from obsdesign.design.certificate import certify, common_lyapunov, log_norm, p_norm
+from obsdesign.design import certificate as certificate_module
+from obsdesign.design.certificate import certify, common_lyapunov, log_norm, lyapunov_candidates, p_norm
 from obsdesign.design.discretize import coefficient_matrices
 
 TABLE1 = od.load_preset("table1")
@@ -174,3 +177,73 @@ def test_check_carries_the_certificate_as_its_own_verdict():
 def test_rho_range_is_where_the_slowest_frozen_pole_is_stable():
     lo, hi = od.design.certified_rho_range(VCM, np.linspace(0.9, 1.1, 21))
     assert lo == pytest.approx(1.01) and hi == pytest.approx(1.1)
+
+
+def _mu2_numpy_scalars(A, P):
+    """The closed form as first written, on NumPy float64 scalars (the reference of the fast one)."""
+    S = A.T @ P
+    S = S + S.T
+    a = P[0, 0] * P[1, 1] - P[0, 1] * P[0, 1]
+    b = -(S[0, 0] * P[1, 1] + S[1, 1] * P[0, 0] - 2.0 * S[0, 1] * P[0, 1])
+    c = S[0, 0] * S[1, 1] - S[0, 1] * S[0, 1]
+    if not (a > 0.0 and math.isfinite(a) and math.isfinite(b) and math.isfinite(c)):
+        return 0.5 * 1e300
+    sq = math.sqrt(max(b * b - 4.0 * a * c, 0.0))
+    if b <= 0.0:
+        return 0.5 * ((-b + sq) / (2.0 * a))
+    den = -b - sq
+    return 0.5 * (2.0 * c / den if den != 0.0 else 0.0)
+
+
+def test_fast_objective_gives_the_bits_of_numpy_scalars_and_the_same_search(monkeypatch):
+    certificate = certificate_module
+    rng = np.random.default_rng(11)
+    for _ in range(2000):
+        A = rng.standard_normal((2, 2)) * 10.0 ** rng.uniform(-3, 5)
+        p, lq = rng.standard_normal(2) * 3
+        P = np.array([[1.0, p], [p, p * p + math.exp(lq)]])
+        assert certificate._mu2(A, P) == _mu2_numpy_scalars(A, P)
+    designs = [od.design_observer(c) for c in (VCM, TABLE1, VCM.override(rho=2.0), TABLE1.override(rho=1.5))]
+    fast = [certify(d).to_dict() for d in designs]
+    monkeypatch.setattr(certificate, "_mu2", _mu2_numpy_scalars)
+    assert [certify(d).to_dict() for d in designs] == fast  # the same Nelder-Mead path, bit for bit
+
+
+def test_lyapunov_candidates_solve_the_equation():
+    from scipy.linalg import solve_continuous_lyapunov
+
+    rng = np.random.default_rng(5)
+    for _ in range(50):
+        A1, A2 = _hurwitz(rng), _hurwitz(rng)
+        for A, P in zip((A1, A2, 0.5 * (A1 + A2)), lyapunov_candidates(A1, A2), strict=True):
+            ref = solve_continuous_lyapunov(A.T, -np.eye(2))
+            assert np.allclose(P, ref, rtol=1e-10, atol=1e-12 * np.abs(ref).max())
+
+
+def _generalized_max(A, P):
+    """Largest eigenvalue of (A^T P + P A, P), by SciPy's symmetric generalized solver: 2 mu_P(A)."""
+    from scipy.linalg import eigh
+
+    return float(eigh(A.T @ P + P @ A, P, eigvals_only=True).max())
+
+
+def test_verdict_without_search_is_the_full_verdict():
+    """search=False (simulate, export, noise) gives the verdict and method of the full certificate;
+    its decay rate is proved by its own P (checked with SciPy's generalized eigensolver) and never
+    above the searched one."""
+    rng = np.random.default_rng(3)
+    designs = [od.design_observer(base.override(rho=float(rho), dt=dt))
+               for base in (VCM, TABLE1) for rho in (0.98, 1.02, 1.3, 3.0, 12.0) for dt in (1e-4, 2e-3)]
+    designs += [_Pair(*_spirals(w), dt) for w in (1.2, 3.0) for dt in (0.01, 0.3)]
+    designs += [_Pair(_hurwitz(rng), _hurwitz(rng), 0.05) for _ in range(40)]
+    quick_hits = 0
+    for d in designs:
+        full, quick = certify(d), certify(d, search=False)
+        assert (quick.verdict, quick.method, quick.sequence) == (full.verdict, full.method, full.sequence)
+        if quick.method == "continuous":
+            _, B_lo, B_hi, D, _ = certificate_module._ends(d)
+            Pb = D.T @ quick.P @ D  # back to the balanced coordinates it was verified in
+            assert max(_generalized_max(B, Pb) for B in (B_lo, B_hi)) / 2 <= -quick.decay_rate * (1 - 1e-7)
+            assert quick.decay_rate <= full.decay_rate * (1 + 1e-12)
+            quick_hits += quick.decay_rate < full.decay_rate  # the search was skipped
+    assert quick_hits >= 10  # the fast path is exercised, not only the fallback

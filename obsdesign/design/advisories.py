@@ -51,7 +51,7 @@ def design_warnings(cfg: Config) -> tuple[str, ...]:
     """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # returned instead
-        report = check_stability(cfg)
+        report = check_stability(cfg, search=False)  # the verdicts only: no search for the best P
     notes = list(report.warnings)
     failed = report.failed()
     if failed:
@@ -84,7 +84,7 @@ def certified_rho_range(cfg: Config, rhos=None) -> tuple[float, float] | None:
     rhos = np.geomspace(0.5, 20.0, 80) if rhos is None else np.asarray(rhos, float)
     ok = []
     for rho in rhos:
-        c = certify(design_observer(cfg.override(rho=float(rho))))
+        c = certify(design_observer(cfg.override(rho=float(rho))), search=False)  # verdict and method only
         ok.append(c.certified and c.method == "continuous")
     best, run = None, None
     for i, flag in enumerate(ok):
