@@ -36,7 +36,7 @@ _RUN_IN_STEPS = 400
 
 
 @njit(cache=True, error_model="numpy")
-def simulate_windows(code, pp, force, starts, lengths, x0, v0, m, dt, n_sub, run_in, out):
+def simulate_windows(code, pp, force, starts, lengths, x0, v0, dirs, m, dt, n_sub, run_in, out):
     """Simulate each window ``[starts[i], starts[i] + lengths[i])`` under ``force``; write ``x`` to ``out``.
 
     Parameters
@@ -52,6 +52,10 @@ def simulate_windows(code, pp, force, starts, lengths, x0, v0, m, dt, n_sub, run
         Windows, in samples.
     x0, v0 : ndarray
         Initial displacement [m] and velocity [m/s] of each window.
+    dirs : ndarray
+        Direction (+1 or -1) of the gross sliding each window starts in, in which its friction is
+        saturated (0: from rest, no saturation). Not the sign of ``v0``: a window starts near the end of
+        a stroke, where the speed can be below the noise of a velocity estimate.
     m, dt : float
         Mass [kg], sample time [s].
     n_sub : int
@@ -74,14 +78,16 @@ def simulate_windows(code, pp, force, starts, lengths, x0, v0, m, dt, n_sub, run
     for i in range(starts.shape[0]):
         x = x0[i]
         v = v0[i]
-        d = 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
+        d = dirs[i]
         p_dir, p_xr, p_fr = d, x - d * run_in, -d
         if code != _PAPER:
             friction_init(code, pp, fst, x - d * run_in)
             if d != 0.0:
-                hb = run_in / _RUN_IN_STEPS / abs(v)
+                speed = max(abs(v), 1e-9)
+                hb = run_in / _RUN_IN_STEPS / speed
                 for j in range(_RUN_IN_STEPS):
-                    friction_advance(code, pp, fst, x - d * run_in * (1.0 - (j + 1.0) / _RUN_IN_STEPS), v, hb)
+                    friction_advance(code, pp, fst, x - d * run_in * (1.0 - (j + 1.0) / _RUN_IN_STEPS), d * speed,
+                                     hb)
         for k in range(lengths[i]):
             out[pos + k] = x
             if not abs(x) < 1e3 or not abs(v) < 1e6:
@@ -143,8 +149,8 @@ def extremes(x, threshold):
 
 
 def select_windows(x_f: np.ndarray, *, threshold: float, travel: float, lead: int, tail: int,
-                   skip: int) -> tuple[np.ndarray, np.ndarray, int]:
-    """Windows ``(starts, lengths, reversals)`` of a filtered displacement ``x_f``.
+                   skip: int) -> tuple[np.ndarray, np.ndarray, int, np.ndarray]:
+    """Windows ``(starts, lengths, reversals, directions)`` of a filtered displacement ``x_f``.
 
     Parameters
     ----------
@@ -165,16 +171,18 @@ def select_windows(x_f: np.ndarray, *, threshold: float, travel: float, lead: in
     ``travel`` [m]. A window starts in a gross stroke that is followed by a reversal, where it has
     travelled ``travel`` and at most ``lead`` samples before its end; it runs through the strokes
     that follow to the sample where the next gross stroke has travelled ``travel``, plus ``tail``
-    samples (within that stroke). ``reversals`` counts the turning points inside the windows.
+    samples (within that stroke). ``reversals`` counts the turning points inside the windows;
+    ``directions`` holds the sign (+1/-1) of the gross stroke each window starts in.
     ``skip`` samples at both ends of the record are not used (filter transients).
     """
     ext = extremes(x_f, threshold)
     ext = ext[(ext >= skip) & (ext <= x_f.size - 1 - skip)]
     if ext.size < 3:
-        return np.empty(0, np.int64), np.empty(0, np.int64), 0
+        return np.empty(0, np.int64), np.empty(0, np.int64), 0, np.empty(0)
     gross = np.abs(np.diff(x_f[ext])) > travel
     starts: list[int] = []
     ends: list[int] = []
+    dirs: list[float] = []
     reversals = 0
     k = 0
     while k < gross.size - 1:
@@ -198,7 +206,8 @@ def select_windows(x_f: np.ndarray, *, threshold: float, travel: float, lead: in
         if end - start > 2:
             starts.append(start)
             ends.append(end)
+            dirs.append(1.0 if x_f[b] > x_f[a] else -1.0)
             reversals += j - k
         k = j
     s = np.array(starts, dtype=np.int64)
-    return s, np.array(ends, dtype=np.int64) - s, reversals
+    return s, np.array(ends, dtype=np.int64) - s, reversals, np.array(dirs)

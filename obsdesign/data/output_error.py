@@ -182,7 +182,7 @@ class _Problem:
         scale = max(ident.noise_rms, ident.quantization / math.sqrt(12.0), 1e-12)
         n_win = max(1, int(round(window / dt)))
         skip = 50  # samples of the zero-phase filter's transients at both ends (5 periods of its cut-off)
-        self.starts, self.lengths, self.reversals = select_windows(
+        self.starts, self.lengths, self.reversals, self.dirs = select_windows(
             x_f, threshold=max(5.0 * ident.noise_rms, 2.0 * ident.quantization, 1e-9), travel=travel,
             lead=n_win, tail=n_win, skip=skip)
         self.x0, self.v0 = x_f[self.starts], v_f[self.starts]
@@ -253,7 +253,7 @@ class _Problem:
         self.evaluations += 1
         code = FRICTION_MODELS.code(self.model)
         ok = simulate_windows(code, self.pack(q), self.trace.force, self.starts, self.lengths, self.x0 + dx0,
-                              self.v0 + dv0, q["m"], self.dt, self.substeps, self.travel, self.out)
+                              self.v0 + dv0, self.dirs, q["m"], self.dt, self.substeps, self.travel, self.out)
         x = self.out.copy()
         delay = q["delay"] / self.dt
         if delay > 0.0:
