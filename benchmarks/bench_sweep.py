@@ -37,6 +37,19 @@ def run() -> list[dict]:
     _warm(workers=1)
     t_in, res_in = _timed(workers=1)
     rows = []
+    # first, while this process runs no other thread (the pools and the cluster below leave some): the
+    # package's own pool as a user gets it
+    from obsdesign.sweeps.pool import can_fork
+
+    own, here = [], []
+    for _ in range(3):  # alternately: the load of the machine falls on both alike
+        here.append(_timed(workers=1)[0])
+        own.append(_timed(workers=2)[0])
+    ratio = min(here) / min(own)
+    rows.append({"benchmark": f"  od.sweep(workers=2), start-up included ({'forked' if can_fork() else 'spawned'} "
+                              "workers), best of 3", "value": f"{min(own):.2f} s",
+                 "reference": f"od.sweep(workers=1): {min(here):.2f} s", "ratio": f"{ratio:.2f}", "target": ">= 1.9",
+                 "ok": ratio >= 1.9})
     rates = {}
     for workers in (1, 2):
         ctx = multiprocessing.get_context("spawn")
@@ -53,17 +66,6 @@ def run() -> list[dict]:
     rows.append({"benchmark": "  speed-up on 2 cores", "value": f"{speedup:.2f}x",
                  "reference": f"1 process: {rates[1]:.1f} runs/s", "ratio": f"{speedup:.2f}", "target": ">= 1.9",
                  "ok": speedup >= 1.9})
-    from obsdesign.sweeps.pool import can_fork
-
-    own, here = [], []
-    for _ in range(3):  # alternately: the load of the machine falls on both alike
-        here.append(_timed(workers=1)[0])
-        own.append(_timed(workers=2)[0])
-    ratio = min(here) / min(own)
-    rows.append({"benchmark": f"  od.sweep(workers=2), start-up included ({'forked' if can_fork() else 'spawned'} "
-                              "workers), best of 3", "value": f"{min(own):.2f} s",
-                 "reference": f"od.sweep(workers=1): {min(here):.2f} s", "ratio": f"{ratio:.2f}", "target": ">= 1.9",
-                 "ok": ratio >= 1.9})
     try:
         from distributed import Client, LocalCluster
     except ImportError:

@@ -192,19 +192,6 @@ def _circle_part(cfg: Config, runs: dict) -> dict:
     return section
 
 
-class _NoBar:
-    """The progress bar when there is none."""
-
-    def set_postfix_str(self, _text):
-        pass
-
-    def update(self):
-        pass
-
-    def close(self):
-        pass
-
-
 class _Serial:
     """The stand-in of a one-worker pool: runs a task when its result is asked for."""
 
@@ -311,8 +298,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
 def _render(cfg, pool, steps, paper, circle, *, source_label, progress, data, sweep_section, compare_section,
             flags, moving_speed) -> str:
     """:func:`render_report` after its arguments are checked, with the helper ``pool``."""
-    from tqdm import tqdm
-
+    from .._progress import progress_bar
     from ..criteria import judge_design
     from ..provenance import parameter_sources
 
@@ -328,9 +314,7 @@ def _render(cfg, pool, steps, paper, circle, *, source_label, progress, data, sw
     conv_job = pool.submit(_convergence_part) if paper else None
     slow_feed = min(CIRCLE_FEEDS)
     circle_job = pool.submit(feed_runs, cfg, slow_feed) if circle else None
-    # no tqdm object without a bar: tqdm starts a monitor thread even when disabled, and a thread
-    # would keep the next report in this process from forking its helper
-    bar = tqdm(steps, desc="obsdesign report", leave=False) if progress else _NoBar()
+    bar = progress_bar(progress, iterable=steps, desc="obsdesign report", leave=False)  # no thread without a bar
     ctx: dict = {"cfg": cfg, "version": __version__, "source_label": source_label,
                  "date": datetime.date.today().isoformat()}
     t0 = time.perf_counter()

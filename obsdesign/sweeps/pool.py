@@ -75,12 +75,17 @@ def can_fork() -> bool:
 
 
 def warm() -> None:
-    """Load the simulator's compiled kernels in this process (a 10-sample run; from numba's cache)."""
+    """Load the simulator's compiled kernels in this process (a 10-sample run; from numba's cache).
+
+    Examples
+    --------
+    >>> warm()  # raises if the run does not
+    """
     from ..params import load_preset
     from ..sim.simulate import simulate
 
     cfg = load_preset("vcm")
-    simulate(cfg, "positioning", duration=10 * cfg.observer.dt)
+    simulate(cfg, "tracking", duration=10 * cfg.observer.dt)
 
 
 class Executor:

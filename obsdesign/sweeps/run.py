@@ -250,15 +250,14 @@ def sweep(cfg: Config, scenario: str, *, vary: dict | None = None, uncertain: di
 
 def _execute(run_cfg, scenario, run_options, plan, columns, out, done, executor, workers, chunk, progress):
     """Run the runs of ``plan`` not in ``done``, appending rows to ``out`` (if given)."""
-    from tqdm import tqdm
+    from .._progress import progress_bar
 
     t0 = time.perf_counter()
     todo = [spec for spec in plan if spec.run not in done]
     rows: dict[int, dict] = dict(done)
     pool = Executor(executor, workers)
     every = 0 if isinstance(progress, bool) else check_integer("progress", progress, minimum=1)
-    bar = tqdm(total=len(plan), initial=len(done), desc="sweep", unit="run", disable=progress is not True,
-               smoothing=0.05)
+    bar = progress_bar(progress is True, total=len(plan), initial=len(done), desc="sweep", unit="run", smoothing=0.05)
     walls = []
     sink = open(out / "results.csv", "a", encoding="utf-8") if out is not None else None
     sums = open(out / ".checksums", "a", encoding="utf-8") if out is not None else None
