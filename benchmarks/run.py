@@ -21,6 +21,7 @@ import bench_compare  # noqa: E402
 import bench_data  # noqa: E402
 import bench_derive  # noqa: E402
 import bench_identify  # noqa: E402
+import bench_report  # noqa: E402
 import bench_sim  # noqa: E402
 import bench_sweep  # noqa: E402
 import bench_tune  # noqa: E402
@@ -35,6 +36,7 @@ SUITES = {
     "Estimator comparison (issue 11)": bench_compare.run,
     "Stability certificate (issue 18)": bench_certificate.run,
     "Tuning (issue 18)": bench_tune.run,
+    "Report (issue 19)": bench_report.run,
 }
 
 
