@@ -103,6 +103,11 @@ def save_ballbar_figure(results: dict, path) -> None:
     save_figure(ballbar_figure(results), path)
 
 
+def _run_seeds(cfg, seeds) -> tuple:
+    """The seeds that run: all of them with random sensor noise, else the first (every seed gives the same run)."""
+    return tuple(seeds) if cfg.sensor.noise_rms > 0 else tuple(seeds)[:1]
+
+
 def feed_runs(cfg, feed: float, *, feeds=FEEDS, seeds=SEEDS, radius: float = RADIUS,
               figure_feed: float = FIGURE_FEED):
     """The runs of :func:`circle_section` at one feed: its rows, or the message why the axis cannot drive it.
@@ -122,7 +127,7 @@ def feed_runs(cfg, feed: float, *, feeds=FEEDS, seeds=SEEDS, radius: float = RAD
     """
     from ..sim.circle import DIRECTIONS, circle_modes
 
-    seeds = tuple(seeds) if cfg.sensor.noise_rms > 0 else tuple(seeds)[:1]
+    seeds = _run_seeds(cfg, seeds)
     try:
         return circle_modes(cfg, feeds=(feed,), directions=DIRECTIONS if feed in feeds else DIRECTIONS[:1],
                             seeds=seeds if feed in feeds else seeds[:1], radius=radius,
@@ -171,7 +176,7 @@ def circle_section(cfg, *, feeds=FEEDS, seeds=SEEDS, radius: float = RADIUS, fig
     from ..sim.circle import DIRECTIONS
 
     noisy = cfg.sensor.noise_rms > 0
-    seeds = tuple(seeds) if noisy else tuple(seeds)[:1]
+    seeds = _run_seeds(cfg, seeds)
     runs = dict(runs or {})
     peaks: dict = {}
     notes = []
