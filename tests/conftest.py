@@ -16,3 +16,13 @@ def pytest_collection_modifyitems(config, items):
         if (item.path.name == "test_controller_export.py" and "octave" in item.name
                 and not item.name.startswith("test_controller_files_errors")):
             item.add_marker(pytest.mark.slow)
+
+
+# The on-disk memo (obsdesign._memo) of this test session: its own empty folder, never the user's
+# ~/.cache, so every session computes each kept result once and then reads it back.
+import atexit  # noqa: E402
+import shutil  # noqa: E402
+import tempfile  # noqa: E402
+
+os.environ["OBSDESIGN_CACHE_DIR"] = tempfile.mkdtemp(prefix="obsdesign-test-memo-")
+atexit.register(shutil.rmtree, os.environ["OBSDESIGN_CACHE_DIR"], ignore_errors=True)

@@ -8,10 +8,17 @@ Lyapunov solver or an integral runs (the search of the stability certificate tha
 prints; ``export`` and ``simulate``, which print only whether it holds, search only when no
 Lyapunov solution of the ends verifies, as for table1's rho = 1.02; numba imports SciPy too),
 numba where a kernel runs.
+
+Each command runs twice with its own empty memo folder (:mod:`obsdesign._memo`): the first run
+computes and must import what it computes with; the second finds the certificate's searched
+Lyapunov matrix and python-control's loop numbers on disk and must not import SciPy or
+python-control for them (the outputs of both runs are equal).
 """
 
 from __future__ import annotations
 
+import os
+import re
 import subprocess
 import sys
 
@@ -20,11 +27,12 @@ import pytest
 HEAVY = ("sympy", "control", "scipy", "numba", "matplotlib", "dask")
 
 CONTROL = {"control", "scipy", "matplotlib"}  # python-control imports SciPy and matplotlib itself
+#: name -> (arguments, modules of the first run, of the second run when they differ).
 CASES = {
-    "check": (["check", "--preset", "vcm"], {"scipy"}),
-    "check --json": (["check", "--preset", "table1", "--json"], {"scipy"}),
-    "pid": (["pid", "--preset", "vcm"], CONTROL),
-    "loop": (["loop", "--preset", "vcm"], CONTROL),
+    "check": (["check", "--preset", "vcm"], {"scipy"}, set()),
+    "check --json": (["check", "--preset", "table1", "--json"], {"scipy"}, set()),
+    "pid": (["pid", "--preset", "vcm"], CONTROL, set()),
+    "loop": (["loop", "--preset", "vcm"], CONTROL, set()),
     "noise": (["noise", "--preset", "vcm"], CONTROL),
     "derive": (["derive", "--variant", "static"], {"sympy"}),
     "derive --format json": (["derive", "--format", "json"], {"sympy"}),
@@ -34,7 +42,7 @@ CASES = {
     "export --format latex": (["export", "--format", "latex", "--preset", "vcm", "-o", "{tmp}"], {"sympy"}),
     # table1's certificate is tight (rho = 1.02): no Lyapunov solution of the ends verifies, the search runs
     "export --format c --preset table1": (["export", "--format", "c", "--preset", "table1", "-o", "{tmp}"],
-                                          {"scipy"}),
+                                          {"scipy"}, set()),
     "simulate positioning": (["simulate", "positioning"], {"numba", "scipy"}),
     "config": (["config", "--preset", "vcm"], set()),
 }
@@ -46,16 +54,23 @@ _PROBE = ("import sys, runpy\nsys.argv = ['obsdesign', *sys.argv[1:]]\ntry:\n"
 
 
 #: Cases that repeat what another case shows (the same modules): in ``make test`` only.
-SLOW = {"check --json", "pid", "loop", "noise", "derive --format json", "export --format octave", "export --format js",
+SLOW = {"check --json", "noise", "derive --format json", "export --format octave", "export --format js",
         "export --format latex", "export --format c --preset table1"}
 
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW else n for n in CASES])
 def test_command_imports_only_what_it_computes_with(name, tmp_path):
-    args, expected = CASES[name]
-    argv = [a.replace("{tmp}", str(tmp_path / "out")) for a in args]
-    proc = subprocess.run([sys.executable, "-c", _PROBE, *argv], capture_output=True, text=True, timeout=600)
-    line = [ln for ln in proc.stderr.splitlines() if ln.startswith("HEAVY ")][-1]
-    _, code, loaded = (line.split(" ", 2) + [""])[:3]
-    assert code == "0", proc.stderr
-    assert set(filter(None, loaded.split(","))) == expected, f"{name}: {loaded}"
+    args, *expected = CASES[name]
+    env = {**os.environ, "OBSDESIGN_CACHE_DIR": str(tmp_path / "memo")}
+    outputs = []
+    for run, want in enumerate([expected[0], expected[-1]]):
+        argv = [a.replace("{tmp}", str(tmp_path / f"out{run}")) for a in args]
+        proc = subprocess.run([sys.executable, "-c", _PROBE, *argv], capture_output=True, text=True, timeout=600,
+                              env=env)
+        line = [ln for ln in proc.stderr.splitlines() if ln.startswith("HEAVY ")][-1]
+        _, code, loaded = (line.split(" ", 2) + [""])[:3]
+        assert code == "0", proc.stderr
+        assert set(filter(None, loaded.split(","))) == want, f"{name}, run {run + 1}: {loaded}"
+        text = proc.stdout.replace(str(tmp_path / f"out{run}"), "OUT")
+        outputs.append(re.sub(r"(wall\S*:?\s*)[0-9.e+-]+", r"\1T", text))  # wall times differ
+    assert outputs[0] == outputs[1]

@@ -59,6 +59,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._display import Condition, ResultDisplay
+from .._memo import memo
 
 __all__ = ["StabilityCertificate", "certify", "common_lyapunov", "lyapunov_candidates", "log_norm", "p_norm"]
 
@@ -317,6 +318,13 @@ def _search(objective, starts) -> np.ndarray:
     return _from_params(best_x) if best_x is not None else np.eye(2)
 
 
+def _positive_definite(P) -> bool:
+    """A finite, symmetric, positive definite 2x2 matrix (what a stored search result must be)."""
+    P = np.asarray(P, dtype=float)
+    ok = P.shape == (2, 2) and bool(np.all(np.isfinite(P))) and P[0, 1] == P[1, 0]
+    return ok and P[0, 0] > 0.0 and P[0, 0] * P[1, 1] - P[0, 1] ** 2 > 0.0  # Sylvester's criterion
+
+
 def _ends(d):
     A_lo, A_hi = d.matrices(0.0)[0], d.matrices(d.kappa)[0]
     # balanced coordinates (as the kernel's discretization): x = D x', D = diag(1, c)
@@ -378,9 +386,12 @@ def certify(design, *, search: bool = True) -> StabilityCertificate:
     Phis = [phi(k) for k in grid]
     if max(np.abs(np.linalg.eigvals(F)).max() for F in Phis) >= 1.0:  # a frozen stiffness is unstable
         return _refute(d, B_lo, B_hi, phi, dt)
-    starts = [np.eye(2), *(_dlyap(Phis[i]) for i in (0, n // 2, n))]
-    coarse = Phis[:: n // 16]
-    P = _search(lambda P: max(_norm2(F, P) for F in coarse), starts)
+    def search_P():
+        starts = [np.eye(2), *(_dlyap(Phis[i]) for i in (0, n // 2, n))]
+        coarse = Phis[:: n // 16]
+        return _search(lambda P: max(_norm2(F, P) for F in coarse), starts).tolist()
+
+    P = np.array(memo("dcqlf", (B_lo, B_hi, dt), search_P, valid=_positive_definite))  # a proposal; verified on the grid below
     while True:
         r = max(p_norm(F, P) for F in Phis)
         if r >= 1.0:
@@ -431,12 +442,14 @@ def common_lyapunov(A_a: np.ndarray, A_b: np.ndarray, *, search: bool = True) ->
         found = _candidate(A_a, A_b, scale)
         if found is not None:
             return found
-    starts = [_lyap(A_a), _lyap(A_b), _lyap(0.5 * (A_a + A_b)), np.eye(2)]
-    P = _search(lambda P: max(_mu2(A_a, P), _mu2(A_b, P)), starts)
-    mu = max(log_norm(A_a, P), log_norm(A_b, P))  # the verification, by Cholesky and eigvalsh
-    if mu < -MARGIN * scale:
-        return -mu * (1.0 - MARGIN), P
-    return _candidate(A_a, A_b, scale)  # a weak search never loses what a candidate proves
+    def search_P():
+        starts = [_lyap(A_a), _lyap(A_b), _lyap(0.5 * (A_a + A_b)), np.eye(2)]
+        return _search(lambda P: max(_mu2(A_a, P), _mu2(A_b, P)), starts).tolist()
+
+    # the search only proposes (kept on disk, obsdesign._memo); the verification below decides, every time
+    P = np.array(memo("cqlf", (A_a, A_b), search_P, valid=_positive_definite))
+    found = _verified(A_a, A_b, P, scale)  # the verification, by Cholesky and eigvalsh
+    return found if found is not None else _candidate(A_a, A_b, scale)  # a weak search never loses a candidate
 
 
 def _dlyap(F: np.ndarray):

@@ -39,14 +39,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
-import control as ct
 import numpy as np
 
+from .._memo import list_of, memo
 from ..params import Config, load_preset
-from .pid import PIDDesign, design_pid, peak_magnitude
+from .pid import PIDDesign, design_pid, lazy_system, peak_magnitude
 from .sampled_loop import SampledLoop, sampled_loop
 from .._display import ResultDisplay
+
+if TYPE_CHECKING:
+    import control as ct
 
 __all__ = ["LoopAnalysis", "loop_analysis", "loop_figure"]
 
@@ -109,9 +113,12 @@ class LoopAnalysis(ResultDisplay):
     max_CS: float
     sampled: SampledLoop
     pid: PIDDesign = field(repr=False, compare=False)
-    L: ct.TransferFunction = field(repr=False, compare=False)
-    S: ct.TransferFunction = field(repr=False, compare=False)
-    T: ct.TransferFunction = field(repr=False, compare=False)
+    L = lazy_system()
+    S = lazy_system()
+    T = lazy_system()
+
+    def _build_systems(self) -> dict:
+        return _systems(self.pid)
 
     @property
     def system(self) -> str:
@@ -204,24 +211,41 @@ def loop_analysis(cfg: Config | None = None, *, phi: float | None = None, tau: f
         raise TypeError(f"cfg: expected a Config or None, found {type(cfg).__name__}")
     cfg = cfg.override(phi=phi, tau=tau, delay_samples=delay_samples)
     pid = design_pid(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S, phase_margin_deg=cfg.pid.phase_margin_deg)
-    L = pid.C * pid.H
-    S = ct.feedback(ct.tf([1.0], [1.0]), L)  # 1 / (1 + L)
-    T = ct.feedback(L, 1)  # L / (1 + L)
-    gm, pm, _, wpc, wgc, _ = ct.stability_margins(L)
-    max_S, w_S = peak_magnitude(S)
-    max_T, w_T = peak_magnitude(T)
-    poles = sorted((complex(p) for p in ct.poles(T)), key=lambda p: (p.real, p.imag))
+    gm, pm, wpc, wgc, max_S, w_S, max_T, w_T, poles, bandwidth = memo(
+        "loop", (pid.k, pid.T_I, pid.tau, pid.phi), lambda: _numbers(pid), valid=list_of(10))
     sampled = sampled_loop(cfg)
     return LoopAnalysis(
         gain_margin_db=20.0 * math.log10(gm) if math.isfinite(gm) else math.inf,
-        phase_margin_deg=float(pm), crossover_rad_s=float(wgc), phase_crossover_rad_s=float(wpc),
+        phase_margin_deg=pm, crossover_rad_s=wgc, phase_crossover_rad_s=wpc,
         max_S=max_S, omega_max_S=w_S, max_T=max_T, omega_max_T=w_T, max_S_disturbance=pid.max_S_achieved,
-        bandwidth_rad_s=float(ct.bandwidth(T, dbdrop=_HALF_POWER_DB)), closed_loop_poles=tuple(poles),
-        delay_margin_s=math.radians(float(pm)) / float(wgc), max_CS=math.inf, sampled=sampled, pid=pid, L=L, S=S, T=T,
+        bandwidth_rad_s=bandwidth, closed_loop_poles=tuple(poles),
+        delay_margin_s=math.radians(pm) / wgc, max_CS=math.inf, sampled=sampled, pid=pid,
     )
 
 
+def _systems(pid: PIDDesign) -> dict:
+    import control as ct
+
+    L = pid.C * pid.H
+    return {"L": L, "S": ct.feedback(ct.tf([1.0], [1.0]), L), "T": ct.feedback(L, 1)}  # 1/(1 + L), L/(1 + L)
+
+
+def _numbers(pid: PIDDesign) -> list:
+    """python-control's numbers of the continuous loop (what :func:`loop_analysis` keeps on disk)."""
+    import control as ct
+
+    sys = _systems(pid)
+    gm, pm, _, wpc, wgc, _ = ct.stability_margins(sys["L"])
+    max_S, w_S = peak_magnitude(sys["S"])
+    max_T, w_T = peak_magnitude(sys["T"])
+    poles = sorted((complex(p) for p in ct.poles(sys["T"])), key=lambda p: (p.real, p.imag))
+    return [float(gm), float(pm), float(wpc), float(wgc), max_S, w_S, max_T, w_T, poles,
+            float(ct.bandwidth(sys["T"], dbdrop=_HALF_POWER_DB))]
+
+
 def _mag_phase(sys, w):
+    import control as ct
+
     resp = np.asarray(ct.frequency_response(sys, w).complex).ravel()
     return resp, 20.0 * np.log10(np.abs(resp)), np.degrees(np.unwrap(np.angle(resp)))
 
@@ -250,6 +274,7 @@ def loop_figure(analysis: LoopAnalysis):
     """
     if not isinstance(analysis, LoopAnalysis):
         raise TypeError(f"analysis: expected a LoopAnalysis, found {type(analysis).__name__}")
+    import control as ct
     from matplotlib.figure import Figure
 
     a = analysis

@@ -20,19 +20,42 @@ True
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .._display import ResultDisplay
+from .._memo import list_of, memo
 from .._validate import NONNEGATIVE, POSITIVE, Range
 from ..params import Config
 
 if TYPE_CHECKING:
     import control as ct
 
-__all__ = ["PIDDesign", "design_pid", "pid_gains", "pid_from_config", "pid_from_gains", "peak_magnitude"]
+__all__ = ["PIDDesign", "design_pid", "pid_gains", "pid_from_config", "pid_from_gains", "peak_magnitude",
+           "lazy_system"]
+
+
+class lazy_system:  # noqa: N801 (used like property)
+    """A transfer function of a result, built on first use by the result's ``_build_systems()``.
+
+    The numbers of :class:`PIDDesign`, :class:`~obsdesign.design.loop.LoopAnalysis` and
+    :class:`~obsdesign.design.sampled_loop.SampledLoop` are kept on disk (:mod:`obsdesign._memo`);
+    their python-control systems are rebuilt from those numbers only when a caller (a figure, a
+    notebook) asks, so printing the numbers needs no python-control import.
+    """
+
+    def __set_name__(self, owner, name):
+        self.name = name
+
+    def __get__(self, obj, owner=None):
+        if obj is None:
+            return self
+        systems = obj.__dict__.get("_systems")
+        if systems is None:
+            systems = obj.__dict__["_systems"] = obj._build_systems()
+        return systems[self.name]
 
 _POS = POSITIVE
 _PHASE = Range(low=0.0, high=90.0)
@@ -79,9 +102,12 @@ class PIDDesign(ResultDisplay):
     gain_margin: float
     omega_crossover: float
     closed_loop_stable: bool
-    H: ct.TransferFunction = field(repr=False, compare=False)
-    C: ct.TransferFunction = field(repr=False, compare=False)
-    S: ct.TransferFunction = field(repr=False, compare=False)
+    H = lazy_system()
+    C = lazy_system()
+    S = lazy_system()
+
+    def _build_systems(self) -> dict:
+        return _systems(self.k, self.T_I, self.tau, self.phi)
 
     def to_dict(self) -> dict:
         """JSON-ready values (the keys of ``obsdesign pid --json`` and more)."""
@@ -128,20 +154,32 @@ def peak_magnitude(sys: ct.TransferFunction) -> tuple[float, float]:
     return (best, float(10.0**res.x)) if best >= mag[i] else (float(mag[i]), float(w[i]))
 
 
-def _build(k: float, T_I: float, tau: float, phi: float, phase_margin_deg: float) -> PIDDesign:
+def _systems(k: float, T_I: float, tau: float, phi: float) -> dict:
     import control as ct
 
     H = ct.tf([phi], [tau, 1.0, 0.0])
     C = ct.tf([k * tau * T_I, k * (tau + T_I), k], [T_I, 0.0])
-    S = ct.feedback(H, C)  # H / (1 + H C), eq:Syd
-    peak, w_peak = peak_magnitude(S)
-    gm, pm, _, _, wgc, _ = ct.stability_margins(C * H)
-    stable = bool(np.all(np.real(ct.poles(S)) < 0))
+    return {"H": H, "C": C, "S": ct.feedback(H, C)}  # S = H / (1 + H C), eq:Syd
+
+
+def _verification(k: float, T_I: float, tau: float, phi: float) -> list:
+    """python-control's numbers of the loop: peak of |S| and where, margins, stability."""
+    import control as ct
+
+    sys = _systems(k, T_I, tau, phi)
+    peak, w_peak = peak_magnitude(sys["S"])
+    gm, pm, _, _, wgc, _ = ct.stability_margins(sys["C"] * sys["H"])
+    return [peak, w_peak, float(pm), float(gm), float(wgc), bool(np.all(np.real(ct.poles(sys["S"])) < 0))]
+
+
+def _build(k: float, T_I: float, tau: float, phi: float, phase_margin_deg: float) -> PIDDesign:
+    peak, w_peak, pm, gm, wgc, stable = memo("pid", (k, T_I, tau, phi), lambda: _verification(k, T_I, tau, phi),
+                                                 valid=list_of(6))
     return PIDDesign(
         k=k, T_I=T_I, tau=tau, phi=phi, kp=k * (T_I + tau) / T_I, ki=k / T_I, kd=k * tau,  # eq:PIDparams
         phase_margin_deg=phase_margin_deg, omega_s=math.tan(math.radians(phase_margin_deg)) / T_I,
-        max_S_achieved=peak, omega_peak=w_peak, phase_margin_achieved_deg=float(pm),
-        gain_margin=float(gm), omega_crossover=float(wgc), closed_loop_stable=stable, H=H, C=C, S=S,
+        max_S_achieved=peak, omega_peak=w_peak, phase_margin_achieved_deg=pm,
+        gain_margin=gm, omega_crossover=wgc, closed_loop_stable=stable,
     )
 
 

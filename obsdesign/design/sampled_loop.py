@@ -39,16 +39,19 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import control as ct
 import numpy as np
-import scipy.optimize
 
 from .._display import ResultDisplay
+from .._memo import list_of, memo
 from .._validate import POSITIVE, check_integer
 from ..params import Config
-from .pid import pid_gains
+from .pid import lazy_system, pid_gains
+
+if TYPE_CHECKING:
+    import control as ct
 
 __all__ = ["SampledLoop", "sampled_loop", "discrete_pid", "zoh_plant", "discrete_peak"]
 
@@ -81,6 +84,8 @@ def discrete_pid(*, kp: float, ki: float, kd: float, tau_d: float, dt: float) ->
     zm1, zma = np.array([1.0, -1.0]), np.array([1.0, -a])
     num = (kp * np.polymul(zm1, zma) + ki * dt * np.polymul([1.0, 0.0], zma)
            + kd * (1.0 - a) / dt * np.polymul(zm1, zm1))
+    import control as ct
+
     return ct.tf(num, np.polymul(zm1, zma), dt)
 
 
@@ -98,6 +103,8 @@ def zoh_plant(*, phi: float, tau: float, dt: float) -> ct.TransferFunction:
     >>> H.dt, len(H.poles())
     (0.1, 2)
     """
+    import control as ct
+
     H = ct.tf([POSITIVE.check("phi", phi)], [POSITIVE.check("tau", tau), 1.0, 0.0])
     return ct.c2d(H, POSITIVE.check("dt", dt), "zoh")
 
@@ -118,6 +125,7 @@ def discrete_peak(sys: ct.TransferFunction, dt: float, w_low: float) -> tuple[fl
 
     Examples
     --------
+    >>> import control as ct
     >>> z = ct.tf([1.0, 0.0], [1.0], 0.1)
     >>> peak, w = discrete_peak(1 / (z + 0.5), 0.1, 0.01)   # largest at z = -1 (w = pi/dt): 1 / 0.5
     >>> round(peak, 9), round(w * 0.1, 9)
@@ -133,6 +141,8 @@ def discrete_peak(sys: ct.TransferFunction, dt: float, w_low: float) -> tuple[fl
     m = mag(w)
     i = int(m.argmax())
     lo, hi = w[max(i - 1, 0)], w[min(i + 1, w.size - 1)]
+    import scipy.optimize
+
     res = scipy.optimize.minimize_scalar(lambda x: -float(mag(x)[0]), bounds=(lo, hi), method="bounded",
                                          options={"xatol": 1e-12 * hi})
     best = -float(res.fun)
@@ -173,6 +183,8 @@ class SampledLoop(ResultDisplay):
         ``step_info`` of ``T``: overshoot [%], 10-90 % rise and 2 % settling time [s] (None if unstable).
     kp, ki, kd, tau_d : float
         The PID the kernel runs.
+    phi, tau : float
+        The plant of eq:linplant the loop is closed around [m/(V s)], [s].
     C, H, L, S, T, PS, CS : control.TransferFunction
         The discrete systems (sample time ``dt``).
     """
@@ -204,13 +216,18 @@ class SampledLoop(ResultDisplay):
     ki: float
     kd: float
     tau_d: float
-    C: ct.TransferFunction = field(repr=False, compare=False)
-    H: ct.TransferFunction = field(repr=False, compare=False)
-    L: ct.TransferFunction = field(repr=False, compare=False)
-    S: ct.TransferFunction = field(repr=False, compare=False)
-    T: ct.TransferFunction = field(repr=False, compare=False)
-    PS: ct.TransferFunction = field(repr=False, compare=False)
-    CS: ct.TransferFunction = field(repr=False, compare=False)
+    phi: float
+    tau: float
+    C = lazy_system()
+    H = lazy_system()
+    L = lazy_system()
+    S = lazy_system()
+    T = lazy_system()
+    PS = lazy_system()
+    CS = lazy_system()
+
+    def _build_systems(self) -> dict:
+        return _systems(self.kp, self.ki, self.kd, self.tau_d, self.dt, self.phi, self.tau, self.delay_samples)
 
     @property
     def system(self) -> str:
@@ -263,6 +280,8 @@ class SampledLoop(ResultDisplay):
 
 def _margins(L: ct.TransferFunction) -> tuple[float, float, float, float, float]:
     """``(gm, pm_deg, w_gc, w_pc, delay margin [s])`` of a discrete loop."""
+    import control as ct
+
     with warnings.catch_warnings():  # its 'frd' fallback refines on the exact response: accurate here
         warnings.filterwarnings("ignore", message="stability_margins: Falling back")
         gm, pm, _, wpc, wgc, _ = ct.stability_margins(L)
@@ -308,33 +327,49 @@ def sampled_loop(cfg: Config, *, delay_samples: int | None = None) -> SampledLoo
     _, _, kp, ki, kd = pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
                                  phase_margin_deg=cfg.pid.phase_margin_deg)
     tau_d = kd / kp / N  # as obsdesign.sampled.controller.sampled_controller
-    C = discrete_pid(kp=kp, ki=ki, kd=kd, tau_d=tau_d, dt=dt)
-    H = zoh_plant(phi=cfg.phi, tau=cfg.pid.tau, dt=dt)
-    Cd = C * ct.tf([1.0], [1.0] + [0.0] * d, dt)  # C z^-d
-    L = Cd * H
-    one = ct.tf([1.0], [1.0], dt)
-    S, T = ct.feedback(one, L), ct.feedback(L, one)
-    PS, CS = ct.feedback(H, Cd), ct.feedback(Cd, H)
-    gm, pm, wgc, wpc, dm = _margins(L)
-    num, den = (np.atleast_1d(np.squeeze(x)) for x in ct.tfdata(L))
-    poles = tuple(sorted((complex(p) for p in np.roots(np.polyadd(den, num))), key=lambda p: (abs(p), p.imag)))
-    rmax = max(abs(p) for p in poles)
-    w_low = (wgc if math.isfinite(wgc) and wgc > 0 else 1.0 / cfg.pid.tau) * 1e-3
-    max_S, w_S = discrete_peak(S, dt, w_low)
-    max_T, w_T = discrete_peak(T, dt, w_low)
-    max_PS, _ = discrete_peak(PS, dt, w_low)
-    max_CS, w_CS = discrete_peak(CS, dt, w_low)
-    over = rise = settle = None
-    if rmax < 1.0:
-        n = int(min(2e6, max(1000, 20.0 / (-math.log(rmax)))))  # 20 time constants of the slowest pole
-        info = ct.step_info(T, T=np.arange(n) * dt, SettlingTimeThreshold=0.02)
-        over, rise, settle = (float(info[k]) for k in ("Overshoot", "RiseTime", "SettlingTime"))
+    numbers = memo("sampled_loop", (kp, ki, kd, tau_d, dt, cfg.phi, cfg.pid.tau, d),
+                   lambda: _numbers(kp, ki, kd, tau_d, dt, cfg.phi, cfg.pid.tau, d), valid=list_of(17))
+    gm, pm, wgc, wpc, dm, max_S, w_S, max_T, w_T, max_PS, max_CS, w_CS, poles, rmax, over, rise, settle = numbers
     return SampledLoop(
         dt=dt, delay_samples=d, derivative_N=N, gain_margin=gm,
         gain_margin_db=20.0 * math.log10(gm) if math.isfinite(gm) else math.inf,
         phase_margin_deg=pm, crossover_rad_s=wgc, phase_crossover_rad_s=wpc, delay_margin_s=dm,
         delay_margin_samples=dm / dt, max_S=max_S, omega_max_S=w_S, max_T=max_T, omega_max_T=w_T, max_PS=max_PS,
         max_CS=max_CS, omega_max_CS=w_CS, poles=poles, max_pole_magnitude=rmax, overshoot_pct=over,
-        rise_time_s=rise, settling_time_s=settle, kp=kp, ki=ki, kd=kd, tau_d=tau_d,
-        C=C, H=H, L=L, S=S, T=T, PS=PS, CS=CS,
+        rise_time_s=rise, settling_time_s=settle, kp=kp, ki=ki, kd=kd, tau_d=tau_d, phi=cfg.phi, tau=cfg.pid.tau,
     )
+
+
+def _systems(kp, ki, kd, tau_d, dt, phi, tau, d) -> dict:
+    import control as ct
+
+    C = discrete_pid(kp=kp, ki=ki, kd=kd, tau_d=tau_d, dt=dt)
+    H = zoh_plant(phi=phi, tau=tau, dt=dt)
+    Cd = C * ct.tf([1.0], [1.0] + [0.0] * d, dt)  # C z^-d
+    L = Cd * H
+    one = ct.tf([1.0], [1.0], dt)
+    return {"C": C, "H": H, "L": L, "S": ct.feedback(one, L), "T": ct.feedback(L, one), "PS": ct.feedback(H, Cd),
+            "CS": ct.feedback(Cd, H)}
+
+
+def _numbers(kp, ki, kd, tau_d, dt, phi, tau, d) -> list:
+    """python-control's numbers of the sampled loop (what :func:`sampled_loop` keeps on disk)."""
+    import control as ct
+
+    sys = _systems(kp, ki, kd, tau_d, dt, phi, tau, d)
+    L, S, T = sys["L"], sys["S"], sys["T"]
+    gm, pm, wgc, wpc, dm = _margins(L)
+    num, den = (np.atleast_1d(np.squeeze(x)) for x in ct.tfdata(L))
+    poles = tuple(sorted((complex(p) for p in np.roots(np.polyadd(den, num))), key=lambda p: (abs(p), p.imag)))
+    rmax = max(abs(p) for p in poles)
+    w_low = (wgc if math.isfinite(wgc) and wgc > 0 else 1.0 / tau) * 1e-3
+    max_S, w_S = discrete_peak(S, dt, w_low)
+    max_T, w_T = discrete_peak(T, dt, w_low)
+    max_PS, _ = discrete_peak(sys["PS"], dt, w_low)
+    max_CS, w_CS = discrete_peak(sys["CS"], dt, w_low)
+    over = rise = settle = None
+    if rmax < 1.0:
+        n = int(min(2e6, max(1000, 20.0 / (-math.log(rmax)))))  # 20 time constants of the slowest pole
+        info = ct.step_info(T, T=np.arange(n) * dt, SettlingTimeThreshold=0.02)
+        over, rise, settle = (float(info[k]) for k in ("Overshoot", "RiseTime", "SettlingTime"))
+    return [gm, pm, wgc, wpc, dm, max_S, w_S, max_T, w_T, max_PS, max_CS, w_CS, poles, rmax, over, rise, settle]
