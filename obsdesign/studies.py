@@ -8,6 +8,7 @@ report prints them in its claims table.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -420,7 +421,19 @@ def pid_claims(cfg: Config | None = None) -> tuple:
 
 
 def derivation_claims() -> tuple:
-    """Statements of the derivation that the symbolic engine checks (table1 numbers)."""
+    """Statements of the derivation that the symbolic engine checks (table1 numbers).
+
+    The claims are a pure function of the package's code and SymPy's version: they are computed once
+    and then read from the on-disk memo (:mod:`obsdesign._memo`), so the report needs no SymPy.
+    """
+    from ._memo import list_of, memo
+
+    rows = memo("derivation_claims", (), lambda: [list(dataclasses.astuple(c)) for c in _derivation_claims()],
+                valid=lambda v: list_of(4)(v) and all(list_of(6)(row) for row in v))
+    return tuple(Claim(*row) for row in rows)
+
+
+def _derivation_claims() -> tuple:
     import sympy as sp
 
     from .symbolic import derive

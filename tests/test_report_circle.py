@@ -91,10 +91,14 @@ def test_report_shows_the_circle_test_of_the_axis(tmp_path):
 
 @pytest.mark.slow
 def test_no_circle_flag_leaves_the_section_out(tmp_path, monkeypatch):
-    def forbidden(cfg):
+    def forbidden(*args, **kwargs):
         raise AssertionError("the circle test ran with --no-circle")
 
-    monkeypatch.setattr(report_html, "circle_section", forbidden)
+    from obsdesign.report import page
+    from obsdesign.sim import circle as sim_circle
+
+    for module, name in ((page, "circle_section"), (page, "feed_runs"), (sim_circle, "circle_modes")):
+        monkeypatch.setattr(module, name, forbidden)
     out = tmp_path / "r.html"
     assert main(["report", "--no-circle", "--quiet", "-o", str(out)]) == 0
     assert 'id="circle"' not in out.read_text()

@@ -11,7 +11,6 @@ from pathlib import Path
 
 import numpy as np
 
-from .figures import plt
 from .folder_files import read_csv_rows, read_json, svg_data_url
 
 __all__ = ["comparison_figure", "comparison_section", "FILES"]
@@ -42,6 +41,8 @@ def comparison_figure(rows: list[dict]):
     scenarios = list(dict.fromkeys(r["scenario"] for r in rows))
     plants = list(dict.fromkeys(r["plant"] for r in rows))
     estimators = list(dict.fromkeys(r["estimator"] for r in rows))
+    from .figures import plt
+
     fig, axes = plt.subplots(1, max(1, len(scenarios)), figsize=(4.2 * max(1, len(scenarios)), 3.6),
                              constrained_layout=True, squeeze=False)
     width = 0.8 / max(1, len(estimators))

@@ -15,91 +15,18 @@ script, meta, base or form element the report does not write.
 
 from __future__ import annotations
 
-import base64
-import datetime
-import hashlib
-import math
 import os
-import re
-import time
-import warnings
 from pathlib import Path
 
-import control as ct
-import numpy as np
-from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
-
-from .. import __version__, studies
-from .._format import with_unit
 from .._io import atomic_write
 from .._validate import check_integer
-from ..design import check_stability, noise_analysis, pid_from_config
 from ..params import Config
 from ..sweeps.summary import check_summary
-from ..symbolic import derive
-from ..symbolic.printing import derivation_html
 from .circle_section import FEEDS as CIRCLE_FEEDS
-from .circle_section import circle_section, feed_runs
-from .data_section import data_section
-from .explorer import explorer_context, explorer_json
-from .figures import figure_svg, relabel
 from .folder_files import read_json, svg_data_url
-from .study_figures import convergence_figure, experiments_figure, friction_loops_figure
+from .markup import _CSP_MARK, ReportContentError, _quantity, _with_csp  # noqa: F401 (the page's, named here too)
 
 __all__ = ["render_report", "write_report", "ReportContentError"]
-
-
-def _svg(fig, units=None) -> str:
-    """Inline SVG of a figure (its units those of ``units``, an AxisSpec): no XML prolog, no RDF metadata block."""
-    text = figure_svg(relabel(fig, units))
-    text = text[text.index("<svg"):]
-    return re.sub(r"<metadata>.*?</metadata>", "", text, flags=re.S)
-
-
-def _eigen_figure(design):
-    import matplotlib.pyplot as plt
-
-    k = np.linspace(0.0, design.kappa, 300)
-    eig = np.array([design.eigenvalues(x) for x in k])
-    fig, ax = plt.subplots(figsize=(7, 3.6), constrained_layout=True)
-    ax.plot(k, eig[:, 0].real, label="lambda_1 (dominant)")
-    ax.plot(k, eig[:, 1].real, label="lambda_2")
-    if np.any(np.abs(eig.imag) > 0):
-        ax.plot(k, np.abs(eig[:, 0].imag), ":", label="|imaginary part|")
-    ax.axhline(0.0, color="k", lw=0.6)
-    ax.set_xlabel("pre-sliding stiffness k [N/m]")
-    ax.set_ylabel("eigenvalue [1/s]")
-    ax.legend(loc="best")
-    return fig
-
-
-def _bode_figure(curves, bound=None, ylabel=""):
-    import matplotlib.pyplot as plt
-
-    w = np.logspace(-1, 5, 600)
-    fig, ax = plt.subplots(figsize=(7, 3.6), constrained_layout=True)
-    for label, sys in curves:
-        ax.loglog(w, np.abs(ct.frequency_response(sys, w).complex.ravel()), label=label)
-    if bound is not None:
-        ax.axhline(bound, color="r", ls="--", label=f"bound 1/k = {bound:.4g}")
-    ax.set_xlabel("frequency [rad/s]")
-    ax.set_ylabel(ylabel)
-    ax.legend(loc="best")
-    return fig
-
-
-def _quantity(value, unit: str = "") -> str:
-    """One number format for the report's prose and tables: 4 significant digits and the unit."""
-    if isinstance(value, (list, tuple)):
-        return ", ".join(_quantity(v) for v in value) + (f" {unit}" if unit and value else "")
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, float) and math.isinf(value):
-        return "infinite"
-    if isinstance(value, complex):
-        text = f"{value.real:.4g}{value.imag:+.4g}j" if value.imag else f"{value.real:.4g}"
-        return f"{text} {unit}" if unit else text
-    return with_unit(value, unit, 4)
 
 
 def _sweep_section(sweep_dir) -> dict | None:
@@ -116,80 +43,25 @@ def _sweep_section(sweep_dir) -> dict | None:
     return {"summary": summary, "map_src": images[0], "dist_src": images[1], "folder": str(folder)}
 
 
-_CSP_MARK = "obsdesign-content-security-policy"
-_SCRIPT = re.compile(r"<script>(.*?)</script>", re.S)
-#: Elements a report never holds outside its head: they could navigate the page (meta refresh), change
-#: where its links point (base) or send data (form). Matched case-insensitively, with any whitespace.
-_FORBIDDEN = re.compile(r"<\s*(script|meta|base|form)\b", re.I)
+def _convergence_task() -> tuple[list, str]:
+    """The helper's first task: the Table 1 convergence study (imports what it needs in the helper)."""
+    from .page import convergence_part
+
+    return convergence_part()
 
 
-class ReportContentError(ValueError):
-    """The rendered page holds an element the report never writes: some input text escaped its escaping."""
+def _loops_task(cfg: Config) -> tuple[list, str]:
+    """The helper's third task: the friction loops study and its figure."""
+    from .page import loops_part
+
+    return loops_part(cfg)
 
 
-def _section_of(html: str, at: int) -> str:
-    """The id of the last element with an id before position ``at`` (the report's section), for messages."""
-    ids = re.findall(r'\bid="([^"]+)"', html[:at])
-    return ids[-1] if ids else "head"
+def _feed_task(cfg: Config, feed: float) -> dict:
+    """The helper's second task: the circle test's runs at one feed."""
+    from .circle_section import feed_runs
 
-
-def _check_elements(html: str) -> str:
-    """The explorer's script text, after checking the page holds no element it should not.
-
-    The report writes exactly one script (the explorer) and two meta elements (charset and the
-    policy), in that order of the page: every other ``script``, ``meta``, ``base`` or ``form``
-    element is refused with :class:`ReportContentError` naming the element and the section it is in.
-    """
-    scripts = _SCRIPT.findall(html)
-    expected = {"meta": 2, "script": 1}
-    found = list(_FORBIDDEN.finditer(html))
-    counts: dict[str, int] = {}
-    for match in found:
-        name = match.group(1).lower()
-        counts[name] = counts.get(name, 0) + 1
-        if counts[name] > expected.get(name, 0):
-            raise ReportContentError(
-                f"report: refusing to write a page with an extra <{name}> element ({html[match.start():][:40]!r} in "
-                f"section {_section_of(html, match.start())!r}); expected {expected.get(name, 0)}: some input text "
-                "(a folder's file, a config, a data file) escaped its escaping")
-    if len(scripts) != 1 or counts.get("script", 0) != 1:
-        raise ReportContentError(f"report: expected exactly one script element (the explorer), "
-                                 f"found {len(scripts)} complete and {counts.get('script', 0)} opening tags")
-    return scripts[0]
-
-
-def _with_csp(html: str) -> str:
-    """Fill the policy of the meta tag: no external load, only the report's own inline script (by hash).
-
-    The policy forbids every fetch (``default-src 'none'``), any ``<base>`` (``base-uri 'none'``) and
-    any form submission (``form-action 'none'``). A policy cannot stop a ``<meta http-equiv="refresh">``,
-    so the page itself is checked as well (:func:`_check_elements`): it may hold one script, the charset
-    and policy meta elements, and no ``<base>`` or ``<form>``.
-
-    Raises
-    ------
-    ReportContentError
-        A ``ValueError``: the page holds an element the report does not write.
-    """
-    script = _check_elements(html)
-    digest = base64.b64encode(hashlib.sha256(script.encode("utf-8")).digest()).decode("ascii")
-    policy = (f"default-src 'none'; script-src 'sha256-{digest}'; style-src 'unsafe-inline'; img-src data:; "
-              "base-uri 'none'; form-action 'none'")
-    return html.replace(_CSP_MARK, policy, 1)
-
-
-def _convergence_part() -> tuple[list, str]:
-    """The Table 1 convergence study's claims and figure (a task of :func:`render_report`'s helper)."""
-    conv = studies.convergence_study(seeds=3)
-    return list(conv.claims), _svg(convergence_figure(conv))
-
-
-def _circle_part(cfg: Config, runs: dict) -> dict:
-    """The circle section with its figure as inline SVG; ``runs``: feeds computed by the helper."""
-    section = circle_section(cfg, runs=runs)
-    fig = section.pop("figure")
-    section["svg"] = _svg(fig, cfg.units) if fig is not None else None
-    return section
+    return feed_runs(cfg, feed)
 
 
 class _Serial:
@@ -268,7 +140,8 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
         (:func:`obsdesign.report.circle_section.circle_section`; default yes).
     workers : int, optional
         Processes that compute: with 2 or more (default: the number of cores) the Table 1
-        convergence study and the circle test run in one forked helper process while this one
+        convergence study, the circle test's slowest feed and the friction loops study run in one
+        forked helper process (forked before the page's libraries are imported) while this one
         computes the rest; 1 computes everything here. The page is the same either way.
     """
     from ..provenance import matching_preset
@@ -288,123 +161,19 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
         steps.remove("circle test")
     pool = _helper_pool(workers)
     try:
-        return _render(cfg, pool, steps, paper, circle, source_label=source_label, progress=progress, data=data,
-                       sweep_section=sweep_section, compare_section=compare_section, flags=flags,
-                       moving_speed=moving_speed)
+        # the independent heavy studies go to the helper first, before this process imports the page's
+        # libraries, so that the helper's imports and studies run while this process imports and works
+        # (on vcm: the convergence study and the slowest feed of the circle test, whose contour is longest)
+        jobs = {"convergence": pool.submit(_convergence_task) if paper else None,
+                "circle": pool.submit(_feed_task, cfg, min(CIRCLE_FEEDS)) if circle else None,
+                "loops": pool.submit(_loops_task, cfg)}
+        from .page import render_page
+
+        return render_page(cfg, jobs, steps, paper, circle, source_label=source_label, progress=progress,
+                           data=data, sweep_section=sweep_section, compare_section=compare_section, flags=flags,
+                           moving_speed=moving_speed)
     finally:
         pool.shutdown(cancel_futures=True)
-
-
-def _render(cfg, pool, steps, paper, circle, *, source_label, progress, data, sweep_section, compare_section,
-            flags, moving_speed) -> str:
-    """:func:`render_report` after its arguments are checked, with the helper ``pool``."""
-    from .._progress import progress_bar
-    from ..criteria import judge_design
-    from ..provenance import parameter_sources
-
-    variant = cfg.observer.variant
-    units = cfg.units  # every unit the report prints is written for this axis
-
-    def svg(fig):
-        return _svg(fig, units)
-
-    # the independent heavy studies go to the helper first, so that they run while this process works
-    # (on vcm: the convergence study 3.8 s and the slowest feed of the circle test, 2.5 s, against
-    # about 6.5 s here; the circle's lowest feed has the longest contour)
-    conv_job = pool.submit(_convergence_part) if paper else None
-    slow_feed = min(CIRCLE_FEEDS)
-    circle_job = pool.submit(feed_runs, cfg, slow_feed) if circle else None
-    bar = progress_bar(progress, iterable=steps, desc="obsdesign report", leave=False)  # no thread without a bar
-    ctx: dict = {"cfg": cfg, "version": __version__, "source_label": source_label,
-                 "date": datetime.date.today().isoformat()}
-    t0 = time.perf_counter()
-    bar.set_postfix_str(steps[0])
-    d = derive(variant)
-    ctx["derivation_html"] = derivation_html(d)
-    sources = parameter_sources(cfg, source_label, flags=flags)
-    ctx["params"] = [(r.name, r.value, r.unit, r.doc, sources[r.name]) for r in cfg.describe_fields()]
-    bar.update()
-
-    bar.set_postfix_str(steps[1])
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        rep = check_stability(cfg)
-    ctx["stability"] = rep
-    ctx["eigen_svg"] = svg(_eigen_figure(rep.design))
-    bar.update()
-
-    bar.set_postfix_str(steps[2])
-    pid = pid_from_config(cfg)
-    ctx["pid"] = pid
-    ctx["pid_svg"] = svg(_bode_figure([("|S| = |H/(1+HC)|", pid.S)], bound=1 / pid.k, ylabel="|S| [m/V]"))
-    from ..design.loop import loop_analysis, loop_figure
-
-    ctx["loop_view"] = loop_analysis(cfg)
-    ctx["loop_svg"] = svg(loop_figure(ctx["loop_view"]))
-    bar.update()
-
-    bar.set_postfix_str(steps[3])
-    na = noise_analysis(cfg)
-    ctx["noise"] = na
-    ctx["noise_svg"] = svg(_bode_figure([("noise -> friction estimate", na.G_friction),
-                                          ("after the low-pass eq:3:4:5", na.lowpass * na.G_friction)],
-                                         ylabel="gain [N/m]"))
-    bar.update()
-
-    claims = []
-    ctx["paper"] = paper
-    if paper:
-        claims = list(studies.derivation_claims()) + list(studies.pid_claims())
-        conv_index = len(claims)  # the convergence claims go here when the helper returns them
-
-    bar.set_postfix_str("experiments")
-    exp = studies.experiments_study(cfg)
-    claims += exp.claims
-    ctx["experiments"] = exp
-    ctx["experiments_svg"] = svg(experiments_figure(exp))
-    bar.update()
-
-    bar.set_postfix_str("friction loops")
-    loops = studies.friction_loops_study(cfg)
-    claims += loops.claims
-    ctx["loops_svg"] = svg(friction_loops_figure(loops))
-    bar.update()
-
-    if paper:
-        bar.set_postfix_str("noise study")
-        claims += studies.noise_study().claims
-        bar.update()
-        bar.set_postfix_str("convergence (Table 1)")
-        conv_claims, ctx["convergence_svg"] = conv_job.result()
-        claims[conv_index:conv_index] = conv_claims
-        bar.update()
-    ctx["claims"] = claims if paper else []
-    ctx["circle"] = None
-    if circle:
-        bar.set_postfix_str("circle test")
-        ctx["circle"] = _circle_part(cfg, {slow_feed: circle_job.result()})
-        bar.update()
-    ctx["criteria"] = judge_design(cfg, sampled_loop=ctx["loop_view"].sampled, experiments=exp, noise=na,
-                                   stability=rep)
-
-    bar.set_postfix_str("render")
-    ctx.update(explorer_context(cfg, certificate=rep.certificate))
-    ctx["sweep"] = sweep_section
-    ctx["data"] = data_section(data, cfg, moving_speed=moving_speed,
-                               label=f"the report's config ({source_label})") if data is not None else None
-    ctx["comparison"] = compare_section
-    ctx["elapsed"] = time.perf_counter() - t0
-    env = Environment(loader=PackageLoader("obsdesign.report", "templates"), undefined=StrictUndefined,
-                      autoescape=select_autoescape(default=True, default_for_string=True))
-    env.filters["num"] = _quantity  # one number format in the whole report: 4 significant digits
-    env.filters["qty"] = lambda value, unit="": _quantity(value, units.unit(unit))
-    env.filters["unit"] = units.unit
-    env.filters["log10"] = math.log10
-    env.filters["explorer_json"] = explorer_json
-    html = _with_csp(env.get_template("report.html.j2").render(csp=_CSP_MARK, **ctx))
-    bar.update()
-    bar.close()
-    return html
 
 
 def write_report(cfg: Config, path: str | os.PathLike, *, source_label: str | None = None,

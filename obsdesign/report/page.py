@@ -1,0 +1,243 @@
+"""The report's page: studies, figures and the template (what :func:`obsdesign.report.html.render_report` runs).
+
+The entry point :mod:`obsdesign.report.html` imports nothing heavy: it checks the arguments, starts
+the helper process and hands it the independent studies first; only then is this module imported
+(SymPy where the memo does not hold the derivation, python-control, numba, matplotlib), in this
+process and in the helper side by side.
+"""
+
+from __future__ import annotations
+
+import datetime
+import math
+import re
+import time
+import warnings
+
+import control as ct
+import numpy as np
+from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
+
+from .. import __version__, studies
+from .._memo import memo
+from ..design import check_stability, noise_analysis, pid_from_config
+from ..params import Config
+from .circle_section import FEEDS as CIRCLE_FEEDS
+from .circle_section import circle_section, feed_runs
+from .data_section import data_section
+from .explorer import explorer_context, explorer_json
+from .figures import figure_svg, relabel
+from .markup import _CSP_MARK, _quantity, _with_csp
+from .study_figures import convergence_figure, experiments_figure, friction_loops_figure
+
+__all__ = ["render_page", "convergence_part", "loops_part", "circle_part"]
+
+
+def _svg(fig, units=None) -> str:
+    """Inline SVG of a figure (its units those of ``units``, an AxisSpec): no XML prolog, no RDF metadata block."""
+    text = figure_svg(relabel(fig, units))
+    text = text[text.index("<svg"):]
+    return re.sub(r"<metadata>.*?</metadata>", "", text, flags=re.S)
+
+
+def _eigen_figure(design):
+    import matplotlib.pyplot as plt
+
+    k = np.linspace(0.0, design.kappa, 300)
+    eig = np.array([design.eigenvalues(x) for x in k])
+    fig, ax = plt.subplots(figsize=(7, 3.6), constrained_layout=True)
+    ax.plot(k, eig[:, 0].real, label="lambda_1 (dominant)")
+    ax.plot(k, eig[:, 1].real, label="lambda_2")
+    if np.any(np.abs(eig.imag) > 0):
+        ax.plot(k, np.abs(eig[:, 0].imag), ":", label="|imaginary part|")
+    ax.axhline(0.0, color="k", lw=0.6)
+    ax.set_xlabel("pre-sliding stiffness k [N/m]")
+    ax.set_ylabel("eigenvalue [1/s]")
+    ax.legend(loc="best")
+    return fig
+
+
+def _bode_figure(curves, bound=None, ylabel=""):
+    import matplotlib.pyplot as plt
+
+    w = np.logspace(-1, 5, 600)
+    fig, ax = plt.subplots(figsize=(7, 3.6), constrained_layout=True)
+    for label, sys in curves:
+        ax.loglog(w, np.abs(ct.frequency_response(sys, w).complex.ravel()), label=label)
+    if bound is not None:
+        ax.axhline(bound, color="r", ls="--", label=f"bound 1/k = {bound:.4g}")
+    ax.set_xlabel("frequency [rad/s]")
+    ax.set_ylabel(ylabel)
+    ax.legend(loc="best")
+    return fig
+
+
+def convergence_part() -> tuple[list, str]:
+    """The Table 1 convergence study's claims and figure (the report helper's task)."""
+    conv = studies.convergence_study(seeds=3)
+    return list(conv.claims), _svg(convergence_figure(conv))
+
+
+def _derivation_html(variant: str) -> str:
+    from ..symbolic import derive  # SymPy: only when the memo does not hold the derivation
+    from ..symbolic.printing import derivation_html
+
+    return derivation_html(derive(variant))
+
+
+def loops_part(cfg: Config) -> tuple[list, str]:
+    """The friction loops study's claims and figure (the report helper's task).
+
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+    """
+    loops = studies.friction_loops_study(cfg)
+    return list(loops.claims), _svg(friction_loops_figure(loops), cfg.units)
+
+
+def circle_part(cfg: Config, runs: dict) -> dict:
+    """The circle section with its figure as inline SVG.
+
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+    runs : dict
+        Feed [m/s] -> runs already computed (by the helper), as :func:`obsdesign.report.circle_section.feed_runs`.
+    """
+    section = circle_section(cfg, runs=runs)
+    fig = section.pop("figure")
+    section["svg"] = _svg(fig, cfg.units) if fig is not None else None
+    return section
+
+
+def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data, sweep_section, compare_section,
+            flags, moving_speed) -> str:
+    """:func:`obsdesign.report.html.render_report` after its arguments are checked.
+
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+    jobs : dict
+        The helper's futures: ``convergence`` (:func:`convergence_part`), ``circle`` (the slowest
+        feed's runs) and ``loops`` (:func:`loops_part`); ``None`` where the study is not asked for.
+    steps : list of str
+        The progress bar's steps.
+    paper, circle : bool
+        Whether the paper's studies and the circle test are on the page.
+    source_label, progress, data, sweep_section, compare_section, flags, moving_speed
+        As checked and prepared by :func:`obsdesign.report.html.render_report`.
+    """
+    from .._progress import progress_bar
+    from ..criteria import judge_design
+    from ..provenance import parameter_sources
+
+    variant = cfg.observer.variant
+    units = cfg.units  # every unit the report prints is written for this axis
+
+    def svg(fig):
+        return _svg(fig, units)
+
+    conv_job, circle_job = jobs["convergence"], jobs["circle"]
+    slow_feed = min(CIRCLE_FEEDS)
+    bar = progress_bar(progress, iterable=steps, desc="obsdesign report", leave=False)  # no thread without a bar
+    ctx: dict = {"cfg": cfg, "version": __version__, "source_label": source_label,
+                 "date": datetime.date.today().isoformat()}
+    t0 = time.perf_counter()
+    bar.set_postfix_str(steps[0])
+    # a pure function of the variant and the code: SymPy runs once per package version (obsdesign._memo)
+    ctx["derivation_html"] = memo("derivation_html", (variant,), lambda: _derivation_html(variant),
+                                  valid=lambda v: isinstance(v, str))
+    sources = parameter_sources(cfg, source_label, flags=flags)
+    ctx["params"] = [(r.name, r.value, r.unit, r.doc, sources[r.name]) for r in cfg.describe_fields()]
+    bar.update()
+
+    bar.set_postfix_str(steps[1])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rep = check_stability(cfg)
+    ctx["stability"] = rep
+    ctx["eigen_svg"] = svg(_eigen_figure(rep.design))
+    bar.update()
+
+    bar.set_postfix_str(steps[2])
+    pid = pid_from_config(cfg)
+    ctx["pid"] = pid
+    ctx["pid_svg"] = svg(_bode_figure([("|S| = |H/(1+HC)|", pid.S)], bound=1 / pid.k, ylabel="|S| [m/V]"))
+    from ..design.loop import loop_analysis, loop_figure
+
+    ctx["loop_view"] = loop_analysis(cfg)
+    ctx["loop_svg"] = svg(loop_figure(ctx["loop_view"]))
+    bar.update()
+
+    bar.set_postfix_str(steps[3])
+    na = noise_analysis(cfg)
+    ctx["noise"] = na
+    ctx["noise_svg"] = svg(_bode_figure([("noise -> friction estimate", na.G_friction),
+                                          ("after the low-pass eq:3:4:5", na.lowpass * na.G_friction)],
+                                         ylabel="gain [N/m]"))
+    bar.update()
+
+    claims = []
+    ctx["paper"] = paper
+    if paper:
+        claims = list(studies.derivation_claims()) + list(studies.pid_claims())
+        conv_index = len(claims)  # the convergence claims go here when the helper returns them
+
+    bar.set_postfix_str("experiments")
+    exp = studies.experiments_study(cfg)
+    claims += exp.claims
+    ctx["experiments"] = exp
+    ctx["experiments_svg"] = svg(experiments_figure(exp))
+    bar.update()
+
+    # what runs here before the helper's results are asked for: the noise study and the circle's other
+    # feeds (so this process does not wait while work is left); the page is assembled in its own order
+    noise_claims = []
+    if paper:
+        bar.set_postfix_str("noise study")
+        noise_claims = list(studies.noise_study().claims)
+        bar.update()
+    feeds = {}
+    if circle:
+        bar.set_postfix_str("circle test")
+        feeds = {f: feed_runs(cfg, f) for f in CIRCLE_FEEDS if f != slow_feed}
+    bar.set_postfix_str("friction loops")
+    loops_claims, ctx["loops_svg"] = jobs["loops"].result()
+    claims += loops_claims + noise_claims
+    bar.update()
+    if paper:
+        bar.set_postfix_str("convergence (Table 1)")
+        conv_claims, ctx["convergence_svg"] = conv_job.result()
+        claims[conv_index:conv_index] = conv_claims
+        bar.update()
+    ctx["claims"] = claims if paper else []
+    ctx["circle"] = None
+    if circle:
+        bar.set_postfix_str("circle test")
+        ctx["circle"] = circle_part(cfg, {**feeds, slow_feed: circle_job.result()})
+        bar.update()
+    ctx["criteria"] = judge_design(cfg, sampled_loop=ctx["loop_view"].sampled, experiments=exp, noise=na,
+                                   stability=rep)
+
+    bar.set_postfix_str("render")
+    ctx.update(explorer_context(cfg, certificate=rep.certificate))
+    ctx["sweep"] = sweep_section
+    ctx["data"] = data_section(data, cfg, moving_speed=moving_speed,
+                               label=f"the report's config ({source_label})") if data is not None else None
+    ctx["comparison"] = compare_section
+    ctx["elapsed"] = time.perf_counter() - t0
+    env = Environment(loader=PackageLoader("obsdesign.report", "templates"), undefined=StrictUndefined,
+                      autoescape=select_autoescape(default=True, default_for_string=True))
+    env.filters["num"] = _quantity  # one number format in the whole report: 4 significant digits
+    env.filters["qty"] = lambda value, unit="": _quantity(value, units.unit(unit))
+    env.filters["unit"] = units.unit
+    env.filters["log10"] = math.log10
+    env.filters["explorer_json"] = explorer_json
+    html = _with_csp(env.get_template("report.html.j2").render(csp=_CSP_MARK, **ctx))
+    bar.update()
+    bar.close()
+    return html
