@@ -9,6 +9,9 @@ Issue 19 contract, ratios to the same reference: ``check --preset vcm`` <= 2.5x,
 <= 5x, ``export --format c`` <= 3x; ``simulate positioning`` at most 1.0 s plus the kernel's own
 time (its ``sim_wall_s``). Each figure is the median of ``repeats`` fresh processes.
 
+Each command is timed with the result memo (:mod:`obsdesign._memo`, filled by the untimed warm-up
+run) and with it off (``OBSDESIGN_CACHE=off``: every number computed, as on a first run).
+
 ``python benchmarks/bench_cli.py [--repeats N] [--contract [--baseline DIR]]`` (``--contract``: the issue-19
 rows only; ``--baseline DIR`` times the same commands of another source tree in the same loop).
 """
@@ -79,7 +82,7 @@ def contract(repeats: int = 7, baseline: str | None = None) -> list[dict]:
     """
     numpy_cmd = [sys.executable, "-c", "import numpy"]
     cli = [sys.executable, "-m", "obsdesign"]
-    envs = {"": None}
+    envs = {"": None, "(memo off)": {**os.environ, "OBSDESIGN_CACHE": "off"}}  # obsdesign._memo: warm vs none
     if baseline is not None:
         envs["before"] = {**os.environ, "PYTHONPATH": baseline}
     with tempfile.TemporaryDirectory() as tmp:
