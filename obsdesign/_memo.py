@@ -50,7 +50,7 @@ import sys
 from pathlib import Path
 from typing import Any, Callable
 
-__all__ = ["memo", "cache_dir", "enabled", "fingerprint", "source_hash", "list_of"]
+__all__ = ["memo", "cache_dir", "enabled", "fingerprint", "source_hash", "list_of", "config_key"]
 
 #: The libraries whose versions are part of every key (their results are what is kept): module -> distribution.
 _LIBRARIES = {"numpy": "numpy", "scipy": "scipy", "control": "control", "sympy": "sympy"}
@@ -161,6 +161,19 @@ def _decode(value: Any) -> Any:
             return tuple(_decode(v) for v in value["__tuple__"])
         return {k: _decode(v) for k, v in value.items()}
     return value
+
+
+def config_key(cfg) -> str:
+    """The exact text of a :class:`~obsdesign.params.Config`'s values for a key (name and provenance left out).
+
+    >>> import obsdesign as od
+    >>> config_key(od.load_preset("vcm")) == config_key(od.load_preset("vcm").override(rho=4.0))
+    True
+    >>> config_key(od.load_preset("vcm")) == config_key(od.load_preset("vcm").override(rho=4.000001))
+    False
+    """
+    values = {k: v for k, v in cfg.to_dict().items() if k not in ("name", "sources")}
+    return json.dumps(values, sort_keys=True, default=repr)  # floats by repr: every bit
 
 
 def list_of(n: int) -> Callable[[Any], bool]:

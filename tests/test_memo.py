@@ -200,3 +200,19 @@ def test_a_tampered_search_result_cannot_certify_more(memo_dir):
         A_lo, A_hi = design.matrices(0.0)[0], design.matrices(design.kappa)[0]
         P = np.asarray(got.P)
         assert max(log_norm(A_lo, P), log_norm(A_hi, P)) <= -got.decay_rate * (1 - 1e-6)
+
+
+@pytest.mark.parametrize("name, rule", [("eso", "noise"), ("kalman", "noise"), ("dob", "rate"), ("eso", "min-error")])
+def test_a_kept_tuning_equals_a_fresh_one(name, rule, memo_dir, monkeypatch):
+    from obsdesign.estimators import tune
+
+    cfg = od.load_preset("vcm")
+    monkeypatch.setenv("OBSDESIGN_CACHE", "off")
+    fresh = tune(name, cfg, rule=rule)
+    monkeypatch.delenv("OBSDESIGN_CACHE")
+    tune(name, cfg, rule=rule)
+    kept = tune(name, cfg, rule=rule)
+    assert (memo_dir / "tune").exists() or (name, rule) == ("dob", "rate")  # dob's rate knob is the pole itself
+    assert _same(kept.params, fresh.params)
+    for field in ("Phi", "gu", "g0", "g1", "Cz", "d"):
+        assert np.array_equal(getattr(kept, field), getattr(fresh, field))

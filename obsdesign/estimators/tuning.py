@@ -42,6 +42,7 @@ import math
 import numpy as np
 import scipy.optimize
 
+from .._memo import config_key, memo
 from ..params import Config
 from .base import DiscreteEstimator, check_config, check_positive
 from .kalman import noise_level
@@ -166,21 +167,27 @@ def tune(name: str, cfg: Config, *, rule: str = "noise", sigma_model: float | No
         for _ in range(info.knob_noise_power):   # lo eta^p / eta_range^p, in this order of operations
             lo, hi = lo * eta, hi * eta
         lo, hi = lo / _RANGE_ETA ** info.knob_noise_power, hi / _RANGE_ETA ** info.knob_noise_power
-    if rule == "min-error":
-        return make(_min_error(make, cfg, lo, hi))
-    if rule == "rate":
-        target = pole * cfg.observer.dt          # log of the target pole radius
-
-        def mismatch(log_q: float) -> float:     # > 0 when faster than the target
-            return target - math.log(float(np.max(np.abs(make(math.exp(log_q)).poles()))))
-
-        return make(_solve_log(mismatch, lo, hi, "rate rule"))
     eta, B = noise_level(cfg)
-    if eta == 0.0:
+    if rule == "noise" and eta == 0.0:
         raise ValueError("sensor: the noise rule needs noise_rms > 0 or quantization > 0, found both 0")
-    ref = reference_noise_rms(cfg)
 
-    def mismatch(log_knob: float) -> float:
-        return friction_noise_rms(make(math.exp(log_knob)), eta, B) / ref - 1.0
+    def knob_value() -> float:
+        if rule == "min-error":
+            return _min_error(make, cfg, lo, hi)
+        if rule == "rate":
+            target = pole * cfg.observer.dt          # log of the target pole radius
 
-    return make(_solve_log(mismatch, lo, hi, "noise rule"))
+            def mismatch(log_q: float) -> float:     # > 0 when faster than the target
+                return target - math.log(float(np.max(np.abs(make(math.exp(log_q)).poles()))))
+
+            return _solve_log(mismatch, lo, hi, "rate rule")
+        ref = reference_noise_rms(cfg)
+
+        def mismatch(log_knob: float) -> float:
+            return friction_noise_rms(make(math.exp(log_knob)), eta, B) / ref - 1.0
+
+        return _solve_log(mismatch, lo, hi, "noise rule")
+
+    # the knob is a pure function of the estimator, the rule and the design: kept on disk (obsdesign._memo)
+    return make(memo("tune", (name, rule, sigma_model, lo, hi, config_key(cfg)), knob_value,
+                     valid=lambda v: isinstance(v, float) and math.isfinite(v)))
