@@ -93,9 +93,10 @@ def _library_versions() -> list[str]:
     return out
 
 
-def source_hash(root: str | os.PathLike) -> str:
+def source_hash(root: str | os.PathLike[str]) -> str:
     """SHA-256 of every ``.py`` and ``.toml`` file under ``root``: relative paths and contents, in a fixed order."""
     h = hashlib.sha256()
+    root = os.fspath(root)
     for dirpath, dirnames, filenames in os.walk(root):
         dirnames[:] = sorted(d for d in dirnames if d != "__pycache__")
         for name in sorted(filenames):

@@ -61,10 +61,10 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     parser = Parser(prog="obsdesign", description="Design and verify reduced-order friction observers.")
     parser.add_argument("--version", action="version", version=f"obsdesign {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    target = sub if command is None else _OnlyCommand(sub, command)
+    only = None if command is None else _OnlyCommand(sub, command)
     for module in (_design, _sim, _output, _data, _loop, _config, _compare, _dynamic, _tune):
-        module.add_commands(target)
-    if command is not None and not target.found:
+        module.add_commands(sub if only is None else only)
+    if only is not None and not only.found:
         return build_parser()
     return parser
 
