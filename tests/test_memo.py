@@ -174,7 +174,7 @@ def test_kept_systems_are_rebuilt_as_computed(memo_dir):
     la = loop_analysis(cfg)  # numbers from disk, systems built on request
     H = ct.tf([cfg.phi], [cfg.pid.tau, 1.0, 0.0])
     pid = la.pid
-    C = ct.tf([pid.kp * 0 + pid.k * pid.tau * pid.T_I, pid.k * (pid.tau + pid.T_I), pid.k], [pid.T_I, 0.0])
+    C = ct.tf([pid.k * pid.tau * pid.T_I, pid.k * (pid.tau + pid.T_I), pid.k], [pid.T_I, 0.0])
     w = np.logspace(-1, 4, 50)
     for got, want in ((pid.S, ct.feedback(H, C)), (la.T, ct.feedback(C * H, 1)), (la.sampled.L.dt, cfg.observer.dt)):
         if isinstance(want, float):
