@@ -52,8 +52,9 @@ from typing import Any, Callable
 
 __all__ = ["memo", "cache_dir", "enabled", "fingerprint", "source_hash", "list_of", "config_key"]
 
-#: The libraries whose versions are part of every key (their results are what is kept): module -> distribution.
-_LIBRARIES = {"numpy": "numpy", "scipy": "scipy", "control": "control", "sympy": "sympy"}
+#: The libraries whose versions are part of every key (their results are what is kept); each installs
+#: as ``<name>-<version>.dist-info`` beside its package (python-control's wheel as ``control-``).
+_LIBRARIES = ("numpy", "scipy", "control", "sympy")
 _FINGERPRINT: str | None = None
 
 
@@ -75,7 +76,7 @@ def _library_versions() -> list[str]:
     import importlib.util
 
     out = []
-    for name, dist in _LIBRARIES.items():
+    for name in _LIBRARIES:
         try:
             spec = importlib.util.find_spec(name)
         except (ImportError, ValueError):
@@ -85,8 +86,7 @@ def _library_versions() -> list[str]:
             continue
         site = Path(spec.origin).parent.parent
         try:
-            infos = sorted(e for e in os.listdir(site)  # python-control's wheel installs as control-<version>
-                           if e.endswith(".dist-info") and e.lower().replace("python_", "").startswith(dist + "-"))
+            infos = sorted(e for e in os.listdir(site) if e.endswith(".dist-info") and e.lower().startswith(name + "-"))
         except OSError:
             infos = []
         out.append(f"{name}:{spec.origin}:{','.join(infos)}")

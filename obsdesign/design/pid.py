@@ -173,8 +173,8 @@ def _verification(k: float, T_I: float, tau: float, phi: float) -> list:
 
 
 def _build(k: float, T_I: float, tau: float, phi: float, phase_margin_deg: float) -> PIDDesign:
-    peak, w_peak, pm, gm, wgc, stable = memo("pid", (k, T_I, tau, phi), lambda: _verification(k, T_I, tau, phi),
-                                                 valid=list_of(6))
+    args = (k, T_I, tau, phi)
+    peak, w_peak, pm, gm, wgc, stable = memo("pid", args, lambda: _verification(*args), valid=list_of(6))
     return PIDDesign(
         k=k, T_I=T_I, tau=tau, phi=phi, kp=k * (T_I + tau) / T_I, ki=k / T_I, kd=k * tau,  # eq:PIDparams
         phase_margin_deg=phase_margin_deg, omega_s=math.tan(math.radians(phase_margin_deg)) / T_I,

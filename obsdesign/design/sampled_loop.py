@@ -327,8 +327,8 @@ def sampled_loop(cfg: Config, *, delay_samples: int | None = None) -> SampledLoo
     _, _, kp, ki, kd = pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
                                  phase_margin_deg=cfg.pid.phase_margin_deg)
     tau_d = kd / kp / N  # as obsdesign.sampled.controller.sampled_controller
-    numbers = memo("sampled_loop", (kp, ki, kd, tau_d, dt, cfg.phi, cfg.pid.tau, d),
-                   lambda: _numbers(kp, ki, kd, tau_d, dt, cfg.phi, cfg.pid.tau, d), valid=list_of(17))
+    args = (kp, ki, kd, tau_d, dt, cfg.phi, cfg.pid.tau, d)
+    numbers = memo("sampled_loop", args, lambda: _numbers(*args), valid=list_of(17))
     gm, pm, wgc, wpc, dm, max_S, w_S, max_T, w_T, max_PS, max_CS, w_CS, poles, rmax, over, rise, settle = numbers
     return SampledLoop(
         dt=dt, delay_samples=d, derivative_N=N, gain_margin=gm,

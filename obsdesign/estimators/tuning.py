@@ -161,13 +161,12 @@ def tune(name: str, cfg: Config, *, rule: str = "noise", sigma_model: float | No
 
     if rule == "rate" and info.knob_is_rate:
         return make(-pole)
+    eta, B = noise_level(cfg)
     if info.knob_noise_power:
-        eta = noise_level(cfg)[0]
         check_positive("measurement_rms (sensor noise_rms or quantization)", eta, "m")
         for _ in range(info.knob_noise_power):   # lo eta^p / eta_range^p, in this order of operations
             lo, hi = lo * eta, hi * eta
         lo, hi = lo / _RANGE_ETA ** info.knob_noise_power, hi / _RANGE_ETA ** info.knob_noise_power
-    eta, B = noise_level(cfg)
     if rule == "noise" and eta == 0.0:
         raise ValueError("sensor: the noise rule needs noise_rms > 0 or quantization > 0, found both 0")
 

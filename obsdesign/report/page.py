@@ -122,8 +122,9 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     cfg : Config
         The design.
     jobs : dict
-        The helper's futures: ``convergence`` (:func:`convergence_part`), ``circle`` (the slowest
-        feed's runs) and ``loops`` (:func:`loops_part`); ``None`` where the study is not asked for.
+        The helper's futures: ``convergence`` (:func:`convergence_part`, ``None`` without the paper's
+        studies), ``circle`` (feed -> the future of its runs, for the feeds the helper computes; empty
+        without the circle test) and ``loops`` (:func:`loops_part`).
     steps : list of str
         The progress bar's steps.
     paper, circle : bool
@@ -141,8 +142,7 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     def svg(fig):
         return _svg(fig, units)
 
-    conv_job, circle_job = jobs["convergence"], jobs["circle"]
-    slow_feed = min(CIRCLE_FEEDS)
+    conv_job, helper_feeds = jobs["convergence"], jobs["circle"]
     bar = progress_bar(progress, iterable=steps, desc="obsdesign report", leave=False)  # no thread without a bar
     ctx: dict = {"cfg": cfg, "version": __version__, "source_label": source_label,
                  "date": datetime.date.today().isoformat()}
@@ -204,7 +204,7 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     feeds = {}
     if circle:
         bar.set_postfix_str("circle test")
-        feeds = {f: feed_runs(cfg, f) for f in CIRCLE_FEEDS if f != slow_feed}
+        feeds = {f: feed_runs(cfg, f) for f in CIRCLE_FEEDS if f not in helper_feeds}
     bar.set_postfix_str("friction loops")
     loops_claims, ctx["loops_svg"] = jobs["loops"].result()
     claims += loops_claims + noise_claims
@@ -218,7 +218,7 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     ctx["circle"] = None
     if circle:
         bar.set_postfix_str("circle test")
-        ctx["circle"] = circle_part(cfg, {**feeds, slow_feed: circle_job.result()})
+        ctx["circle"] = circle_part(cfg, {**feeds, **{f: job.result() for f, job in helper_feeds.items()}})
         bar.update()
     ctx["criteria"] = judge_design(cfg, sampled_loop=ctx["loop_view"].sampled, experiments=exp, noise=na,
                                    stability=rep)
