@@ -216,3 +216,29 @@ def test_a_kept_tuning_equals_a_fresh_one(name, rule, memo_dir, monkeypatch):
     assert _same(kept.params, fresh.params)
     for field in ("Phi", "gu", "g0", "g1", "Cz", "d"):
         assert np.array_equal(getattr(kept, field), getattr(fresh, field))
+
+
+HOSTILE = ["<table><tr><td><img src=x onerror=alert(1)></td></tr></table>",
+           "</table><script>alert(1)</script>",
+           '<table><tr><td><a href="javascript:alert(1)">x</a></td></tr></table>',
+           "<table><tr><td><math xmlns='http://evil'><mi>x</mi></math></td></tr></table>",
+           "<table><tr><td><mi style='background:url(http://x)'>x</mi></td></tr></table>",
+           "<table><tr><td><mi mathvariant='\"'>x</mi></td></tr></table><!DOCTYPE x>",
+           "<table><tr><td><mi>*/ \\\n''' \"\"\" </mi></td></tr></table><?php ?>"]
+
+
+def test_a_kept_derivation_is_embedded_only_if_it_is_the_table(memo_dir):
+    from obsdesign.report.markup import is_derivation_markup
+    from obsdesign.report.page import derivation_markup
+    from obsdesign.symbolic import derive
+    from obsdesign.symbolic.printing import derivation_html
+
+    fresh = {v: derivation_html(derive(v)) for v in ("static", "lag")}
+    assert all(is_derivation_markup(text) for text in fresh.values())  # what the report writes passes
+    assert derivation_markup("static") == fresh["static"]  # computed and kept
+    (entry,) = (memo_dir / "derivation_html").iterdir()
+    for bad in HOSTILE:
+        assert not is_derivation_markup(bad), bad
+        entry.write_text(json.dumps(bad))
+        assert derivation_markup("static") == fresh["static"]  # derived again, not embedded
+        assert json.loads(entry.read_text()) == fresh["static"]  # and the entry rewritten

@@ -1,4 +1,5 @@
-"""The report page's markup rules: one number format, and the content policy with its check.
+"""The report page's markup rules: one number format, the content policy with its check, and the
+allowlist a kept derivation table must pass before it is put on a page.
 
 Shared by the entry point :mod:`obsdesign.report.html` and the page builder
 :mod:`obsdesign.report.page` (one place for both, no import cycle).
@@ -10,10 +11,79 @@ import base64
 import hashlib
 import math
 import re
+from html.parser import HTMLParser
 
 from .._format import with_unit
 
-__all__ = ["ReportContentError"]
+__all__ = ["ReportContentError", "is_derivation_markup"]
+
+#: What :func:`obsdesign.symbolic.printing.derivation_html` writes: an HTML table of MathML presentation
+#: elements. A derivation read back from the result memo (a file on disk) must hold nothing else.
+_DERIVATION_TAGS = frozenset({
+    "table", "caption", "tr", "th", "td", "math", "mi", "mn", "mo", "ms", "mtext", "mspace", "mrow", "mfrac",
+    "msqrt", "mroot", "msub", "msup", "msubsup", "munder", "mover", "munderover", "mtable", "mtr", "mtd",
+    "mfenced", "mstyle", "mpadded", "mphantom"})
+#: Its attributes: presentation keywords and lengths only (no URL, no script, no style).
+_DERIVATION_ATTRS = frozenset({"class", "fence", "stretchy", "symmetric", "width", "mathvariant", "separators",
+                               "open", "close", "lspace", "rspace", "columnalign", "accent", "linethickness"})
+_MATHML_NS = "http://www.w3.org/1998/Math/MathML"
+_PLAIN_VALUE = re.compile(r"[A-Za-z0-9 .,%#+-]*")
+
+
+class _DerivationCheck(HTMLParser):
+    def __init__(self) -> None:
+        super().__init__(convert_charrefs=True)
+        self.ok = True
+
+    def handle_starttag(self, tag, attrs):
+        if tag not in _DERIVATION_TAGS:
+            self.ok = False
+        for name, value in attrs:
+            if name == "xmlns":
+                self.ok &= tag == "math" and value == _MATHML_NS
+            else:
+                self.ok &= name in _DERIVATION_ATTRS and _PLAIN_VALUE.fullmatch(value or "") is not None
+
+    handle_startendtag = handle_starttag
+
+    def handle_endtag(self, tag):
+        self.ok &= tag in _DERIVATION_TAGS
+
+    def handle_decl(self, decl):
+        self.ok = False
+
+    handle_pi = unknown_decl = handle_decl
+
+
+def is_derivation_markup(text) -> bool:
+    """Whether ``text`` is a derivation table as the report writes it: allowed elements and attributes only.
+
+    The report embeds its derivation as markup; read back from the result memo it is a file on disk,
+    so it is embedded only when every element is one of the table and MathML presentation elements
+    and every attribute a presentation keyword with a plain value. Otherwise the derivation is computed
+    again (and the entry rewritten).
+
+    Parameters
+    ----------
+    text : str
+        The markup (anything else is not a derivation table).
+
+    Examples
+    --------
+    >>> is_derivation_markup("<table class='obsdesign-derivation'><tr><td><math xmlns="
+    ...                      "'http://www.w3.org/1998/Math/MathML'><mi>x</mi></math></td></tr></table>")
+    True
+    >>> is_derivation_markup("<table><tr><td><img src=x onerror=alert(1)></td></tr></table>")
+    False
+    >>> is_derivation_markup("<table><tr><td><mi mathvariant='x\\' onclick='y'>a</mi></td></tr></table>")
+    False
+    """
+    if not isinstance(text, str):
+        return False
+    check = _DerivationCheck()
+    check.feed(text)
+    check.close()
+    return check.ok
 
 
 def _quantity(value, unit: str = "") -> str:

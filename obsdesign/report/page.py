@@ -27,10 +27,10 @@ from .circle_section import circle_section, feed_runs
 from .data_section import data_section
 from .explorer import explorer_context, explorer_json
 from .figures import figure_svg, relabel
-from .markup import _CSP_MARK, _quantity, _with_csp
+from .markup import _CSP_MARK, _quantity, _with_csp, is_derivation_markup
 from .study_figures import convergence_figure, experiments_figure, friction_loops_figure
 
-__all__ = ["render_page", "convergence_part", "loops_part", "circle_part"]
+__all__ = ["render_page", "convergence_part", "loops_part", "circle_part", "derivation_markup"]
 
 
 def _svg(fig, units=None) -> str:
@@ -83,6 +83,21 @@ def _derivation_html(variant: str) -> str:
     from ..symbolic.printing import derivation_html
 
     return derivation_html(derive(variant))
+
+
+def derivation_markup(variant: str) -> str:
+    """The derivation table of the page (MathML), from the result memo or from SymPy.
+
+    A pure function of the variant and the code, so SymPy runs once per package version
+    (:mod:`obsdesign._memo`); read back from disk it is embedded only if it passes
+    :func:`obsdesign.report.markup.is_derivation_markup`, else it is derived again.
+
+    Parameters
+    ----------
+    variant : str
+        ``static`` or ``lag``.
+    """
+    return memo("derivation_html", (variant,), lambda: _derivation_html(variant), valid=is_derivation_markup)
 
 
 def loops_part(cfg: Config) -> tuple[list, str]:
@@ -148,9 +163,7 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
                  "date": datetime.date.today().isoformat()}
     t0 = time.perf_counter()
     bar.set_postfix_str(steps[0])
-    # a pure function of the variant and the code: SymPy runs once per package version (obsdesign._memo)
-    ctx["derivation_html"] = memo("derivation_html", (variant,), lambda: _derivation_html(variant),
-                                  valid=lambda v: isinstance(v, str))
+    ctx["derivation_html"] = derivation_markup(variant)
     sources = parameter_sources(cfg, source_label, flags=flags)
     ctx["params"] = [(r.name, r.value, r.unit, r.doc, sources[r.name]) for r in cfg.describe_fields()]
     bar.update()
