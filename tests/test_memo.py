@@ -213,9 +213,22 @@ def test_a_kept_tuning_equals_a_fresh_one(name, rule, memo_dir, monkeypatch):
     tune(name, cfg, rule=rule)
     kept = tune(name, cfg, rule=rule)
     assert (memo_dir / "tune").exists() or (name, rule) == ("dob", "rate")  # dob's rate knob is the pole itself
+    assert (memo_dir / "dlqe").exists() == (name == "kalman")  # the Kalman filter's Riccati solution is kept too
     assert _same(kept.params, fresh.params)
     for field in ("Phi", "gu", "g0", "g1", "Cz", "d"):
         assert np.array_equal(getattr(kept, field), getattr(fresh, field))
+
+
+def test_a_mis_shaped_riccati_entry_is_solved_again(memo_dir):
+    from obsdesign.estimators import build_kalman
+
+    cfg = od.load_preset("vcm")
+    fresh = build_kalman(cfg, q=1e3)
+    for bad in ([[1.0, 2.0], [3.0, 4.0]], "x", [[1.0, 2.0, "3"]] * 3, None):
+        for entry in (memo_dir / "dlqe").iterdir():
+            entry.write_text(json.dumps(bad))
+        again = build_kalman(cfg, q=1e3)
+        assert np.array_equal(again.Phi, fresh.Phi) and np.array_equal(again.g1, fresh.g1), bad
 
 
 HOSTILE = ["<table><tr><td><img src=x onerror=alert(1)></td></tr></table>",

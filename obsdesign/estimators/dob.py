@@ -34,12 +34,16 @@ Examples
 
 from __future__ import annotations
 
-import control as ct
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..params import Config
 from .base import DiscreteEstimator, check_config, check_positive
 from .paper import model_sigma, step_matrices
+
+if TYPE_CHECKING:
+    import control as ct
 
 __all__ = ["build_dob", "q_filter", "dob_continuous"]
 
@@ -55,6 +59,8 @@ def q_filter(omega_q: float) -> ct.TransferFunction:
     >>> float(q_filter(3.0).dcgain())
     1.0
     """
+    import control as ct
+
     w = check_positive("omega_q", omega_q, "rad/s")
     return ct.tf([w * w], [1.0, 2.0 * w, w * w])
 
@@ -80,6 +86,8 @@ def dob_continuous(omega_q: float, m: float, sigma_model: float) -> ct.StateSpac
     sigma_model : float
         Viscous coefficient of the nominal model [N s/m].
     """
+    import control as ct
+
     A, b, g, L = _matrices(check_positive("omega_q", omega_q, "rad/s"), m, sigma_model)
     return ct.ss(A, np.column_stack([b, g]), np.eye(2), np.column_stack([np.zeros(2), L]),
                  inputs=["u", "x_meas"], outputs=["v_hat", "f_hat"])

@@ -28,9 +28,9 @@ from __future__ import annotations
 
 import math
 
-import control as ct
 import numpy as np
 
+from .._memo import memo
 from ..params import Config
 from .base import DiscreteEstimator, check_config, check_positive, foh_matrices
 from .paper import model_sigma
@@ -75,6 +75,24 @@ def kalman_model(m: float, sigma_model: float, dt: float):
     return Ad, Bd, np.array([[1.0, 0.0, 0.0]]), np.array([[0.0], [0.0], [1.0]])
 
 
+def _is_3x3(value) -> bool:
+    return (isinstance(value, list) and len(value) == 3
+            and all(isinstance(r, list) and len(r) == 3 and all(isinstance(x, float) for x in r) for r in value))
+
+
+def _riccati(Ad: np.ndarray, G: np.ndarray, c_scaled: np.ndarray, q_dt: float) -> np.ndarray:
+    """The steady-state prediction covariance of python-control's ``dlqe`` with the outputs scaled to unit
+    noise (``R = 1``, a well-conditioned Riccati equation); kept in the result memo (:mod:`obsdesign._memo`),
+    so a warm process imports no python-control for it."""
+    def solve():
+        import control as ct
+
+        _, P, _ = ct.dlqe(Ad, G, c_scaled, np.array([[q_dt]]), np.eye(1))
+        return np.asarray(P, dtype=float).tolist()
+
+    return np.array(memo("dlqe", (Ad, G, c_scaled, q_dt), solve, valid=_is_3x3))
+
+
 def build_kalman(cfg: Config, *, q: float, measurement_rms: float | None = None,
                  sigma_model: float | None = None, tuning: str = "manual") -> DiscreteEstimator:
     """Steady-state Kalman filter (current-estimator form) at ``cfg.observer.dt``.
@@ -104,9 +122,7 @@ def build_kalman(cfg: Config, *, q: float, measurement_rms: float | None = None,
     m, sig, dt = cfg.plant.m, model_sigma(cfg, sigma_model), cfg.observer.dt
     Ad, Bd, c, G = kalman_model(m, sig, dt)
     R = eta * eta
-    # Scale the outputs to unit noise for a well-conditioned Riccati equation (R = 1).
-    _, P_scaled, _ = ct.dlqe(Ad, G, c / eta, np.array([[q * dt]]), np.eye(1))
-    P = np.asarray(P_scaled)
+    P = _riccati(Ad, G, c / eta, q * dt)
     M = P @ c.T / (c @ P @ c.T + R)           # innovation gain, shape (3, 1)
     IMC = np.eye(3) - M @ c
     Phi = IMC @ Ad
