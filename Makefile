@@ -14,13 +14,14 @@ $(STAMP): pyproject.toml | $(PY)
 	$(PY) -m pip install --quiet -e '.[test,distributed]'
 	touch $(STAMP)
 
+# Both test runs spread the cases over every core (pytest-xdist, `-n auto`: one worker process per core).
 test: $(STAMP)
-	$(PY) -m pytest
+	$(PY) -m pytest -n auto
 
 # The quick loop while editing: everything but the cases marked @pytest.mark.slow (meant for under
 # 2 minutes on an idle 2-core machine; docs/development.md says what is marked slow and why).
 test-fast: $(STAMP)
-	$(PY) -m pytest -m "not slow"
+	$(PY) -m pytest -n auto -m "not slow"
 
 report: $(STAMP)
 	$(VENV)/bin/obsdesign report --preset vcm -o report.html

@@ -6,15 +6,23 @@ hypothesis.settings.register_profile("obsdesign", derandomize=True, deadline=Non
 hypothesis.settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "obsdesign"))
 
 
+OCTAVE_FILES = ("test_controller_export.py", "test_compensation_modes.py")
+#: Documentation pages whose examples run a design search end to end (docs/tune.md: 7 s).
+SLOW_PAGES = ("tune.md",)
+
+
 def pytest_collection_modifyitems(config, items):
     """The controller-export cases that run GNU Octave (one interpreter start each, 2-20 s on the
-    2-core machine) are slow: ``make test`` runs them, ``make test-fast`` skips them. The C, Python
-    and JavaScript cases of the same tests stay in the fast run."""
+    2-core machine; the compensation modes' reference exports 7-9 s each) are slow: ``make test`` runs
+    them, ``make test-fast`` skips them. The C, Python and JavaScript cases of the same tests stay in
+    the fast run. So are the examples of :data:`SLOW_PAGES`."""
     import pytest
 
     for item in items:
-        if (item.path.name == "test_controller_export.py" and "octave" in item.name
+        if (item.path.name in OCTAVE_FILES and "octave" in item.name
                 and not item.name.startswith("test_controller_files_errors")):
+            item.add_marker(pytest.mark.slow)
+        if item.path.name in SLOW_PAGES and item.path.parent.name == "docs":
             item.add_marker(pytest.mark.slow)
 
 

@@ -227,6 +227,7 @@ def _generalized_max(A, P):
     return float(eigh(A.T @ P + P @ A, P, eigvals_only=True).max())
 
 
+@pytest.mark.slow  # 60 designs certified twice, the full search each time (8 s)
 def test_verdict_without_search_is_the_full_verdict():
     """search=False (simulate, export, noise) gives the verdict and method of the full certificate;
     its decay rate is proved by its own P (checked with SciPy's generalized eigensolver) and never

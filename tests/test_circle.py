@@ -49,7 +49,7 @@ def test_metrics_of_a_contour_with_known_glitches():
     assert m["axes"]["x"]["max"] == 0.0  # the references are the positions here
 
 
-@pytest.mark.parametrize("feed", [2e-3, 6.3e-3, 2e-2])
+@pytest.mark.parametrize("feed", [pytest.param(2e-3, marks=pytest.mark.slow), 6.3e-3, 2e-2])  # the slowest feed: 2 s
 def test_feedforward_of_the_exact_friction_model_removes_the_glitch(feed):
     """Plant friction = the feed-forward model: Coulomb + viscous with the design's Cf, sigma and no
     pre-sliding to speak of (s = 1e7 1/m: 0.1 um, a tenth of an encoder count), the feed-forward a
@@ -63,7 +63,7 @@ def test_feedforward_of_the_exact_friction_model_removes_the_glitch(feed):
     assert ff["glitch_peak"] <= 0.10 * pid["glitch_peak"]
 
 
-@pytest.mark.parametrize("feed", [2e-3, 6.3e-3, 2e-2])
+@pytest.mark.parametrize("feed", [pytest.param(2e-3, marks=pytest.mark.slow), 6.3e-3, 2e-2])  # the slowest feed: 3 s
 def test_feedforward_with_the_models_presliding_curve_on_its_own_plant(feed):
     """The preset's plant (Coulomb with pre-sliding memory, s = 3000 1/m) and the default feed-forward,
     whose Coulomb term follows the same pre-sliding curve along the reference: the model is the

@@ -21,7 +21,8 @@ def run(*args):
     return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
-@pytest.mark.parametrize("args, code", [(["check", "--rho", "0.98"], 1), (["check", "--rho", "x"], 2),
+@pytest.mark.parametrize("args, code", [pytest.param(["check", "--rho", "0.98"], 1, marks=pytest.mark.slow),
+                                        (["check", "--rho", "x"], 2),
                                         pytest.param(["derive"], 0, marks=pytest.mark.slow)])
 def test_real_process_exit_status(args, code):
     proc = run_process(*args)

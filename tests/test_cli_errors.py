@@ -165,7 +165,8 @@ def _cli(*argv, **kwargs):
 
 
 @pytest.mark.skipif(not os.path.exists("/dev/full"), reason="no /dev/full")
-@pytest.mark.parametrize("argv", [["check", "--json"], ["derive", "--format", "json"]])  # m1, m2
+@pytest.mark.parametrize("argv", [["check", "--json"],  # m1, m2; the derivation in a fresh interpreter is slow
+                                  pytest.param(["derive", "--format", "json"], marks=pytest.mark.slow)])
 def test_a_full_stdout_is_one_line_and_status_2(argv):
     with open("/dev/full", "w") as full:
         proc = _cli(*argv, stdout=full)

@@ -318,7 +318,10 @@ def _noisy_run(scenario_name, estimator, schedule, knobs):
     return cfg, res
 
 
-@pytest.fixture(scope="module", params=[(s, e, sc, k) for s in NOISY for e, sc in PARITY for k in PARITY_KNOBS],
+# The compensation knobs' half of the cases is slow (make test runs it; the knobs' law is in the fast run
+# through test_compensation_knobs_follow_the_law).
+@pytest.fixture(scope="module", params=[pytest.param((s, e, sc, k), marks=[pytest.mark.slow] if k == "knobs" else [])
+                                        for s in NOISY for e, sc in PARITY for k in PARITY_KNOBS],
                 ids=lambda p: "-".join(p))
 def noisy_case(request):
     scenario_name, estimator, schedule, knobs = request.param
@@ -385,6 +388,7 @@ def test_the_export_and_the_simulator_share_the_choices_and_the_threshold():
     assert eso["E_NZ"] == 3.0 and "L1" not in eso and "E_PHI_2_2" in eso
 
 
+@pytest.mark.slow  # a fresh interpreter that exports twice (4-6 s)
 def test_a_paper_export_does_not_load_the_estimators():
     """The baselines' modules (python-control tuning) are imported only when a baseline is exported; the
     estimators' light catalogue (obsdesign.estimators.registry, the names) is read either way."""

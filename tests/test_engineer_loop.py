@@ -237,7 +237,7 @@ def test_exported_c_controller_matches_the_simulator(traces, label):
     assert np.max(np.abs(u - data["u"])) <= 1e-9 * np.max(np.abs(data["u"]))
 
 
-@pytest.mark.parametrize("label", ["default", "knobs"])
+@pytest.mark.parametrize("label", ["default", pytest.param("knobs", marks=pytest.mark.slow)])  # 2.5-4 s a case
 def test_exported_python_controller_matches_the_simulator(traces, label):
     root, runs = traces
     cfg_path, data = runs[label]
@@ -301,6 +301,7 @@ def test_loop_json_matches_an_independent_python_control_loop():
     np.testing.assert_allclose(poles, expected, rtol=1e-6)
 
 
+@pytest.mark.slow  # the loop's five-panel figure rendered (3 s)
 def test_loop_plot_and_bad_input(tmp_path):
     code, _, err = run("loop", "--tau", "0.01", "--plot", tmp_path / "loop.svg")
     assert code == 0 and (tmp_path / "loop.svg").read_text().lstrip().startswith(("<?xml", "<svg"))

@@ -44,6 +44,7 @@ def test_check_command_reports_a_stale_file(tmp_path, monkeypatch):
     assert generate.main(["--frobnicate"]) == 2
 
 
+@pytest.mark.slow  # a fresh interpreter per command (3 s)
 def test_computing_commands_do_not_import_sympy():
     code = ("import sys, obsdesign as od; from obsdesign.design import numeric; "
             "od.check_stability(od.load_preset('vcm')); od.noise_analysis(od.load_preset('table1')); "

@@ -36,6 +36,7 @@ print(methods, all(f.exception() is None for f in warmed), len(warmed), rows[0] 
 """
 
 
+@pytest.mark.slow  # a sweep on a forked pool in a fresh interpreter (4-5 s)
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the pool forks on Linux only")
 def test_sweep_forks_warmed_workers_and_gives_the_serial_rows():
     out = subprocess.run([sys.executable, "-c", CHECK], capture_output=True, text=True, timeout=600)

@@ -23,6 +23,7 @@ def _spread(rows, mode, feed):
     return g.mean(), g.min(), g.max(), g.size
 
 
+@pytest.mark.slow  # the circle runs twice, two feeds by two seeds by two directions (8 s)
 def test_section_numbers_are_those_of_circle_modes():
     feeds, seeds = (6.32e-3, 2e-2), (0, 1)
     sec = circle_section(NOISY, feeds=feeds, seeds=seeds)

@@ -53,9 +53,10 @@ _PROBE = ("import sys, runpy\nsys.argv = ['obsdesign', *sys.argv[1:]]\ntry:\n"
           f"print('HEAVY', code, ','.join(m for m in {HEAVY!r} if m in sys.modules), file=sys.stderr)\n")
 
 
-#: Cases that repeat what another case shows (the same modules): in ``make test`` only.
+#: Cases that repeat what another case shows (the same modules), and the two longest (SymPy's derivation,
+#: numba's kernels: 4 s each): in ``make test`` only.
 SLOW = {"check --json", "noise", "derive --format json", "export --format octave", "export --format js",
-        "export --format latex", "export --format c --preset table1"}
+        "export --format latex", "export --format c --preset table1", "derive", "simulate positioning"}
 
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW else n for n in CASES])

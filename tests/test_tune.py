@@ -49,6 +49,7 @@ def _telegraph_run(cfg, est, rate, seconds, seed=0):
     return float(np.sqrt(np.mean((f - f_hat)[keep] ** 2)))
 
 
+@pytest.mark.slow  # a Monte Carlo of long noisy runs, 13-15 s a case
 @pytest.mark.parametrize("preset, name", [("vcm", "paper+lowpass"), ("table1", "paper+lowpass"), ("vcm", "dob")])
 def test_lag_part_against_monte_carlo(preset, name):
     cfg = od.load_preset(preset)
