@@ -239,7 +239,7 @@ def experiments_study(cfg: Config | None = None) -> ExperimentsStudy:
     cfg = cfg or load_preset("vcm")
     pos, trk, runs = {}, {}, {}
     # choice subset: the paper's experiment (section 4.2) compares these two controllers
-    for ctrl in ("pid", "pid+observer"):
+    for ctrl in ("pid", "pid+observer"):  # friction_loops_study(experiments=) reuses (positioning, pid+observer)
         runs[("positioning", ctrl)] = r = simulate(cfg, "positioning", controller=ctrl, stiffness="estimated-raw")
         pos[ctrl] = r.metrics
         runs[("tracking", ctrl)] = r = simulate(cfg, "tracking", controller=ctrl, stiffness="estimated-raw")
@@ -307,22 +307,36 @@ class FrictionLoopsStudy:
     true_f: np.ndarray = field(repr=False)
 
 
-def friction_loops_study(cfg: Config | None = None) -> FrictionLoopsStudy:
+def friction_loops_study(cfg: Config | None = None, *, experiments: ExperimentsStudy | None = None
+                         ) -> FrictionLoopsStudy:
     """Friction estimate vs displacement against the model's f and Fc (Fig. frictionloops).
 
     Parameters
     ----------
     cfg : Config, optional
         Default: the ``vcm`` preset.
+    experiments : ExperimentsStudy, optional
+        :func:`experiments_study` of the same ``cfg`` (else ``ValueError``): its positioning run with the
+        observer is the run studied, not simulated again (the report draws both figures from it).
 
     As in the paper, the same low-pass (eq:3:4:5) is applied to the velocity estimate,
     which with the measured displacement drives the friction model: ``Fc`` from the
     pre-sliding map, ``f = Fc + sigma v``.
+
+    >>> cfg = load_preset("vcm")
+    >>> friction_loops_study(cfg, experiments=experiments_study(cfg)).claims == friction_loops_study(cfg).claims
+    True
     """
     import scipy.signal
 
     cfg = cfg or load_preset("vcm")
-    res = simulate(cfg, "positioning", controller="pid+observer", stiffness="estimated-raw")
+    if experiments is None:
+        res = simulate(cfg, "positioning", controller="pid+observer", stiffness="estimated-raw")
+    else:
+        res = experiments.runs[("positioning", "pid+observer")]
+        if res.config != cfg:
+            raise ValueError(f"experiments: expected the experiments study of the config {cfg.name!r}, "
+                             f"found one of {res.config.name!r} with other values")
     w, dt = cfg.observer.omega_co, cfg.observer.dt
     b, a = scipy.signal.cont2discrete(([w * w], [1, 2 * w, w * w]), dt, method="bilinear")[:2]
     v_f = scipy.signal.lfilter(np.ravel(b), a, res.v_hat)

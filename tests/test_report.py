@@ -5,6 +5,7 @@ import re
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import obsdesign as od
@@ -199,7 +200,7 @@ print(len(forked), serial == parallel, len(serial))
 
 @pytest.mark.slow
 def test_the_page_is_the_same_with_and_without_the_helper_process():
-    """workers=2 forks a helper for the Table 1 study and the circle's slowest feed; the page it gives
+    """workers=2 forks a helper for the Table 1 study and the circle's two slowest feeds; the page it gives
     is the one computed in one process, byte for byte but for the render time (in a fresh process:
     a thread left by another test would keep the helper from forking)."""
     import subprocess
@@ -238,3 +239,19 @@ def test_envelope_keeps_each_columns_extremes_in_time_order():
     assert envelope(short, short)[1] is not None and len(envelope(short, short)[0]) == 10
     y[5] = np.nan  # a diverged run is drawn as it is
     assert len(envelope(t, y, columns=500)[0]) == t.size
+
+
+def test_the_friction_loops_reuse_the_experiments_run_exactly():
+    """The report draws the friction loops from the experiments' positioning run with the observer: the
+    study of that run equals the study that simulates it again, array for array; another config's
+    experiments are refused."""
+    from obsdesign import studies
+
+    cfg = od.load_preset("vcm")
+    exp = studies.experiments_study(cfg)
+    reused, fresh = studies.friction_loops_study(cfg, experiments=exp), studies.friction_loops_study(cfg)
+    assert reused.claims == fresh.claims
+    for name in ("x", "estimate", "model_f", "model_fc", "true_f"):
+        assert np.array_equal(getattr(reused, name), getattr(fresh, name)), name
+    with pytest.raises(ValueError, match="experiments: expected the experiments study of the config 'vcm'"):
+        studies.friction_loops_study(cfg, experiments=studies.experiments_study(cfg.override(rho=3.0)))

@@ -50,15 +50,8 @@ def _convergence_task() -> tuple[list, str]:
     return convergence_part()
 
 
-def _loops_task(cfg: Config) -> tuple[list, str]:
-    """The helper's third task: the friction loops study and its figure."""
-    from .page import loops_part
-
-    return loops_part(cfg)
-
-
 def _feed_task(cfg: Config, feed: float) -> dict:
-    """The helper's second task: the circle test's runs at one feed."""
+    """The helper's other tasks: the circle test's runs at one feed."""
     from .circle_section import feed_runs
 
     return feed_runs(cfg, feed)
@@ -140,7 +133,7 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
         (:func:`obsdesign.report.circle_section.circle_section`; default yes).
     workers : int, optional
         Processes that compute: with 2 or more (default: the number of cores) the Table 1
-        convergence study, the circle test's slowest feed and the friction loops study run in one
+        convergence study and the circle test's two slowest feeds run in one
         forked helper process (forked before the page's libraries are imported) while this one
         computes the rest; 1 computes everything here. The page is the same either way.
     """
@@ -163,11 +156,11 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     try:
         # the independent heavy studies go to the helper first, before this process imports the page's
         # libraries, so that the helper's imports and studies run while this process imports and works
-        # (on vcm: the convergence study and the slowest feed of the circle test, whose contour is longest)
-        slow = min(CIRCLE_FEEDS)  # the circle's lowest feed has the longest contour
+        # (on vcm: the convergence study and the two slowest feeds of the circle test, whose contours are
+        # longest; the two processes then end within about a second of each other)
+        slow = sorted(CIRCLE_FEEDS)[:2]  # the circle's lowest feeds have the longest contours
         jobs = {"convergence": pool.submit(_convergence_task) if paper else None,
-                "circle": {slow: pool.submit(_feed_task, cfg, slow)} if circle else {},
-                "loops": pool.submit(_loops_task, cfg)}
+                "circle": {feed: pool.submit(_feed_task, cfg, feed) for feed in slow} if circle else {}}
         from .page import render_page
 
         return render_page(cfg, jobs, steps, paper, circle, source_label=source_label, progress=progress,

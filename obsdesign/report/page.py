@@ -100,15 +100,18 @@ def derivation_markup(variant: str) -> str:
     return memo("derivation_html", (variant,), lambda: _derivation_html(variant), valid=is_derivation_markup)
 
 
-def loops_part(cfg: Config) -> tuple[list, str]:
-    """The friction loops study's claims and figure (the report helper's task).
+def loops_part(cfg: Config, experiments) -> tuple[list, str]:
+    """The friction loops study's claims and figure, drawn from the experiments' positioning run with the
+    observer (the same simulation as the experiments figure's, not run twice).
 
     Parameters
     ----------
     cfg : Config
         The design.
+    experiments : ExperimentsStudy
+        :func:`obsdesign.studies.experiments_study` of ``cfg``.
     """
-    loops = studies.friction_loops_study(cfg)
+    loops = studies.friction_loops_study(cfg, experiments=experiments)
     return list(loops.claims), _svg(friction_loops_figure(loops), cfg.units)
 
 
@@ -138,8 +141,8 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
         The design.
     jobs : dict
         The helper's futures: ``convergence`` (:func:`convergence_part`, ``None`` without the paper's
-        studies), ``circle`` (feed -> the future of its runs, for the feeds the helper computes; empty
-        without the circle test) and ``loops`` (:func:`loops_part`).
+        studies) and ``circle`` (feed -> the future of its runs, for the feeds the helper computes; empty
+        without the circle test).
     steps : list of str
         The progress bar's steps.
     paper, circle : bool
@@ -219,7 +222,7 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
         bar.set_postfix_str("circle test")
         feeds = {f: feed_runs(cfg, f) for f in CIRCLE_FEEDS if f not in helper_feeds}
     bar.set_postfix_str("friction loops")
-    loops_claims, ctx["loops_svg"] = jobs["loops"].result()
+    loops_claims, ctx["loops_svg"] = loops_part(cfg, exp)
     claims += loops_claims + noise_claims
     bar.update()
     if paper:
