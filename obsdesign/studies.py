@@ -321,11 +321,8 @@ def friction_loops_study(cfg: Config | None = None, *, experiments: ExperimentsS
 
     As in the paper, the same low-pass (eq:3:4:5) is applied to the velocity estimate,
     which with the measured displacement drives the friction model: ``Fc`` from the
-    pre-sliding map, ``f = Fc + sigma v``.
-
-    >>> cfg = load_preset("vcm")
-    >>> friction_loops_study(cfg, experiments=experiments_study(cfg)).claims == friction_loops_study(cfg).claims
-    True
+    pre-sliding map, ``f = Fc + sigma v``. (tests/test_report.py checks that the study of the
+    experiments' run equals the study that simulates it again, array for array.)
     """
     import scipy.signal
 

@@ -241,6 +241,7 @@ def test_envelope_keeps_each_columns_extremes_in_time_order():
     assert len(envelope(t, y, columns=500)[0]) == t.size
 
 
+@pytest.mark.slow  # five closed-loop runs (5 s); the report's page test covers the same reuse end to end
 def test_the_friction_loops_reuse_the_experiments_run_exactly():
     """The report draws the friction loops from the experiments' positioning run with the observer: the
     study of that run equals the study that simulates it again, array for array; another config's
@@ -253,5 +254,10 @@ def test_the_friction_loops_reuse_the_experiments_run_exactly():
     assert reused.claims == fresh.claims
     for name in ("x", "estimate", "model_f", "model_fc", "true_f"):
         assert np.array_equal(getattr(reused, name), getattr(fresh, name)), name
+    import dataclasses
+
+    key = ("positioning", "pid+observer")
+    other = dataclasses.replace(exp, runs={**exp.runs, key: dataclasses.replace(exp.runs[key],
+                                                                                config=cfg.override(rho=3.0))})
     with pytest.raises(ValueError, match="experiments: expected the experiments study of the config 'vcm'"):
-        studies.friction_loops_study(cfg, experiments=studies.experiments_study(cfg.override(rho=3.0)))
+        studies.friction_loops_study(cfg, experiments=other)
