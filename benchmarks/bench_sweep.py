@@ -19,7 +19,7 @@ import os
 import time
 
 import obsdesign as od
-from obsdesign.sweeps.pool import warm
+from obsdesign.sweeps.pool import is_dask_client, warm
 
 CFG = od.load_preset("vcm")
 SWEEP = dict(vary={"rho": (1.5, 4.0, 24)}, uncertain={"Cf": (0.3, 0.4)}, samples=8, seed=0)
@@ -45,7 +45,7 @@ def _warm_every_worker(pool, workers: int) -> None:
     kernels' loading (1-2 s here) inside the timed sweep. Dask runs the warm-up on each worker
     (``Client.run``); the process pools warm each process as it starts (``initializer=warm``), so it is
     enough that every process has started (answered with its pid)."""
-    if hasattr(pool, "run") and hasattr(pool, "scheduler_info"):
+    if is_dask_client(pool):
         pool.run(warm)
         return
     seen: set[int] = set()
@@ -83,7 +83,7 @@ def run() -> list[dict]:
             _warm(executor=pools[workers])
             _warm_every_worker(pools[workers], workers)
             startup[workers] = time.perf_counter() - t0
-        walls: dict = {1: [], 2: [], "dask": []}
+        walls: dict = {1: [], 2: []}
         for _ in range(3):
             for workers in (1, 2):
                 walls[workers].append(_timed(executor=pools[workers], chunk=4)[0])
@@ -108,7 +108,7 @@ def run() -> list[dict]:
             # 2-worker cluster costs 0.21 cores with it here and 0.14 without (docs/sweeps.md)
             for label, settings in (("", {}), (", the workers' profiler off",
                                              {"distributed.worker.profile.enabled": False})):
-                walls["dask"], ref = [], []
+                dask_walls, ref = [], []
                 with dask.config.set(settings):
                     t0 = time.perf_counter()
                     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
@@ -118,9 +118,9 @@ def run() -> list[dict]:
                         t_start = time.perf_counter() - t0
                         for _ in range(3):  # alternately with the one-process pool, its reference
                             ref.append(_timed(executor=pools[1], chunk=4)[0])
-                            walls["dask"].append(_timed(executor=client, chunk=4)[0])
+                            dask_walls.append(_timed(executor=client, chunk=4)[0])
                 beside = n / min(ref)  # the one-process pool slowed by the cluster's own background work
-                rate = n / min(walls["dask"])
+                rate = n / min(dask_walls)
                 dask_ratio = rate / rates[1]  # against one process on the quiet machine: the stricter reference
                 rows.append({"benchmark": f"  local Dask cluster, 2 workers{label}, best of 3",
                              "value": f"{rate:.1f} runs/s",

@@ -21,7 +21,7 @@ import sys
 import threading
 import time
 
-__all__ = ["Executor", "die_with_parent", "NoWorkersError", "STALL_S", "can_fork", "warm"]
+__all__ = ["Executor", "die_with_parent", "NoWorkersError", "STALL_S", "can_fork", "is_dask_client", "warm"]
 
 #: Seconds a Dask sweep waits with no worker in the cluster before it gives up.
 STALL_S = 60.0
@@ -74,6 +74,23 @@ def can_fork() -> bool:
     return sys.platform.startswith("linux") and threading.active_count() == 1
 
 
+def is_dask_client(executor) -> bool:
+    """Whether ``executor`` is a ``dask.distributed.Client`` (told by its methods; Dask is not imported).
+
+    Parameters
+    ----------
+    executor : object or None
+        What a caller passed as ``executor=``.
+
+    Examples
+    --------
+    >>> import concurrent.futures
+    >>> is_dask_client(concurrent.futures.ThreadPoolExecutor(1)), is_dask_client(None)
+    (False, False)
+    """
+    return executor is not None and hasattr(executor, "scheduler_info") and hasattr(executor, "gather")
+
+
 def warm() -> None:
     """Load the simulator's compiled kernels in this process (a 10-sample run; from numba's cache).
 
@@ -118,7 +135,7 @@ class Executor:
         else:
             self.workers = self._count_workers(executor)
         self.pool = executor
-        self.dask = executor is not None and hasattr(executor, "scheduler_info") and hasattr(executor, "gather")
+        self.dask = is_dask_client(executor)
         self.futures: list = []
 
     @staticmethod
