@@ -8,6 +8,8 @@ import matplotlib
 import numpy as np
 import pytest
 import scipy.optimize
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import obsdesign as od
 from obsdesign.design.loop import LoopAnalysis, loop_analysis, loop_figure
@@ -149,7 +151,7 @@ def test_result_is_frozen(la):
 
 # --------------------------------------------------------------------------------------------
 # Step metrics (obsdesign.sim.step_metrics); here because this branch may add only these test files.
-from obsdesign.sim.step_metrics import step_metrics  # noqa: E402
+from obsdesign.sim.step_metrics import last_outside, step_metrics  # noqa: E402
 
 ZETA, WN = 0.4, 10.0
 
@@ -217,6 +219,69 @@ def test_step_metrics_edge_cases():
     assert never["rise_time"] is None and never["settling_time"] is None and never["overshoot"] == 0.0
     lost = step_metrics(t, [0, 1, 1, np.nan, 1], t_step=0, y0=0, y1=1, settle_band=0.1)
     assert lost["settling_time"] == pytest.approx(0.4)  # a NaN sample counts as outside the band
+
+
+def _step_metrics_by_hand(t, y, t_step, y0, y1, band):
+    """The module's definitions sample by sample, in plain Python (no NumPy)."""
+    dt_min = min(b - a for a, b in zip(t, t[1:]))
+    keep = [i for i in range(len(t)) if t[i] >= t_step - 0.5 * dt_min]
+    ts, ys = [t[i] for i in keep], [y[i] for i in keep]
+    r = [(v - y0) / (y1 - y0) for v in ys]
+    peak_of = [-math.inf if math.isnan(v) else v for v in r]
+    i_peak = peak_of.index(max(peak_of))  # the first of the largest
+
+    def crossing(level):
+        for i, v in enumerate(r):
+            if v >= level:
+                return ts[0] if i == 0 else ts[i - 1] + (level - r[i - 1]) * (ts[i] - ts[i - 1]) / (v - r[i - 1])
+        return None
+
+    outside = [i for i, v in enumerate(ys) if not abs(v - y1) <= band]
+    t10, t90 = crossing(0.1), crossing(0.9)
+    return {"overshoot": max(0.0, peak_of[i_peak] - 1.0),
+            "rise_time": None if t10 is None or t90 is None else t90 - t10,
+            "settling_time": 0.0 if not outside else None if outside[-1] == len(ys) - 1 else ts[outside[-1] + 1] - t_step,
+            "peak_time": ts[i_peak] - t_step}
+
+
+@settings(max_examples=200, deadline=None)
+@given(steps=st.lists(st.one_of(st.floats(0.01, 1.0), st.sampled_from([0.25, 0.5, 1.0])), min_size=2, max_size=40),
+       values=st.lists(st.sampled_from([-0.5, 0.0, 0.05, 0.1, 0.3, 0.9, 0.95, 1.0, 1.02, 1.3, math.nan]),
+                       min_size=41, max_size=41),
+       start=st.floats(0.0, 1.0), on_sample=st.integers(-1, 40), down=st.booleans(),
+       band=st.sampled_from([0.01, 0.05, 0.2]))
+def test_step_metrics_equals_its_definitions_by_hand(steps, values, start, on_sample, down, band):
+    """Any trace (lost samples, plateaus at the limits, a step up or down; a step half a sample after
+    a sample, the edge of "from t_step on"), with and without a scratch buffer: the module's definitions
+    computed sample by sample give the same numbers, and t, y are untouched."""
+    t = np.cumsum([0.0, *steps])
+    y = np.asarray(values[:t.size])
+    y0, y1 = (2.0, 1.0) if down else (0.0, 1.0)
+    if down:
+        y = 2.0 - y  # the same response, mirrored: a step down from 2 to 1
+    t_step = float(t[0] + start * (t[-1] - t[0]))
+    if 0 <= on_sample < t.size:  # the threshold t_step - dt_min / 2 falls on a sample (dyadic steps: exactly)
+        t_step = float(t[on_sample] + 0.5 * np.diff(t).min())
+    expected = _step_metrics_by_hand(list(t), list(y), t_step, y0, y1, band)
+    t_copy, y_copy = t.copy(), y.copy()
+    for scratch in (None, np.full(t.size + 3, 7.0)):
+        m = step_metrics(t, y, t_step=t_step, y0=y0, y1=y1, settle_band=band, scratch=scratch)
+        assert m.keys() == expected.keys()
+        for key, value in expected.items():
+            assert (m[key] is None) if value is None else m[key] == pytest.approx(value, rel=1e-12, abs=1e-15,
+                                                                                   nan_ok=True), key
+        np.testing.assert_array_equal(t, t_copy)
+        np.testing.assert_array_equal(y, y_copy)
+
+
+@given(values=st.lists(st.sampled_from([-2.0, -1.0, -0.5, 0.0, 0.5, 1.0, 2.0, math.nan, math.inf]), max_size=30),
+       center=st.sampled_from([0.0, 0.5]))
+def test_last_outside_is_the_last_index_outside_the_band(values, center):
+    y = np.asarray(values, dtype=float)
+    outside = [i for i, v in enumerate(values) if not abs(v - center) <= 1.0]
+    expected = outside[-1] if outside else None
+    assert last_outside(y, center, 1.0) == expected
+    assert last_outside(y, center, 1.0, scratch=np.empty(y.size + 1)) == expected
 
 
 @pytest.mark.parametrize("args, kwargs, exc, match", [

@@ -425,3 +425,24 @@ def test_a_dask_cluster_without_workers_ends_the_sweep(tmp_path, monkeypatch):
     finally:
         sched.terminate()
         sched.wait(30)
+
+
+def test_dask_cpu_settings_are_dask_keys_that_check_less_often():
+    """dask.config.set takes any key without complaint: a misspelt one would change nothing. Each key of
+    DASK_CPU_SETTINGS is in distributed's own defaults, of the default's kind, and each interval is
+    longer than the default (the point of the settings); the profiler is off."""
+    pytest.importorskip("distributed")
+    import dask
+    from dask.utils import parse_timedelta
+
+    from obsdesign.sweeps.pool import DASK_CPU_SETTINGS
+
+    assert DASK_CPU_SETTINGS["distributed.worker.profile.enabled"] is False
+    for key, value in DASK_CPU_SETTINGS.items():
+        default = dask.config.get(key)  # KeyError for a key distributed does not know
+        if isinstance(default, bool):
+            assert isinstance(value, bool), key
+        else:
+            assert parse_timedelta(value) > parse_timedelta(default), (key, value, default)
+    with dask.config.set(DASK_CPU_SETTINGS):
+        assert all(dask.config.get(key) == value for key, value in DASK_CPU_SETTINGS.items())

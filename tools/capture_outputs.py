@@ -43,6 +43,12 @@ CASES["simulate-excitation-json"] = ["simulate", "excitation", "--json", "--dura
 CASES["simulate-tracking-kalman-json"] = ["simulate", "tracking", "--estimator", "kalman", "--json",
                                           "--duration", "0.5"]
 CASES["config-vcm"] = ["config", "--preset", "vcm"]
+# the metrics of many runs (step metrics on a sweep's rows, the comparison's settling times and overshoots)
+CASES["sweep-positioning"] = ["sweep", "--scenario", "positioning", "--vary", "rho=1.5:4:3", "--uncertain",
+                              "Cf=0.3:0.4", "--samples", "2", "--duration", "4", "--workers", "1", "--out", "{out}/sw"]
+CASES["sweep-tracking"] = ["sweep", "--scenario", "tracking", "--vary", "rho=1.5:4:2", "--duration", "2",
+                           "--workers", "1", "--out", "{out}/sw"]
+CASES["compare-vcm"] = ["compare", "--preset", "vcm", "--seeds", "1", "--workers", "1", "--out", "{out}/cmp", "--json"]
 # issue 17, the axis's units: the other controller exports, the friction table and the report of a preset
 for fmt in ("python", "octave", "js"):
     CASES[f"export-controller-{fmt}-vcm"] = ["export", "--format", fmt, "--what", "controller", "--preset", "vcm",

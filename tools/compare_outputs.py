@@ -1,7 +1,9 @@
 """Compare two folders written by tools/capture_outputs.py byte for byte.
 
 The fields that are measurements or dates, not results, are masked: ``sim_wall_s`` (the simulation's
-wall time) in stdout, the date and the rendering time in a report's HTML. Prints each differing file; exit status 1 if any differs.
+wall time) in stdout, ``wall_s`` (a sweep's or a comparison's) in stdout and JSON files, the elapsed time
+of a progress line in stderr, the date and the rendering time in a report's HTML; a sweep's ``.lock``
+(the pid of the process that held it) is not compared. Prints each differing file; exit status 1 if any differs.
 
     python tools/compare_outputs.py /tmp/before /tmp/after
 """
@@ -13,12 +15,18 @@ import sys
 from pathlib import Path
 
 _WALL = [re.compile(r'("sim_wall_s": )[0-9.e+-]+'), re.compile(r"(sim_wall_s: )[0-9.e+-]+")]
+_WALL += [re.compile(r'("wall_s": )[0-9.e+-]+')]
+_PROGRESS = re.compile(r"(runs, )[0-9.]+( s)")
 _HTML = [re.compile(r"(Generated )\d{4}-\d{2}-\d{2}( by obsdesign \S+ in )[0-9.]+( s)")]
 
 
 def _masked(path: Path) -> bytes:
     data = path.read_bytes()
-    if path.name == "stdout":
+    if path.name == ".lock":
+        return b""
+    if path.name == "stderr":
+        return _PROGRESS.sub(r"\1<WALL>\2", data.decode()).encode()
+    if path.name == "stdout" or path.suffix == ".json":
         text = data.decode()
         for pattern in _WALL:
             text = pattern.sub(r"\1<WALL>", text)

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from .scenarios import CHIRP_BAND_LABELS, Scenario, chirp_frequency
-from .step_metrics import step_metrics
+from .step_metrics import last_outside, step_metrics
 
 __all__ = ["loop_metrics", "METRIC_UNITS", "rms"]
 
@@ -110,16 +110,20 @@ def _first_at_or_above(sc: Scenario, frequency: float, n: int) -> int:
     return first
 
 
-def _step_response(m: dict, sc: Scenario, x: np.ndarray, idx: np.ndarray, start: float, settle_tol: float,
-                   reached: bool) -> None:
-    """Append the overshoot and rise time of the step that starts the hold ``idx``."""
-    y1 = float(sc.x_ref[idx[0]])
-    y0 = float(sc.x_ref[idx[0] - 1]) if idx[0] > 0 else 0.0
+def _step_response(m: dict, sc: Scenario, x: np.ndarray, i0: int, i1: int, start: float, settle_tol: float,
+                   reached: bool, scratch: np.ndarray) -> None:
+    """Append the overshoot and rise time of the step that starts the hold of samples ``i0 .. i1 - 1``
+    (``scratch``: two float buffers of at least ``i1 - i0`` samples each, as rows)."""
+    y1 = float(sc.x_ref[i0])
+    y0 = float(sc.x_ref[i0 - 1]) if i0 > 0 else 0.0
     if not reached or y1 == y0:
         m["overshoot"].append(None)
         m["rise_time"].append(None)
         return
-    sm = step_metrics(idx * sc.dt, x[idx], t_step=start, y0=y0, y1=y1, settle_band=settle_tol)
+    t = scratch[1, :i1 - i0]
+    t[:] = np.arange(i0, i1)  # exact: the sample numbers are integers below 2**53
+    t *= sc.dt  # the sample times, as np.arange(i0, i1) * dt
+    sm = step_metrics(t, x[i0:i1], t_step=start, y0=y0, y1=y1, settle_band=settle_tol, scratch=scratch[0])
     m["overshoot"].append(sm["overshoot"])
     m["rise_time"].append(sm["rise_time"])
 
@@ -164,7 +168,10 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
     # The kernel stops at the first sample whose state is not finite and below its bounds, so a
     # run that did not diverge holds finite values only.
     finite = n_written == len(e)
-    scratch = np.empty(n_written)
+    # Every intermediate array lives in these two rows: fresh memory costs a page fault per 4 KiB on Linux,
+    # more than the arithmetic of this function (most of a sweep's time per run beyond the kernel).
+    buffers = np.empty((2, len(e)))
+    scratch = buffers[0]
     m: dict[str, Any] = {
         "rms_error": rms(e_valid, finite=finite, scratch=scratch),
         "max_error": float(max(np.max(e_valid), -np.min(e_valid))) if n_written else None,
@@ -180,20 +187,23 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
     }
     for start, end in sc.holds:
         i0, i1 = int(np.ceil(start / dt - 0.5)), int(np.ceil(end / dt - 0.5))
-        idx = np.arange(max(i0, 0), min(i1, len(e)))
-        seg = np.abs(e[idx])
-        outside = np.nonzero(~(seg <= settle_tol))[0]
-        if m["diverged"] and idx[-1] >= n_written:
+        i0, i1 = max(i0, 0), min(i1, len(e))  # the hold's samples
+        if i1 <= i0:
+            raise ValueError(f"holds: the hold {start!r} .. {end!r} s holds no sample of the run")
+        seg = e[i0:i1]
+        last = last_outside(seg, 0.0, settle_tol, scratch=scratch)
+        if m["diverged"] and i1 - 1 >= n_written:
             m["settling_time"].append(None)
-        elif outside.size == 0:
+        elif last is None:
             m["settling_time"].append(0.0)
-        elif outside[-1] == len(seg) - 1:
+        elif last == len(seg) - 1:
             m["settling_time"].append(None)  # never settles within the hold
         else:
-            m["settling_time"].append(float((outside[-1] + 1) * dt))
-        _step_response(m, sc, out["x"], idx, start, settle_tol, reached=not (m["diverged"] and idx[-1] >= n_written))
-        tail = idx[int(0.9 * len(idx)):]
-        m["steady_state_error"].append(float(np.mean(e[tail])) if np.all(np.isfinite(e[tail])) else None)
+            m["settling_time"].append(float((last + 1) * dt))
+        _step_response(m, sc, out["x"], i0, i1, start, settle_tol,
+                       reached=not (m["diverged"] and i1 - 1 >= n_written), scratch=buffers)
+        tail = seg[int(0.9 * len(seg)):]
+        m["steady_state_error"].append(float(np.mean(tail)) if np.all(np.isfinite(tail)) else None)
     if sc.name == "tracking":
         # The chirp's frequency rises monotonically, so each band is a contiguous run of samples.
         m["rms_error_per_band"] = {}

@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-__all__ = ["step_metrics", "RISE_LIMITS"]
+__all__ = ["step_metrics", "last_outside", "RISE_LIMITS"]
 
 #: Fractions of the step between which the rise time is measured.
 RISE_LIMITS = (0.1, 0.9)
@@ -41,17 +41,39 @@ def _finite(name: str, value) -> float:
 
 def _crossing(t: np.ndarray, r: np.ndarray, level: float) -> float | None:
     """First time ``r`` reaches ``level``, linearly interpolated between the two samples around it."""
-    hits = np.nonzero(r >= level)[0]
-    if hits.size == 0:
+    hits = r >= level
+    i = int(np.argmax(hits))  # the first True (argmax of booleans stops there), or 0 if there is none
+    if not hits[i]:
         return None
-    i = int(hits[0])
     if i == 0:
         return float(t[0])
     t0, t1, r0, r1 = t[i - 1], t[i], r[i - 1], r[i]
     return float(t0 + (level - r0) * (t1 - t0) / (r1 - r0))
 
 
-def step_metrics(t, y, *, t_step: float, y0: float, y1: float, settle_band: float) -> dict:
+def last_outside(y: np.ndarray, center: float, band: float, *, scratch: np.ndarray | None = None) -> int | None:
+    """Index of the last sample of ``y`` outside ``|y - center| <= band`` (NaN counts as outside), or None.
+
+    ``scratch`` (a float array of at least ``y.size`` samples, not ``y``) holds ``|y - center|``.
+
+    Examples
+    --------
+    >>> last_outside(np.array([3.0, 0.5, np.nan, 0.2, -0.1]), 0.0, 1.0), last_outside(np.zeros(3), 0.0, 1.0)
+    (2, None)
+    """
+    if scratch is None:
+        dist = np.abs(y - center)
+    else:
+        dist = np.abs(np.subtract(y, center, out=scratch[:y.size]), out=scratch[:y.size])
+    inside = dist <= band
+    if not inside.size:
+        return None
+    j = int(np.argmin(inside[::-1]))  # the first False from the end, or 0 if there is none
+    return None if inside[-1 - j] else inside.size - 1 - j
+
+
+def step_metrics(t, y, *, t_step: float, y0: float, y1: float, settle_band: float,
+                 scratch: np.ndarray | None = None) -> dict:
     """Overshoot, rise time, settling time and peak time of a step from ``y0`` to ``y1`` at ``t_step``.
 
     Parameters
@@ -68,6 +90,10 @@ def step_metrics(t, y, *, t_step: float, y0: float, y1: float, settle_band: floa
         Value before and after the step (``y1 != y0``); steps down are handled by symmetry.
     settle_band : float
         Half-width of the settling band around ``y1``, in the units of ``y`` (absolute, > 0).
+    scratch : ndarray, shape (>= n,), optional
+        A float buffer for the intermediate arrays (neither ``t`` nor ``y``): a caller that
+        measures many traces spares the allocations (and on Linux the page faults of fresh
+        memory, which cost more than the arithmetic here).
 
     Returns
     -------
@@ -100,7 +126,9 @@ def step_metrics(t, y, *, t_step: float, y0: float, y1: float, settle_band: floa
         raise ValueError(f"t, y: expected two 1-D arrays of one length, found shapes {t.shape} and {y.shape}")
     if t.size < 2:
         raise ValueError(f"t: expected at least 2 samples, found {t.size}")
-    dt = np.diff(t)
+    if scratch is None or scratch.size < t.size or scratch.dtype != np.float64:
+        scratch = np.empty(t.size)
+    dt = np.subtract(t[1:], t[:-1], out=scratch[:t.size - 1])  # np.diff(t)
     if not np.all(dt > 0):
         raise ValueError("t: expected strictly increasing sample times")
     t_step, y0, y1 = _finite("t_step", t_step), _finite("y0", y0), _finite("y1", y1)
@@ -109,24 +137,26 @@ def step_metrics(t, y, *, t_step: float, y0: float, y1: float, settle_band: floa
         raise ValueError(f"settle_band: expected a number > 0, found {settle_band!r}")
     if y1 == y0:
         raise ValueError(f"y1: expected a value different from y0 = {y0!r} (a step of nonzero size)")
-    idx = np.nonzero(t >= t_step - 0.5 * float(dt.min()))[0]
-    if idx.size == 0:
+    first = int(np.searchsorted(t, t_step - 0.5 * float(dt.min()), side="left"))  # t increases: a suffix
+    if first == t.size:
         raise ValueError(f"t_step: expected a time within the trace (last sample at {t[-1]!r}), found {t_step!r}")
-    ts, ys = t[idx], y[idx]
-    r = (ys - y0) / (y1 - y0)  # normalized response: 0 before, 1 after the step
-    r_peak = np.where(np.isnan(r), -np.inf, r)
-    i_peak = int(np.argmax(r_peak))
+    ts, ys = t[first:], y[first:]
+    r = scratch[:ys.size]
+    np.divide(np.subtract(ys, y0, out=r), y1 - y0, out=r)  # normalized response: 0 before, 1 after the step
     t10 = _crossing(ts, r, RISE_LIMITS[0])
     t90 = _crossing(ts, r, RISE_LIMITS[1])
-    outside = np.nonzero(~(np.abs(ys - y1) <= settle_band))[0]
-    if outside.size == 0:
+    r[np.isnan(r)] = -np.inf  # r_peak: a lost sample is no peak
+    i_peak = int(np.argmax(r))
+    overshoot = max(0.0, float(r[i_peak]) - 1.0)
+    last = last_outside(ys, y1, settle_band, scratch=scratch)
+    if last is None:
         settling = 0.0
-    elif outside[-1] == ys.size - 1:
+    elif last == ys.size - 1:
         settling = None
     else:
-        settling = float(ts[outside[-1] + 1] - t_step)
+        settling = float(ts[last + 1] - t_step)
     return {
-        "overshoot": max(0.0, float(r_peak[i_peak]) - 1.0),
+        "overshoot": overshoot,
         "rise_time": None if t10 is None or t90 is None else t90 - t10,
         "settling_time": settling,
         "peak_time": float(ts[i_peak] - t_step),
