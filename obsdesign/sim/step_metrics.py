@@ -54,7 +54,18 @@ def _crossing(t: np.ndarray, r: np.ndarray, level: float) -> float | None:
 def last_outside(y: np.ndarray, center: float, band: float, *, scratch: np.ndarray | None = None) -> int | None:
     """Index of the last sample of ``y`` outside ``|y - center| <= band`` (NaN counts as outside), or None.
 
-    ``scratch`` (a float array of at least ``y.size`` samples, not ``y``) holds ``|y - center|``.
+    Parameters
+    ----------
+    y : ndarray, shape (n,)
+        The samples.
+    center, band : float
+        Centre and half-width of the band.
+    scratch : ndarray, shape (>= n,), optional
+        A float buffer (not ``y``) for ``|y - center|``.
+
+    Returns
+    -------
+    int or None
 
     Examples
     --------
