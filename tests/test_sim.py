@@ -260,3 +260,15 @@ def test_simulate_is_run_of_prepare():
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
     assert {k: v for k, v in a.metrics.items() if k != "sim_wall_s"} == \
         {k: v for k, v in b.metrics.items() if k != "sim_wall_s"}
+
+
+@pytest.mark.parametrize("kw, name, found", [({"duration": 3.00002}, "duration", 0), ({"duration": 3.00015}, "duration", 1),
+                                             ({"step_down": 0.50005}, "step_down", 0)])
+def test_a_hold_shorter_than_two_samples_is_refused_naming_its_end(kw, name, found):
+    """dt = 1e-4 s: a hold from 3 s to 3.00002 s has no sample, to 3.00015 s one (3.0001 s); before, the
+    first ended in an IndexError of the metrics, the second in step_metrics' 't: expected at least 2 samples'."""
+    from obsdesign.sim.scenarios import Positioning
+
+    spec = Positioning(step_size=1e-3, step_up=0.5, step_down=kw.get("step_down", 3.0))
+    with pytest.raises(ValueError, match=rf"^{name}: expected a hold of at least 2 samples .* found {found} "):
+        od.simulate(od.load_preset("vcm"), spec, duration=kw.get("duration", 4.0))

@@ -14,8 +14,8 @@ import re
 import sys
 from pathlib import Path
 
-_WALL = [re.compile(r'("sim_wall_s": )[0-9.e+-]+'), re.compile(r"(sim_wall_s: )[0-9.e+-]+")]
-_WALL += [re.compile(r'("wall_s": )[0-9.e+-]+')]
+_WALL = [re.compile(r'("sim_wall_s": )[0-9.e+-]+'), re.compile(r"(sim_wall_s: )[0-9.e+-]+"),
+         re.compile(r'("wall_s": )[0-9.e+-]+')]
 _PROGRESS = re.compile(r"(runs, )[0-9.]+( s)")
 _HTML = [re.compile(r"(Generated )\d{4}-\d{2}-\d{2}( by obsdesign \S+ in )[0-9.]+( s)")]
 

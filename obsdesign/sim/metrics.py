@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from .scenarios import CHIRP_BAND_LABELS, Scenario, chirp_frequency
+from .scenarios import CHIRP_BAND_LABELS, Scenario, chirp_frequency, hold_samples
 from .step_metrics import last_outside, step_metrics
 
 __all__ = ["loop_metrics", "METRIC_UNITS", "rms"]
@@ -168,8 +168,9 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
     # The kernel stops at the first sample whose state is not finite and below its bounds, so a
     # run that did not diverge holds finite values only.
     finite = n_written == len(e)
-    # Every intermediate array lives in these two rows: fresh memory costs a page fault per 4 KiB on Linux,
-    # more than the arithmetic of this function (most of a sweep's time per run beyond the kernel).
+    # The float intermediates of the run's length live in these two rows: fresh memory costs a page fault
+    # per 4 KiB on Linux, more than the arithmetic of this function (most of a sweep's time per run beyond
+    # the kernel).
     buffers = np.empty((2, len(e)))
     scratch = buffers[0]
     m: dict[str, Any] = {
@@ -186,10 +187,7 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
         "sim_wall_s": wall,
     }
     for start, end in sc.holds:
-        i0, i1 = int(np.ceil(start / dt - 0.5)), int(np.ceil(end / dt - 0.5))
-        i0, i1 = max(i0, 0), min(i1, len(e))  # the hold's samples
-        if i1 <= i0:
-            raise ValueError(f"holds: the hold {start!r} .. {end!r} s holds no sample of the run")
+        i0, i1 = hold_samples(start, end, dt, len(e))  # at least 2 (build_scenario)
         seg = e[i0:i1]
         last = last_outside(seg, 0.0, settle_tol, scratch=scratch)
         if m["diverged"] and i1 - 1 >= n_written:

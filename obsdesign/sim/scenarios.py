@@ -41,7 +41,7 @@ from .._validate import FINITE, NONNEGATIVE, POSITIVE, check_choice
 if TYPE_CHECKING:  # numpy loads on first use: the command line reads SCENARIOS without it
     import numpy as np
 
-__all__ = ["SCENARIOS", "Scenario", "ScenarioSpec", "Excitation", "ConstantForce", "Positioning", "Chirp",
+__all__ = ["hold_samples", "SCENARIOS", "Scenario", "ScenarioSpec", "Excitation", "ConstantForce", "Positioning", "Chirp",
            "scenario_spec", "build_scenario", "band_limited_noise", "chirp_frequency", "CHIRP_BANDS",
            "CHIRP_BAND_LABELS"]
 
@@ -260,6 +260,33 @@ def chirp_frequency(t: np.ndarray, duration: float, spec: Chirp | None = None) -
     return spec.f0 + (spec.f1 - spec.f0) * t / duration
 
 
+def hold_samples(start: float, end: float, dt: float, n: int) -> tuple[int, int]:
+    """The samples ``i0 .. i1 - 1`` of a run of ``n`` samples that belong to the hold ``start .. end`` [s]:
+    those whose time is nearest to a time in ``[start, end)``.
+
+    Parameters
+    ----------
+    start, end : float
+        The hold [s].
+    dt : float
+        Sample period [s].
+    n : int
+        Samples of the run.
+
+    Returns
+    -------
+    tuple of int
+        ``(i0, i1)``, clipped to the run.
+
+    Examples
+    --------
+    >>> hold_samples(0.5, 3.0, 1e-3, 4000), hold_samples(3.0, 4.0, 1e-3, 4000)
+    ((500, 3000), (3000, 4000))
+    """
+    i0, i1 = int(math.ceil(start / dt - 0.5)), int(math.ceil(end / dt - 0.5))
+    return max(i0, 0), min(i1, n)
+
+
 def build_scenario(scenario: Any, *, dt: float, duration: float | None = None, seed=0) -> Scenario:
     """Sample the signals of a scenario (a name or a spec) at ``dt`` over ``duration`` [s].
 
@@ -292,8 +319,14 @@ def build_scenario(scenario: Any, *, dt: float, duration: float | None = None, s
             raise ValueError(
                 f"step_down: expected step_up < step_down < duration, found {up:g} < {down:g} < {duration:g} s"
             )
+        holds = ((up, down), (down, duration))
+        for name, (start, end) in zip(("step_down", "duration"), holds):
+            i0, i1 = hold_samples(start, end, dt, n)
+            if i1 - i0 < 2:  # the step metrics of a hold need two samples of it
+                raise ValueError(f"{name}: expected a hold of at least 2 samples of dt = {dt:g} s from {start:g} s, "
+                                 f"found {max(i1 - i0, 0)} up to {end:g} s")
         x_ref, u_open = _deterministic_signals(spec, dt, duration, n)
-        return Scenario(spec, dt, duration, x_ref, u_open, (up, down), ((up, down), (down, duration)))
+        return Scenario(spec, dt, duration, x_ref, u_open, (up, down), holds)
     x_ref, u_open = _deterministic_signals(spec, dt, duration, n)
     return Scenario(spec, dt, duration, x_ref, u_open)
 
