@@ -261,8 +261,10 @@ def chirp_frequency(t: np.ndarray, duration: float, spec: Chirp | None = None) -
 
 
 def hold_samples(start: float, end: float, dt: float, n: int) -> tuple[int, int]:
-    """The samples ``i0 .. i1 - 1`` of a run of ``n`` samples that belong to the hold ``start .. end`` [s]:
-    those whose time is nearest to a time in ``[start, end)``.
+    """The sample range ``range(i0, i1)`` of a run of ``n`` samples that belongs to a hold [s].
+
+    A sample belongs to the hold from ``start`` to ``end`` when its time is nearest to a time in
+    ``[start, end)``.
 
     Parameters
     ----------
