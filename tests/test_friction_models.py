@@ -15,6 +15,7 @@ from obsdesign.friction import (
     friction_force,
     friction_init,
     friction_n_state,
+    friction_plant_step,
     friction_stiffness,
     friction_viscous,
     simulate_block,
@@ -322,3 +323,125 @@ def test_paper_code_is_not_dispatched():
     _, p = plant_friction_arrays(od.load_preset("table1"))      # the paper plant's real array
     assert math.isnan(friction_force(0, p, np.zeros(3), 0.0, 0.0))
     assert math.isnan(stribeck(0, p, 0.01))
+    assert all(math.isnan(z) for z in friction_plant_step(0, p, np.zeros(3), 0.0, 0.0, 1.0, MASS, 1e-5, 10))
+
+
+def _heun_by_dispatch(code, p, st, x, v, u, m, h, n_sub):
+    """The plant substeps written with the dispatch functions, as the kernel had them before issue 19."""
+    for _ in range(n_sub):
+        k1v = (u - friction_force(code, p, st, x, v)) / m
+        xp = x + h * v
+        vp = v + h * k1v
+        k2v = (u - friction_force(code, p, st, xp, vp)) / m
+        x += 0.5 * h * (v + vp)
+        v += 0.5 * h * (k1v + k2v)
+        friction_advance(code, p, st, x, v, h)
+    return x, v
+
+
+@pytest.mark.parametrize("name, extra", [(n, e) for n in ("lugre", "gms", "dahl") for e in ({}, ASYM)]
+                         + [("dahl", {"alpha": 0.6}), ("dahl", {"alpha": 1.7})])
+def test_plant_step_is_the_dispatched_heun_step_bit_for_bit(name, extra):
+    """friction_plant_step compiles each model into its loop: the same states, every bit, through reversals,
+    stiction, gross sliding far beyond the Stribeck velocity (exp(-(v/vs)^2) underflows) and back."""
+    info = FRICTION_MODELS[name]
+    code, p = info.code, info.pack(extra)
+    a, b = np.zeros(friction_n_state(code, p)), np.zeros(friction_n_state(code, p))
+    friction_init(code, p, a, 0.0)
+    friction_init(code, p, b, 0.0)
+    xa = va = xb = vb = 0.0
+    t = np.arange(20000) * DT
+    force = 3.0 * np.sin(2 * np.pi * 2.0 * t) + 0.3 * np.sin(2 * np.pi * 37.0 * t)  # up to ~0.5 m/s
+    for u in force:
+        xa, va = friction_plant_step(code, p, a, xa, va, u, MASS, DT / 10, 10)
+        xb, vb = _heun_by_dispatch(code, p, b, xb, vb, u, MASS, DT / 10, 10)
+        assert (xa, va) == (xb, vb) and np.array_equal(a, b)
+    assert max(abs(va), abs(vb)) > 0 and np.ptp(force) > 5
+
+
+@pytest.mark.parametrize("r", [0.0, 1.0, 27.0, 27.29, 27.3, 27.32, 27.5, 30.0, 1e3, 1e200, math.inf])
+@pytest.mark.parametrize("coulomb, static", [(0.35, 0.525), (0.0, 0.525), (0.0, 1e300), (0.5, 0.25)])
+def test_stribeck_level_skips_only_an_exp_that_is_zero(r, coulomb, static):
+    """The fast path of an underflowing exp(-(v/vs)^2) gives the bits of the full formula (with Fc = 0 the
+    subnormal values of the exponential are the result itself)."""
+    from obsdesign.friction.common import stribeck_level
+
+    vs = 1e-3
+    speed = r * vs
+    q = (speed / vs) * (speed / vs)
+    assert stribeck_level(coulomb, static, vs, speed) == coulomb + (static - coulomb) * math.exp(-q)
+
+
+def _lugre_reference(p, z, x_last, x, v):
+    """LuGre's force from its definition (module docstring), each g of its own direction, in Python."""
+    from obsdesign.friction.lugre import L_SIGMA0, L_SIGMA1
+
+    def g(direction):
+        c, s = (p[1], p[6]) if direction < 0 else (p[0], p[5])
+        return c + (s - c) * math.exp(-(abs(v) / p[7]) ** 2)
+
+    sigma0 = p[L_SIGMA0]
+    dx = x - x_last
+    if dx != 0.0:
+        d = math.copysign(1.0, dx)
+        z_ss = d * g(d) / sigma0
+        z = z_ss + (z - z_ss) * math.exp(-sigma0 * abs(dx) / g(d))
+    zdot = v - sigma0 * abs(v) * z / g(v) if v != 0.0 else 0.0
+    viscous = (p[3] if v < 0 else p[2]) * v
+    return sigma0 * z + p[L_SIGMA1] * zdot + viscous + p[4]
+
+
+@pytest.mark.parametrize("extra", [{}, ASYM], ids=["symmetric", "asymmetric"])
+def test_lugre_force_is_its_definition(extra):
+    """The force with g evaluated once where displacement and velocity agree equals the definition,
+    also where they point opposite ways (the asymmetric levels tell the two g apart)."""
+    from obsdesign.friction.lugre import lugre_force
+
+    p = FRICTION_MODELS["lugre"].pack(extra)
+    rng = np.random.default_rng(7)
+    for _ in range(400):
+        z, x_last = rng.uniform(-4e-6, 4e-6), rng.uniform(-1e-3, 1e-3)
+        dx = rng.choice([0.0, 1.0, -1.0]) * 10 ** rng.uniform(-9, -5)
+        v = rng.choice([0.0, 1.0, -1.0]) * 10 ** rng.uniform(-5, -1)
+        st = np.array([z, x_last, 0.0])
+        got = lugre_force(p, st, x_last + dx, v)
+        want = _lugre_reference(p, z, x_last, x_last + dx, v)
+        assert got == pytest.approx(want, rel=1e-12, abs=1e-15), (z, dx, v)
+
+
+def test_gms_force_is_its_definition():
+    """GMS with micro-damping and asymmetric levels: each element's slip rate reads the Stribeck level of
+    the velocity's direction, its clip the displacement's (the force evaluates the level once where the two
+    agree)."""
+    from obsdesign.friction.gms import G_C, G_ELEMENTS, G_SIGMA1, gms_force
+
+    p = FRICTION_MODELS["gms"].pack({**ASYM, "sigma1": 50.0, "N": 3})
+    n = 3
+    k, a = p[G_ELEMENTS:G_ELEMENTS + n], p[G_ELEMENTS + n:G_ELEMENTS + 2 * n]
+
+    def level(direction, speed):
+        c, s = (p[1], p[6]) if direction < 0 else (p[0], p[5])
+        return c + (s - c) * math.exp(-(speed / p[7]) ** 2)
+
+    rng = np.random.default_rng(11)
+    for _ in range(400):
+        x_last = rng.uniform(-1e-3, 1e-3)
+        dx = rng.choice([0.0, 1.0, -1.0]) * 10 ** rng.uniform(-9, -5)
+        v = rng.choice([0.0, 1.0, -1.0]) * 10 ** rng.uniform(-5, -2)
+        modes = rng.choice([0.0, 1.0, -1.0], size=n)
+        forces = rng.uniform(-1.0, 1.0, size=n) * a * 0.4
+        st = np.concatenate([[x_last, 1.0], forces, modes])
+        d, dv = np.sign(dx), np.sign(v)
+        total = 0.0
+        for i in range(n):
+            f, rate = forces[i], 0.0
+            if modes[i] != 0.0 and modes[i] * dx >= 0.0:
+                if dv == modes[i]:
+                    rate = modes[i] * p[G_C] * (1.0 - f / (modes[i] * a[i] * level(dv, abs(v))))
+            else:
+                f, rate = f + k[i] * dx, k[i] * v
+                if d != 0.0 and d * f > a[i] * level(d, abs(v)):
+                    f, rate = d * a[i] * level(d, abs(v)), 0.0
+            total += f + p[G_SIGMA1] / k.sum() * rate
+        want = total + (p[3] if v < 0 else p[2]) * v + p[4]
+        assert gms_force(p, st, x_last + dx, v) == pytest.approx(want, rel=1e-12, abs=1e-12)  # N: sums of ~1 N

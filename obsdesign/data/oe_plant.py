@@ -21,10 +21,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..friction.kernels import friction_advance, friction_init, friction_n_state
+from ..friction.kernels import friction_advance, friction_init, friction_n_state, friction_plant_step
 from ..friction.presliding import track_reversal
 from ..friction.registry import FRICTION_MODELS
-from ..sim.kernel import _friction_plant_step, _plant_rhs_asym
+from ..sim.kernel import _plant_rhs_asym
 
 __all__ = ["PAPER_LAYOUT", "simulate_windows", "extremes", "select_windows"]
 
@@ -97,7 +97,7 @@ def simulate_windows(code, pp, force, starts, lengths, x0, v0, dirs, m, dt, n_su
                 break
             u = force[starts[i] + k]
             if code != _PAPER:
-                x, v = _friction_plant_step(code, pp, fst, x, v, u, m, h, n_sub)
+                x, v = friction_plant_step(code, pp, fst, x, v, u, m, h, n_sub)
                 continue
             for _ in range(n_sub):
                 k1v, _w = _plant_rhs_asym(x, v, 0.0, u, p_dir, p_xr, p_fr, m, pp[0], pp[1], pp[5], pp[2], pp[3],

@@ -15,7 +15,7 @@ from .._lazy import lazy_names
 __all__ = [
     "PAPER", "LUGRE", "DAHL", "GMS", "FRICTION_MODELS", "FrictionModelInfo", "ParameterSpec",
     "friction_code", "friction_n_state", "friction_init", "friction_force", "friction_advance",
-    "friction_viscous", "friction_stiffness", "stribeck", "simulate_block", "drive_displacement",
+    "friction_viscous", "friction_stiffness", "friction_plant_step", "stribeck", "simulate_block", "drive_displacement",
     "coulomb", "coulomb_along", "coulomb_normalized", "presliding_shape", "stiffness", "track_reversal",
 ]
 
@@ -27,6 +27,7 @@ _LAZY = {
     'friction_force': '.kernels',
     'friction_init': '.kernels',
     'friction_n_state': '.kernels',
+    'friction_plant_step': '.kernels',
     'friction_stiffness': '.kernels',
     'friction_viscous': '.kernels',
     'stribeck': '.kernels',

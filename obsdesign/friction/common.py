@@ -80,7 +80,10 @@ def viscous(p, v: float) -> float:
 def stribeck_level(coulomb: float, static: float, vs: float, speed: float) -> float:
     """Stribeck magnitude ``Fc + (Fs - Fc) exp(-(speed/vs)^2)`` [N] for ``speed = |v|``."""
     r = speed / vs
-    return coulomb + (static - coulomb) * math.exp(-r * r)
+    q = r * r
+    if q > 746.0:  # exp(-q) is 0.0 exactly (below half the smallest subnormal): skip libm's slow underflow path
+        return coulomb + (static - coulomb) * 0.0
+    return coulomb + (static - coulomb) * math.exp(-q)
 
 
 @njit(cache=True, error_model="numpy")

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .kernels import friction_advance, friction_force, friction_init, friction_n_state
+from .kernels import friction_advance, friction_force, friction_init, friction_n_state, friction_plant_step
 
 __all__ = ["simulate_block", "drive_displacement"]
 
@@ -68,15 +68,7 @@ def simulate_block(code, p, u, m, dt, n_sub, x0=0.0, v0=0.0):
         out_x[k] = x
         out_v[k] = v
         out_f[k] = friction_force(code, p, st, x, v)
-        uk = u[k]
-        for _ in range(n_sub):
-            a1 = (uk - friction_force(code, p, st, x, v)) / m
-            xp = x + h * v
-            vp = v + h * a1
-            a2 = (uk - friction_force(code, p, st, xp, vp)) / m
-            x += 0.5 * h * (v + vp)
-            v += 0.5 * h * (a1 + a2)
-            friction_advance(code, p, st, x, v, h)
+        x, v = friction_plant_step(code, p, st, x, v, u[k], m, h, n_sub)
     return out_x, out_v, out_f
 
 

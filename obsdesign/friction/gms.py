@@ -100,7 +100,9 @@ def gms_force(p, st, x: float, v: float) -> float:
     dv = sign(v)
     speed = abs(v)
     level_d = stribeck_magnitude(p, d, speed)
-    level_v = stribeck_magnitude(p, dv, speed)
+    level_v = level_d  # the magnitude depends on the direction's sign only: evaluated again where it differs
+    if (d < 0.0) != (dv < 0.0):
+        level_v = stribeck_magnitude(p, dv, speed)
     k_sum = 0.0
     for i in range(n):
         k_sum += p[G_ELEMENTS + i]

@@ -11,6 +11,9 @@ of length ``h`` (Heun, as in :mod:`obsdesign.sim.kernel`)::
     ... x, v updated ...
     friction_advance(code, p, st, x, v, h)            # st to the end of the substep
 
+:func:`friction_plant_step` is that substep, ``n_sub`` times (the simulator's plant and
+:mod:`obsdesign.friction.driver` run it), with the model's functions compiled into its loop.
+
 An unknown code (including ``paper``) gives NaN forces, so a wiring mistake
 shows up as a diverged run instead of a silently frictionless plant.
 
@@ -45,7 +48,7 @@ from .lugre import lugre_advance, lugre_force, lugre_init, lugre_steady, lugre_s
 from .registry import DAHL, GMS, LUGRE
 
 __all__ = ["friction_n_state", "friction_init", "friction_force", "friction_advance",
-           "friction_viscous", "friction_stiffness", "stribeck"]
+           "friction_viscous", "friction_stiffness", "friction_plant_step", "stribeck"]
 
 
 @njit(cache=True, error_model="numpy")
@@ -122,3 +125,50 @@ def stribeck(code: int, p, v: float) -> float:
     if code == GMS:
         return gms_steady(p, v)
     return math.nan
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _heun_substeps(force, advance, p, st, x, v, u, m, h, n_sub):
+    """``n_sub`` Heun substeps of ``m x'' = u - F`` with the model functions ``force`` and ``advance``
+    (``F`` with the state held in both stages, then ``advance``)."""
+    for _ in range(n_sub):
+        k1v = (u - force(p, st, x, v)) / m
+        xp = x + h * v
+        vp = v + h * k1v
+        k2v = (u - force(p, st, xp, vp)) / m
+        x += 0.5 * h * (v + vp)
+        v += 0.5 * h * (k1v + k2v)
+        advance(p, st, x, v, h)
+    return x, v
+
+
+def _inlined(fn):
+    """The numba function ``fn`` compiled into each caller: the same source, so the same arithmetic.
+
+    The plant loop below evaluates a model's force twice and advances it once a substep; as calls
+    between separately compiled functions that costs more than the model itself (the dispatch of
+    :mod:`obsdesign.friction.kernels` keeps the ordinary calls, and its short compile time).
+    """
+    return njit(cache=True, error_model="numpy", inline="always")(fn.py_func)
+
+
+_lugre_force, _lugre_advance = _inlined(lugre_force), _inlined(lugre_advance)
+_dahl_force, _dahl_advance = _inlined(dahl_force), _inlined(dahl_advance)
+_gms_force, _gms_advance = _inlined(gms_force), _inlined(gms_advance)
+
+
+@njit(cache=True, error_model="numpy", inline="never")
+def friction_plant_step(code, p, st, x, v, u, m, h, n_sub):
+    """``(x, v)`` after ``n_sub`` Heun substeps of length ``h`` [s] of ``m x'' = u - F`` with model
+    ``code`` (``F`` with ``st`` held in both stages, then :func:`friction_advance`; ``u`` [N] held).
+
+    One loop per model with the model's force and advance compiled into it; an unknown code gives
+    NaN, as :func:`friction_force` does.
+    """
+    if code == LUGRE:
+        return _heun_substeps(_lugre_force, _lugre_advance, p, st, x, v, u, m, h, n_sub)
+    if code == DAHL:
+        return _heun_substeps(_dahl_force, _dahl_advance, p, st, x, v, u, m, h, n_sub)
+    if code == GMS:
+        return _heun_substeps(_gms_force, _gms_advance, p, st, x, v, u, m, h, n_sub)
+    return math.nan, math.nan

@@ -82,26 +82,42 @@ def lugre_init(p, st, x0: float) -> None:
 
 
 @njit(cache=True, error_model="numpy")
+def _z_moved(z: float, dx: float, g: float, sigma0: float) -> float:
+    """Bristle deflection [m] after a displacement ``dx != 0`` from deflection ``z`` (exact, ``g`` frozen)."""
+    d = sign(dx)
+    z_ss = d * g / sigma0
+    return z_ss + (z - z_ss) * math.exp(-sigma0 * abs(dx) / g)
+
+
+@njit(cache=True, error_model="numpy")
 def _z_at(p, st, x: float, v: float) -> float:
     """Bristle deflection [m] at ``x`` from the held state (exact, ``g`` frozen at ``|v|``)."""
     dx = x - st[1]
     if dx == 0.0:
         return st[0]
-    d = sign(dx)
-    g = stribeck_magnitude(p, d, abs(v))
-    sigma0 = p[L_SIGMA0]
-    z_ss = d * g / sigma0
-    return z_ss + (st[0] - z_ss) * math.exp(-sigma0 * abs(dx) / g)
+    return _z_moved(st[0], dx, stribeck_magnitude(p, sign(dx), abs(v)), p[L_SIGMA0])
 
 
 @njit(cache=True, error_model="numpy")
 def lugre_force(p, st, x: float, v: float) -> float:
-    """Total friction force [N] at ``(x, v)`` with the state held."""
-    z = _z_at(p, st, x, v)
+    """Total friction force [N] at ``(x, v)`` with the state held.
+
+    ``g`` is evaluated once where the displacement and the velocity point the same way
+    (:func:`~obsdesign.friction.common.stribeck_magnitude` depends on the direction's sign only).
+    """
     sigma0 = p[L_SIGMA0]
+    speed = abs(v)
+    dx = x - st[1]
+    z = st[0]
+    g = 0.0
+    if dx != 0.0:
+        g = stribeck_magnitude(p, sign(dx), speed)
+        z = _z_moved(z, dx, g, sigma0)
     zdot = 0.0
     if v != 0.0:
-        zdot = v - sigma0 * abs(v) * z / stribeck_magnitude(p, sign(v), abs(v))
+        if dx == 0.0 or (dx < 0.0) != (v < 0.0):
+            g = stribeck_magnitude(p, sign(v), speed)
+        zdot = v - sigma0 * speed * z / g
     return sigma0 * z + p[L_SIGMA1] * zdot + viscous(p, v) + p[P_OFFSET]
 
 

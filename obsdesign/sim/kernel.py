@@ -25,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..friction.kernels import friction_advance, friction_force, friction_n_state, friction_stiffness
+from ..friction.kernels import friction_force, friction_n_state, friction_plant_step, friction_stiffness
 from ..friction.kernels import friction_viscous
 from ..friction.presliding import coulomb_normalized, stiffness, track_reversal
 from ..friction.registry import FRICTION_MODELS
@@ -158,21 +158,6 @@ def _plant_rhs_asym(x, v, w, u, direction, x_r, f_r, m, Cf, Cf_neg, s, sigma, si
     return (u - fc - sg * v) / m, 0.0
 
 
-@njit(cache=True, error_model="numpy", inline="never")
-def _friction_plant_step(fcode, pp, fst, x, v, u, m, h, n_sub):
-    """``n_sub`` Heun substeps of ``m x'' = u - F`` with a model of :mod:`obsdesign.friction`
-    (``F`` with the state held in both stages, then :func:`friction_advance`)."""
-    for _ in range(n_sub):
-        k1v = (u - friction_force(fcode, pp, fst, x, v)) / m
-        xp = x + h * v
-        vp = v + h * k1v
-        k2v = (u - friction_force(fcode, pp, fst, xp, vp)) / m
-        x += 0.5 * h * (v + vp)
-        v += 0.5 * h * (k1v + k2v)
-        friction_advance(fcode, pp, fst, x, v, h)
-    return x, v
-
-
 @njit(cache=True, error_model="numpy")
 def _true_friction(x, v, w, direction, x_r, f_r, mode, lag_model, Cf, s, sigma, beta):
     """The plant's value of the estimated state w3 (Fc + Fv for ``lag``, Fc for ``static``)."""
@@ -266,7 +251,7 @@ def run_loop(obs, est, ctrl, plant, sig, out):
             return n + 1
         # 3. plant, Heun (explicit trapezoidal, order 2) substeps with the input held
         if fcode != FRICTION_PAPER:
-            x, v = _friction_plant_step(fcode, pp, fst, x, v, u, m, h, n_sub)
+            x, v = friction_plant_step(fcode, pp, fst, x, v, u, m, h, n_sub)
             continue
         if asym:
             for _ in range(n_sub):
