@@ -48,12 +48,13 @@ from .params import Config
 from .plant_spec import PlantFrictionSpec
 from .sim.cases import CASES, TRANSIENT
 from .sim.metrics import rms
-from .sim.simulate import simulate
+from .sim.open_loop import run_shared
+from .sim.simulate import prepare
 from .sim.step_metrics import step_metrics
 from .sweeps.pool import Executor
 
 __all__ = ["COLUMNS", "SCENARIOS", "TRANSIENT", "SETTLE_BAND", "JUDGED", "TIE", "ComparisonResult", "compare",
-           "compare_one", "summarize", "check_comparison_runs", "plant_config", "NOT_TUNED", "not_tuned_row",
+           "compare_one", "compare_rows", "summarize", "check_comparison_runs", "plant_config", "NOT_TUNED", "not_tuned_row",
            "not_tuned", "paper_design"]
 
 #: Columns of ``compare.csv``, in order.
@@ -152,17 +153,55 @@ def compare_one(cfg: Config, plant: Config, estimator: str | DiscreteEstimator, 
     noise_rms : float
         The estimator's friction-noise RMS [N] for the row.
     """
-    name = estimator if isinstance(estimator, str) else estimator.name
-    model = plant.plant_friction.model if plant.plant_friction is not None else "paper"
-    row: dict[str, Any] = {"plant": model, "estimator": name, "scenario": scenario, "seed": seed,
-                           "friction_rms_error": None, "velocity_rms_error": None, "settling_time": None,
-                           "overshoot": None, "tracking_rms_error": None, "friction_noise_rms": noise_rms}
-    spec, duration = SCENARIOS[scenario]
+    return compare_rows([(cfg, plant, estimator, scenario, seed, noise_rms)])[0]
+
+
+def compare_rows(tasks: list[tuple]) -> list[dict[str, Any]]:
+    """The rows of several runs: :func:`compare_one` of each task, with the open-loop runs that share
+    their plant (the ``excitation`` rows of one plant and seed) simulating it once
+    (:func:`obsdesign.sim.open_loop.run_shared`: the same rows, bit for bit).
+
+    Parameters
+    ----------
+    tasks : list of tuple
+        The arguments of :func:`compare_one`, one tuple per row.
+    """
+    rows, loops = [], []
+    for cfg, plant, estimator, scenario, seed, noise_rms in tasks:
+        name = estimator if isinstance(estimator, str) else estimator.name
+        model = plant.plant_friction.model if plant.plant_friction is not None else "paper"
+        row: dict[str, Any] = {"plant": model, "estimator": name, "scenario": scenario, "seed": seed,
+                               "friction_rms_error": None, "velocity_rms_error": None, "settling_time": None,
+                               "overshoot": None, "tracking_rms_error": None, "friction_noise_rms": noise_rms}
+        rows.append(row)
+        spec, duration = SCENARIOS[scenario]
+        try:
+            loops.append(prepare(cfg, spec, plant=plant, estimator=estimator, duration=duration, seed=seed))
+        except (ValueError, TypeError, ArithmeticError) as e:
+            row["status"] = _failed(e)
+            loops.append(None)
+    ran = [loop for loop in loops if loop is not None]
     try:
-        res = simulate(cfg, spec, plant=plant, estimator=estimator, duration=duration, seed=seed)
+        results = iter(run_shared(ran))
     except (ValueError, TypeError, ArithmeticError) as e:
-        row["status"] = "failed: " + f"{type(e).__name__}: {e}".splitlines()[0]
-        return row
+        for row, loop in zip(rows, loops):
+            if loop is not None:
+                row["status"] = _failed(e)
+        return rows
+    for row, loop in zip(rows, loops):
+        if loop is not None:
+            _row_metrics(row, next(results))
+    return rows
+
+
+def _failed(error: Exception) -> str:
+    return "failed: " + f"{type(error).__name__}: {error}".splitlines()[0]
+
+
+def _row_metrics(row: dict[str, Any], res) -> None:
+    """Fill ``row``'s metrics and status from the run ``res`` of its scenario."""
+    scenario = row["scenario"]
+    spec, duration = SCENARIOS[scenario]
     keep = res.t >= TRANSIENT
     row["friction_rms_error"] = rms((res.f_hat_filtered - res.f)[keep])
     row["velocity_rms_error"] = rms((res.v_hat - res.v)[keep])
@@ -179,7 +218,6 @@ def compare_one(cfg: Config, plant: Config, estimator: str | DiscreteEstimator, 
     if scenario == "tracking":
         row["tracking_rms_error"] = rms(res.e[keep])
     row["status"] = "diverged" if res.metrics["diverged"] else "ok"
-    return row
 
 
 @dataclass(frozen=True, eq=False)
@@ -385,10 +423,15 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
                     continue
                 noise[name] = friction_noise_rms(tuned[name], eta, band)
         cases = [(p, e, s, seed) for p in plants for e in estimators for s in scenarios for seed in range(seeds)]
-        tasks = [(design[e], plant_config(cfg, p), tuned[e], s, seed, noise[e])
+        plant_cfgs = {p: plant_config(cfg, p) for p in plants}
+        tasks = [(design[e], plant_cfgs[p], tuned[e], s, seed, noise[e])
                  for p, e, s, seed in cases if not isinstance(tuned[e], Exception)]
-        indexed = list(enumerate(tasks))
-        for batch in pool.map_batches(_run_batch, [indexed[i:i + 4] for i in range(0, len(indexed), 4)]):
+        # one unit per run, but the open-loop runs of one plant and seed together (they share the plant)
+        units: dict[tuple, list[int]] = {}
+        for i, (_, plant, _, s, seed, _) in enumerate(tasks):
+            units.setdefault((id(plant), s, seed) if SCENARIOS[s][0].open_loop else (i,), []).append(i)
+        work = [[(i, tasks[i]) for i in unit] for unit in units.values()]
+        for batch in pool.map_batches(_run_batch, [work[i:i + 4] for i in range(0, len(work), 4)]):
             done.update(batch)
     except BaseException:
         pool.abort()
@@ -419,5 +462,6 @@ def paper_design(cfg: Config, rule: str) -> Config:
     return tune_design(cfg, objective="estimate-error", tune_gain=False).config
 
 
-def _run_batch(batch: list[tuple]) -> list[tuple[int, dict]]:
-    return [(i, compare_one(*task)) for i, task in batch]
+def _run_batch(batch: list[list[tuple[int, tuple]]]) -> list[tuple[int, dict]]:
+    """The rows of a batch of units (lists of ``(index, task)``), each unit's runs together."""
+    return [(i, row) for unit in batch for i, row in zip((i for i, _ in unit), compare_rows([t for _, t in unit]))]

@@ -1,7 +1,8 @@
 """Time-varying nonlinear simulation of plant, friction, observer and controller (numba).
 
 Two public steps, :func:`prepare` (design and sample the inputs of a run) and :func:`run`
-(the numba kernel and the metrics); :func:`simulate` is both in one call. :func:`simulate_circle`
+(the numba kernel and the metrics); :func:`simulate` is both in one call; :func:`run_shared` runs
+open-loop runs that share their plant (:mod:`obsdesign.sim.open_loop`). :func:`simulate_circle`
 runs the two-axis circle (ballbar) test (:mod:`obsdesign.sim.circle`).
 """
 
@@ -10,7 +11,7 @@ from .._lazy import keep_functions, lazy_names
 
 __all__ = ["CONTROLLERS", "ESTIMATORS", "PLANTS", "SCHEDULES", "COLUMNS", "SimResult",
            "SCENARIOS", "Chirp", "ConstantForce", "Excitation", "Positioning", "band_limited_noise",
-           "LoopInputs", "prepare", "run", "simulate", "simulate_circle", "CircleResult"]
+           "LoopInputs", "prepare", "run", "run_shared", "simulate", "simulate_circle", "CircleResult"]
 
 #: Public name -> module it comes from; loaded on first use (obsdesign._lazy).
 _LAZY = {
@@ -30,6 +31,7 @@ _LAZY = {
     'prepare': '.simulate',
     'run': '.simulate',
     'simulate': '.simulate',
+    'run_shared': '.open_loop',
     'simulate_circle': '.circle',
     'CircleResult': '.circle',
 }

@@ -41,7 +41,7 @@ from ..friction.registry import FRICTION_MODELS
 from .result import SimResult
 from .scenarios import Scenario, band_limited_noise, build_scenario, scenario_spec
 
-__all__ = ["LoopInputs", "REVERSAL_NOISE_FACTOR", "prepare", "run", "simulate", "plant_friction_arrays"]
+__all__ = ["LoopInputs", "REVERSAL_NOISE_FACTOR", "prepare", "run", "simulate", "plant_friction_arrays", "loop_result", "run_kernel"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -303,13 +303,47 @@ def run(loop: LoopInputs, keep_trace: bool = True) -> SimResult:
     """
     if not isinstance(loop, LoopInputs):
         raise TypeError(f"loop: expected LoopInputs (from obsdesign.sim.prepare), found {type(loop).__name__}")
-    n = loop.n_samples
-    outputs = kernel.Outputs(*(np.empty(n) for _ in kernel.OUTPUT_NAMES))
+    out, n_written, wall = run_kernel(loop)
+    return loop_result(loop, out, n_written, wall, keep_trace=keep_trace)
+
+
+def run_kernel(loop: LoopInputs) -> tuple[dict[str, np.ndarray], int, float]:
+    """The kernel :func:`obsdesign.sim.kernel.run_loop` over ``loop``: its arrays, the samples it wrote and
+    its wall time [s] (what :func:`loop_result` summarises).
+
+    Parameters
+    ----------
+    loop : LoopInputs
+    """
+    outputs = kernel.Outputs(*(np.empty(loop.n_samples) for _ in kernel.OUTPUT_NAMES))
     args = loop.kernel_args()
     t0 = time.perf_counter()
     n_written = kernel.run_loop(*args, outputs)
-    wall = time.perf_counter() - t0
-    out = outputs._asdict()
+    return outputs._asdict(), n_written, time.perf_counter() - t0
+
+
+def loop_result(loop: LoopInputs, out: dict[str, np.ndarray], n_written: int, wall: float, *,
+                keep_trace: bool = True) -> SimResult:
+    """The result of a run of ``loop`` from the arrays the kernel wrote (what :func:`run` returns).
+
+    Parameters
+    ----------
+    loop : LoopInputs
+        The run's inputs.
+    out : dict of ndarray
+        :data:`obsdesign.sim.kernel.OUTPUT_NAMES` -> the kernel's arrays (NaN is written past ``n_written``).
+    n_written : int
+        Samples written (fewer than ``loop.n_samples`` after a divergence).
+    wall : float
+        Wall time of the kernel [s] (the metric ``sim_wall_s``).
+    keep_trace : bool
+        False returns the metrics only.
+
+    Returns
+    -------
+    SimResult
+    """
+    n = loop.n_samples
     if n_written < n:
         for arr in out.values():
             arr[n_written:] = np.nan
@@ -317,7 +351,7 @@ def run(loop: LoopInputs, keep_trace: bool = True) -> SimResult:
     fr = loop.config.friction
     stable_step = step_is_stable(dt=loop.dt, n_sub=loop.n_sub, m=loop.m, sigma=fr.sigma, kappa=fr.kappa,
                                  beta=fr.beta if fr.beta is not None else 0.0,
-                                 model_lag=loop.mode == kernel.PLANT_MODEL and args[3].lag_model)
+                                 model_lag=loop.mode == kernel.PLANT_MODEL and loop.config.observer.variant == "lag")
     metrics = loop_metrics(loop.scenario, out, e, n_written, loop.settle_tol, wall, step_stable=stable_step)
     traces = {}
     if keep_trace:
