@@ -219,6 +219,21 @@ def test_a_kept_tuning_equals_a_fresh_one(name, rule, memo_dir, monkeypatch):
         assert np.array_equal(getattr(kept, field), getattr(fresh, field))
 
 
+@pytest.mark.parametrize("preset, override", [("vcm", {}), ("table1", {"rho": 1.5}), ("vcm", {"noise_rms": 3e-7})])
+def test_the_kept_equal_noise_target_is_the_computed_one(preset, override, memo_dir, monkeypatch):
+    from obsdesign.estimators import friction_noise_rms, noise_level, reference_noise_rms
+    from obsdesign.estimators.tuning import reference_estimator
+
+    cfg = od.load_preset(preset).override(**override)
+    fresh = friction_noise_rms(reference_estimator(cfg), *noise_level(cfg))  # the definition, never kept
+    first, kept = reference_noise_rms(cfg), reference_noise_rms(cfg)
+    assert (memo_dir / "reference_noise_rms").exists()
+    assert _same(first, fresh) and _same(kept, fresh)
+    for entry in (memo_dir / "reference_noise_rms").iterdir():
+        entry.write_text(json.dumps(-1.0))  # not a noise RMS: computed again
+    assert _same(reference_noise_rms(cfg), fresh)
+
+
 def test_a_mis_shaped_riccati_entry_is_solved_again(memo_dir):
     from obsdesign.estimators import build_kalman
 

@@ -17,7 +17,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.integrate
 import scipy.linalg
 
 from .base import DiscreteEstimator, check_positive
@@ -108,6 +107,8 @@ def _band_power_closed(est: DiscreteEstimator, row: int, top: float) -> tuple[fl
 
 def _band_power_quad(est: DiscreteEstimator, row: int, top: float, estimate: float) -> float:
     """The same integral by ``quad``, split at the poles' corners, to ``1e-10`` of ``estimate``."""
+    import scipy.integrate  # the rare fallback: SciPy's quadrature is not imported otherwise
+
     poles = np.linalg.eigvals(est.Phi).astype(complex)
     corners = {abs(np.log(p)) for p in poles if p != 0}
     edges = [0.0, *sorted(c for c in corners if 0.0 < c < top), top]

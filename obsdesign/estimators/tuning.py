@@ -40,7 +40,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.optimize
 
 from .._memo import config_key, memo
 from ..params import Config
@@ -75,12 +74,17 @@ def reference_estimator(cfg: Config) -> DiscreteEstimator:
 def reference_noise_rms(cfg: Config) -> float:
     """RMS [N] of the paper's low-pass filtered friction estimate at ``k = 0``: the equal-noise target.
 
+    A pure function of the design, kept on disk (:mod:`obsdesign._memo`) like the tuned knobs.
+
     Parameters
     ----------
     cfg : Config
         The design.
     """
-    return friction_noise_rms(reference_estimator(cfg), *noise_level(cfg))
+    cfg = check_config(cfg)
+    return memo("reference_noise_rms", (config_key(cfg),),
+                lambda: friction_noise_rms(reference_estimator(cfg), *noise_level(cfg)),
+                valid=lambda v: isinstance(v, float) and math.isfinite(v) and v >= 0.0)
 
 
 def _check_paper_stable(cfg: Config) -> float:
@@ -99,6 +103,8 @@ def _solve_log(fun, lo: float, hi: float, what: str) -> float:
     if not (fa < 0.0 < fb):
         raise ValueError(f"{what}: no knob in [{lo:g}, {hi:g}] reaches the target "
                          f"(relative mismatch {fa:+.3g} at the low end, {fb:+.3g} at the high end)")
+    import scipy.optimize  # only where a knob is solved (the memo keeps the solutions)
+
     return math.exp(scipy.optimize.brentq(fun, a, b, xtol=_XTOL, rtol=_XTOL, maxiter=200))
 
 
@@ -118,6 +124,8 @@ def _min_error(make, cfg: Config, lo: float, hi: float) -> float:
     if not math.isfinite(values[i]):
         raise ValueError(f"min-error rule: no knob in [{lo:g}, {hi:g}] gives a stable estimator")
     a, b = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
+    import scipy.optimize
+
     res = scipy.optimize.minimize_scalar(cost, bounds=(a, b), method="bounded", options={"xatol": 1e-4})
     return math.exp(float(res.x)) if res.fun < values[i] else math.exp(float(grid[i]))
 
