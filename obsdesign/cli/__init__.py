@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import errno
+import gc
 import io
 import os
 import sys
@@ -37,7 +38,7 @@ from . import _compare, _config, _data, _design, _dynamic, _loop, _output, _sim,
 from ._common import Parser, UsageError
 from ._errors import BAD_INPUT, describe, exit_status, plain
 
-__all__ = ["main", "build_parser", "UsageError"]
+__all__ = ["main", "run", "build_parser", "UsageError"]
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
@@ -142,6 +143,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     for w in _unique(caught):
         _say(f"obsdesign: warning: {w}")
     return status
+
+
+def run() -> None:
+    """The ``obsdesign`` program: exit with the status of :func:`main`.
+
+    Before the interpreter ends, every object the run created is frozen out of the garbage collector
+    (:func:`gc.freeze`): the interpreter's last collections would walk all of them (numba's types and
+    compiled functions, matplotlib's figures) only to free memory the process gives back anyway, 0.1 to
+    0.5 s of a command (``benchmarks/RESULTS.md``). Files are closed, streams flushed and exit handlers run
+    as usual.
+    """
+    status = main()
+    gc.freeze()
+    sys.exit(status)
 
 
 def _unique(caught) -> list[str]:
