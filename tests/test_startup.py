@@ -17,6 +17,7 @@ python-control for them (the outputs of both runs are equal).
 
 from __future__ import annotations
 
+import gc
 import os
 import re
 import subprocess
@@ -75,3 +76,18 @@ def test_command_imports_only_what_it_computes_with(name, tmp_path):
         text = proc.stdout.replace(str(tmp_path / f"out{run}"), "OUT")
         outputs.append(re.sub(r"(wall\S*:?\s*)[0-9.e+-]+", r"\1T", text))  # wall times differ
     assert outputs[0] == outputs[1]
+
+
+def test_the_program_exits_with_main_s_status_and_its_heap_frozen():
+    """``python -m obsdesign`` (and the ``obsdesign`` script, :func:`obsdesign.cli.run`) exits with the status
+    of :func:`obsdesign.cli.main` after :func:`gc.freeze`, so the interpreter's last collections skip the run's
+    objects; in-process callers of ``main`` keep a collectable heap."""
+    probe = ("import gc, sys, runpy\nsys.argv = ['obsdesign', *sys.argv[1:]]\ntry:\n"
+             "    runpy.run_module('obsdesign', run_name='__main__')\nexcept SystemExit as e:\n"
+             "    print('EXIT', e.code, gc.get_freeze_count() > 0)\n")
+    for args, status in ((["config", "--preset", "vcm"], 0), (["check", "--rho", "-1"], 2)):
+        proc = subprocess.run([sys.executable, "-c", probe, *args], capture_output=True, text=True, timeout=600)
+        assert proc.stdout.splitlines()[-1] == f"EXIT {status} True", proc.stdout + proc.stderr
+    from obsdesign.cli import main
+
+    assert main(["--version"]) == 0 and gc.get_freeze_count() == 0
