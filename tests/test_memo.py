@@ -155,7 +155,9 @@ def test_kept_results_equal_a_fresh_computation(preset, override, memo_dir, monk
     def results():
         la = loop_analysis(cfg)
         return {"pid": _fields(la.pid), "loop": _fields(la), "sampled": _fields(sampled_loop(cfg)),
-                "certificate": certify(od.design_observer(cfg)).to_dict()}
+                "certificate": certify(od.design_observer(cfg)).to_dict(),
+                "noise": od.noise_analysis(cfg).to_dict(),
+                "noise at kappa": od.noise_analysis(cfg, stiffness=cfg.friction.kappa, noise_bandwidth=500.0).to_dict()}
 
     monkeypatch.setenv("OBSDESIGN_CACHE", "off")
     fresh = results()
@@ -184,6 +186,34 @@ def test_kept_systems_are_rebuilt_as_computed(memo_dir):
                                        rtol=1e-12)
     # the kept phase margin is python-control's own for the rebuilt loop
     assert ct.stability_margins(pid.C * pid.H)[1] == pid.phase_margin_achieved_deg
+
+
+@pytest.mark.parametrize("preset, override", [("vcm", {}), ("table1", {"delay_samples": 1})])
+def test_kept_frequency_responses_are_python_control_s(preset, override, memo_dir):
+    """The figures' curves (design.pid.kept_response) are python-control's frequency responses of the
+    systems, every bit, computed or read back; another grid or system is another entry."""
+    import control as ct
+
+    from obsdesign.design.pid import kept_response
+
+    cfg = od.load_preset(preset).override(**override)
+    la, na = loop_analysis(cfg), od.noise_analysis(cfg)
+    w = np.logspace(-1, 5, 300)
+    wz = np.logspace(-1, math.log10(0.99 * math.pi / cfg.observer.dt), 300)  # a sampled loop: below Nyquist
+    cases = [(la.pid, "S", w), (la, "L", w), (la, "T", w), (la.sampled, "L", wz), (la.sampled, "S", wz),
+             (na, "G_friction", w), (na, "G_friction_filtered", w)]
+    wants = [np.asarray(ct.frequency_response(getattr(r, n), grid).complex).ravel() for r, n, grid in cases]
+    product = np.asarray(ct.frequency_response(na.lowpass * na.G_friction, w).complex).ravel()
+    for _ in range(2):  # computed, then read back
+        for (result, name, grid), want in zip(cases, wants):
+            got = kept_response(result, name, grid)
+            assert got.dtype == want.dtype and got.tobytes() == want.tobytes(), name
+        assert kept_response(na, "G_friction_filtered", w).tobytes() == product.tobytes()
+    for entry in (memo_dir / "frequency_response").iterdir():
+        entry.write_text(json.dumps([[1.0], [2.0]]))  # the wrong length: computed again
+    assert kept_response(la, "L", w).tobytes() == wants[1].tobytes()
+    with pytest.raises(ValueError, match="name: expected a system of LoopAnalysis, found 'K'"):
+        kept_response(la, "K", w)
 
 
 def test_a_tampered_search_result_cannot_certify_more(memo_dir):

@@ -11,7 +11,7 @@ numba where a kernel runs.
 
 Each command runs twice with its own empty memo folder (:mod:`obsdesign._memo`): the first run
 computes and must import what it computes with; the second finds the certificate's searched
-Lyapunov matrix and python-control's loop numbers on disk and must not import SciPy or
+Lyapunov matrix, python-control's loop numbers and the noise RMS values on disk and must not import SciPy or
 python-control for them (the outputs of both runs are equal).
 """
 
@@ -34,7 +34,7 @@ CASES = {
     "check --json": (["check", "--preset", "table1", "--json"], {"scipy"}, set()),
     "pid": (["pid", "--preset", "vcm"], CONTROL, set()),
     "loop": (["loop", "--preset", "vcm"], CONTROL, set()),
-    "noise": (["noise", "--preset", "vcm"], CONTROL),
+    "noise": (["noise", "--preset", "vcm"], CONTROL, set()),
     "derive": (["derive", "--variant", "static"], {"sympy"}),
     "derive --format json": (["derive", "--format", "json"], {"sympy"}),
     "export --format c": (["export", "--format", "c", "--preset", "vcm", "-o", "{tmp}"], set()),

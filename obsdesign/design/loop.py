@@ -45,7 +45,7 @@ import numpy as np
 
 from .._memo import list_of, memo
 from ..params import Config, load_preset
-from .pid import PIDDesign, design_pid, lazy_system, peak_magnitude
+from .pid import PIDDesign, design_pid, kept_response, lazy_system, peak_magnitude
 from .sampled_loop import SampledLoop, sampled_loop
 from .._display import ResultDisplay
 
@@ -116,6 +116,9 @@ class LoopAnalysis(ResultDisplay):
     L = lazy_system()
     S = lazy_system()
     T = lazy_system()
+
+    def _system_args(self) -> tuple:
+        return self.pid._system_args()
 
     def _build_systems(self) -> dict:
         return _systems(self.pid)
@@ -243,10 +246,9 @@ def _numbers(pid: PIDDesign) -> list:
             float(ct.bandwidth(sys["T"], dbdrop=_HALF_POWER_DB))]
 
 
-def _mag_phase(sys, w):
-    import control as ct
-
-    resp = np.asarray(ct.frequency_response(sys, w).complex).ravel()
+def _mag_phase(result, name: str, w):
+    """Response, magnitude [dB] and unwrapped phase [deg] of the system ``name`` of ``result`` (kept)."""
+    resp = kept_response(result, name, w)
     return resp, 20.0 * np.log10(np.abs(resp)), np.degrees(np.unwrap(np.angle(resp)))
 
 
@@ -274,19 +276,18 @@ def loop_figure(analysis: LoopAnalysis):
     """
     if not isinstance(analysis, LoopAnalysis):
         raise TypeError(f"analysis: expected a LoopAnalysis, found {type(analysis).__name__}")
-    import control as ct
     from matplotlib.figure import Figure
 
     a = analysis
     wc = a.crossover_rad_s
     w = np.logspace(math.log10(wc) - 3, math.log10(wc) + 3, 1200)
-    resp, mag_db, phase = _mag_phase(a.L, w)
+    resp, mag_db, phase = _mag_phase(a, "L", w)
     # phase of L is -180 deg + atan(T_I w) here; keep the unwrapped branch that starts near -180 deg
     phase -= 360.0 * np.round((phase[0] + 180.0) / 360.0)
     sl = a.sampled
     tag = f"sampled (ZOH, discrete PID N={sl.derivative_N:g}, delay {sl.delay_samples})"
     wz = w[w < math.pi / sl.dt]
-    _, zmag_db, zphase = _mag_phase(sl.L, wz)
+    _, zmag_db, zphase = _mag_phase(sl, "L", wz)
     zphase -= 360.0 * np.round((zphase[0] + 180.0) / 360.0)
     fig = Figure(figsize=(15, 8.5), layout="constrained")
     gs = fig.add_gridspec(2, 3)
@@ -320,11 +321,11 @@ def loop_figure(analysis: LoopAnalysis):
     ax_ph.grid(True, which="both", alpha=0.3)
 
     wn = np.logspace(math.log10(wc) - 2, math.log10(wc) + 4, 3000)
-    ln = np.asarray(ct.frequency_response(a.L, wn).complex).ravel()
+    ln = kept_response(a, "L", wn)
     ax_ny.plot(ln.real, ln.imag, label="L(jw), w > 0")
     ax_ny.plot(ln.real, -ln.imag, ls=":", color="C0", alpha=0.5, label="L(jw), w < 0 (mirror image)")
     wzn = np.logspace(math.log10(wc) - 2, math.log10(0.999999 * math.pi / sl.dt), 3000)
-    lz = np.asarray(ct.frequency_response(sl.L, wzn).complex).ravel()
+    lz = kept_response(sl, "L", wzn)
     ax_ny.plot(lz.real, lz.imag, ls="--", color="C1", label=f"L(exp(jw dt)) {tag}, 0 < w <= pi/dt")
     theta = np.linspace(0.0, 2.0 * math.pi, 361)
     ax_ny.plot(np.cos(theta), np.sin(theta), color="0.5", lw=0.8, label="unit circle |L| = 1")
@@ -334,12 +335,12 @@ def loop_figure(analysis: LoopAnalysis):
     ax_ny.legend(fontsize="small", loc="lower right")
     ax_ny.grid(True, alpha=0.3)
 
-    _, s_db, _ = _mag_phase(a.S, w)
-    _, t_db, _ = _mag_phase(a.T, w)
+    _, s_db, _ = _mag_phase(a, "S", w)
+    _, t_db, _ = _mag_phase(a, "T", w)
     ax_st.semilogx(w, s_db, label=f"output sensitivity |S|, peak {a.max_S:.3g}")
     ax_st.semilogx(w, t_db, label=f"complementary sensitivity |T|, peak {a.max_T:.3g}")
-    ax_st.semilogx(wz, _mag_phase(sl.S, wz)[1], ls="--", color="C0", label=f"|S| sampled, peak {sl.max_S:.3g}")
-    ax_st.semilogx(wz, _mag_phase(sl.T, wz)[1], ls="--", color="C1", label=f"|T| sampled, peak {sl.max_T:.3g}")
+    ax_st.semilogx(wz, _mag_phase(sl, "S", wz)[1], ls="--", color="C0", label=f"|S| sampled, peak {sl.max_S:.3g}")
+    ax_st.semilogx(wz, _mag_phase(sl, "T", wz)[1], ls="--", color="C1", label=f"|T| sampled, peak {sl.max_T:.3g}")
     ax_st.axvline(a.bandwidth_rad_s, color="C1", lw=0.8, ls=":",
                   label=f"bandwidth of T {a.bandwidth_rad_s:.4g} rad/s")
     ax_st.set(xlabel="frequency [rad/s]", ylabel="magnitude [dB]", title="Sensitivities")

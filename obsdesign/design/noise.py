@@ -28,17 +28,21 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
-import control as ct
 import numpy as np
-import scipy.integrate
 
 from .._display import ResultDisplay
+from .._memo import list_of, memo
 from .._validate import NONNEGATIVE, POSITIVE, Range
 from ..params import Config
+from .advisories import design_warnings
 from .numeric import poly_coeffs
 from .observer import design_observer
-from .advisories import design_warnings
+from .pid import lazy_system
+
+if TYPE_CHECKING:
+    import control as ct
 
 __all__ = ["NoiseAnalysis", "noise_analysis", "lowpass", "band_limited_rms"]
 
@@ -46,7 +50,7 @@ _NONNEG = NONNEGATIVE
 _POS = POSITIVE
 
 
-def lowpass(omega_co: float) -> ct.TransferFunction:
+def lowpass(omega_co: float) -> "ct.TransferFunction":
     """The second-order low-pass filter of eq:3:4:5.
 
     Parameters
@@ -58,11 +62,13 @@ def lowpass(omega_co: float) -> ct.TransferFunction:
     >>> F.num[0][0], F.den[0][0]
     (array([100.]), array([  1.,  20., 100.]))
     """
+    import control as ct
+
     w = _POS.check("omega_co", omega_co)
     return ct.tf([w * w], [1.0, 2.0 * w, w * w])
 
 
-def band_limited_rms(G: ct.TransferFunction, noise_rms: float, bandwidth_hz: float) -> float:
+def band_limited_rms(G: "ct.TransferFunction", noise_rms: float, bandwidth_hz: float) -> float:
     """RMS of ``G`` driven by band-limited white noise of RMS ``noise_rms`` over ``[0, B]`` Hz.
 
     Parameters
@@ -79,9 +85,12 @@ def band_limited_rms(G: ct.TransferFunction, noise_rms: float, bandwidth_hz: flo
     >>> # First-order low-pass 1/(p/a + 1): closed form eta * sqrt(a/W * atan(W/a)), W = 2 pi B.
     >>> a, B = 100.0, 50.0
     >>> W = 2 * math.pi * B
+    >>> import control as ct
     >>> round(band_limited_rms(ct.tf([1.0], [1 / a, 1.0]), 2.0, B) / (2 * math.sqrt(a / W * math.atan(W / a))), 12)
     1.0
     """
+    import scipy.integrate
+
     eta = _NONNEG.check("noise_rms", noise_rms)
     B = _POS.check("noise_bandwidth", bandwidth_hz)
     if eta == 0.0:
@@ -131,7 +140,13 @@ class NoiseAnalysis(ResultDisplay):
         RMS of the friction estimate's noise without and with the low-pass [N].
     rms_velocity_raw : float
         RMS of the velocity estimate's noise [m/s].
+    friction_transfer, velocity_transfer : tuple
+        Numerator and denominator coefficients (highest power first) of the noise transfers to the
+        friction and the velocity estimate (``obsdesign.design.numeric.poly_coeffs``).
     G_friction, G_velocity, lowpass : control.TransferFunction
+        Those transfers and the low-pass eq:3:4:5, built on first use (python-control).
+    G_friction_filtered : control.TransferFunction
+        ``lowpass * G_friction``: the noise transfer to the compensated friction estimate.
     warnings : tuple of str
         The design's warnings (:func:`obsdesign.design.design_warnings`): for a design that
         fails ``check`` the observer is not stable for every stiffness and the RMS values,
@@ -148,10 +163,19 @@ class NoiseAnalysis(ResultDisplay):
     rms_raw: float
     rms_filtered: float
     rms_velocity_raw: float
-    G_friction: ct.TransferFunction = field(repr=False, compare=False)
-    G_velocity: ct.TransferFunction = field(repr=False, compare=False)
-    lowpass: ct.TransferFunction = field(repr=False, compare=False)
+    friction_transfer: tuple = field(repr=False, compare=False)
+    velocity_transfer: tuple = field(repr=False, compare=False)
     warnings: tuple = field(default=(), repr=False, compare=False)
+    G_friction = lazy_system()
+    G_velocity = lazy_system()
+    lowpass = lazy_system()
+    G_friction_filtered = lazy_system()
+
+    def _system_args(self) -> tuple:
+        return (self.friction_transfer, self.velocity_transfer, self.omega_co)
+
+    def _build_systems(self) -> dict:
+        return _systems(*self._system_args())
 
     def to_dict(self) -> dict:
         """JSON-ready values (the keys of ``obsdesign noise --json`` and more)."""
@@ -194,13 +218,29 @@ def noise_analysis(cfg: Config, *, noise_rms: float | None = None,
     B = sensor.noise_bandwidth if noise_bandwidth is None else _POS.check("noise_bandwidth", noise_bandwidth)
     k = _NONNEG.check("stiffness", stiffness)
     values = design.parameter_values(k)
-    G_f = ct.tf(*poly_coeffs(design.variant, "friction")(**values))
-    G_v = ct.tf(*poly_coeffs(design.variant, "velocity")(**values))
-    F = lowpass(cfg.observer.omega_co)
+    friction = tuple(tuple(c.tolist()) for c in poly_coeffs(design.variant, "friction")(**values))
+    velocity = tuple(tuple(c.tolist()) for c in poly_coeffs(design.variant, "velocity")(**values))
+    omega_co = cfg.observer.omega_co
+    args = (friction, velocity, omega_co, eta, B)
+    # python-control's transfers and SciPy's integrals: computed once, kept on disk (obsdesign._memo)
+    rms_raw, rms_filtered, rms_velocity_raw = memo("noise", args, lambda: _rms(*args), valid=list_of(3))
     return NoiseAnalysis(
-        stiffness=k, noise_rms=eta, noise_bandwidth=B, omega_co=cfg.observer.omega_co,
-        direct_gain=design.L2, velocity_direct_gain=design.L1,
-        rms_raw=band_limited_rms(G_f, eta, B), rms_filtered=band_limited_rms(F * G_f, eta, B),
-        rms_velocity_raw=band_limited_rms(G_v, eta, B), G_friction=G_f, G_velocity=G_v, lowpass=F,
+        stiffness=k, noise_rms=eta, noise_bandwidth=B, omega_co=omega_co,
+        direct_gain=design.L2, velocity_direct_gain=design.L1, rms_raw=rms_raw, rms_filtered=rms_filtered,
+        rms_velocity_raw=rms_velocity_raw, friction_transfer=friction, velocity_transfer=velocity,
         warnings=design_warnings(cfg),
     )
+
+
+def _systems(friction: tuple, velocity: tuple, omega_co: float) -> dict:
+    import control as ct
+
+    G_f, G_v, F = ct.tf(*friction), ct.tf(*velocity), lowpass(omega_co)
+    return {"G_friction": G_f, "G_velocity": G_v, "lowpass": F, "G_friction_filtered": F * G_f}
+
+
+def _rms(friction: tuple, velocity: tuple, omega_co: float, eta: float, B: float) -> list:
+    """The three noise RMS values of :class:`NoiseAnalysis` (python-control transfers, SciPy quadrature)."""
+    sys = _systems(friction, velocity, omega_co)
+    return [band_limited_rms(sys["G_friction"], eta, B), band_limited_rms(sys["G_friction_filtered"], eta, B),
+            band_limited_rms(sys["G_velocity"], eta, B)]

@@ -34,7 +34,7 @@ if TYPE_CHECKING:
     import control as ct
 
 __all__ = ["PIDDesign", "design_pid", "pid_gains", "pid_from_config", "pid_from_gains", "peak_magnitude",
-           "lazy_system"]
+           "lazy_system", "kept_response"]
 
 
 class lazy_system:  # noqa: N801 (used like property)
@@ -56,6 +56,62 @@ class lazy_system:  # noqa: N801 (used like property)
         if systems is None:
             systems = obj.__dict__["_systems"] = obj._build_systems()
         return systems[self.name]
+
+
+def _is_response(n: int):
+    def valid(value) -> bool:
+        return (isinstance(value, list) and len(value) == 2
+                and all(isinstance(part, list) and len(part) == n and all(isinstance(x, float) for x in part)
+                        for part in value))
+
+    return valid
+
+
+def kept_response(result, name: str, w) -> np.ndarray:
+    """The frequency response of the system ``name`` of ``result`` at ``w`` [rad/s], kept on disk.
+
+    python-control's ``frequency_response`` of the :class:`lazy_system` ``name``, computed once per
+    system and grid and kept in the result memo (:mod:`obsdesign._memo`) under the numbers the system
+    is built from (``result._system_args()``), like the numbers themselves: a figure drawn again needs
+    no python-control import, and its curves are the same floats.
+
+    Parameters
+    ----------
+    result : PIDDesign, LoopAnalysis, SampledLoop or NoiseAnalysis
+        A result with lazily built systems.
+    name : str
+        One of its systems (``"S"``, ``"L"``, ``"G_friction"``, ...).
+    w : array_like
+        Angular frequencies [rad/s], 1-D.
+
+    Returns
+    -------
+    ndarray of complex
+        ``G(j w)`` (continuous systems) or ``G(exp(j w dt))`` (sampled ones).
+
+    Examples
+    --------
+    >>> import control as ct, obsdesign as od
+    >>> pid = od.pid_from_config(od.load_preset("vcm"))
+    >>> w = np.logspace(0, 4, 5)
+    >>> bool(np.array_equal(kept_response(pid, "S", w), ct.frequency_response(pid.S, w).complex.ravel()))
+    True
+    """
+    if not isinstance(getattr(type(result), name, None), lazy_system):
+        raise ValueError(f"name: expected a system of {type(result).__name__}, found {name!r}")
+    w = np.asarray(w, dtype=float).ravel()
+
+    def compute() -> list:
+        import control as ct
+
+        resp = np.asarray(ct.frequency_response(getattr(result, name), w).complex, dtype=complex).ravel()
+        return [resp.real.tolist(), resp.imag.tolist()]
+
+    re, im = memo("frequency_response", (type(result).__name__, result._system_args(), name, w), compute,
+                  valid=_is_response(len(w)))
+    resp = np.empty(len(w), dtype=complex)
+    resp.real, resp.imag = re, im  # every bit of both parts (no arithmetic: -0.0, inf and nan stay)
+    return resp
 
 _POS = POSITIVE
 _PHASE = Range(low=0.0, high=90.0)
@@ -106,8 +162,11 @@ class PIDDesign(ResultDisplay):
     C = lazy_system()
     S = lazy_system()
 
+    def _system_args(self) -> tuple:
+        return (self.k, self.T_I, self.tau, self.phi)
+
     def _build_systems(self) -> dict:
-        return _systems(self.k, self.T_I, self.tau, self.phi)
+        return _systems(*self._system_args())
 
     def to_dict(self) -> dict:
         """JSON-ready values (the keys of ``obsdesign pid --json`` and more)."""

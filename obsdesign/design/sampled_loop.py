@@ -226,8 +226,11 @@ class SampledLoop(ResultDisplay):
     PS = lazy_system()
     CS = lazy_system()
 
+    def _system_args(self) -> tuple:
+        return (self.kp, self.ki, self.kd, self.tau_d, self.dt, self.phi, self.tau, self.delay_samples)
+
     def _build_systems(self) -> dict:
-        return _systems(self.kp, self.ki, self.kd, self.tau_d, self.dt, self.phi, self.tau, self.delay_samples)
+        return _systems(*self._system_args())
 
     @property
     def system(self) -> str:

@@ -10,34 +10,26 @@ from __future__ import annotations
 
 import datetime
 import math
-import re
 import time
 import warnings
 
-import control as ct
 import numpy as np
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
 
 from .. import __version__, studies
 from .._memo import memo
 from ..design import check_stability, noise_analysis, pid_from_config
+from ..design.pid import kept_response
 from ..params import Config
 from .circle_section import FEEDS as CIRCLE_FEEDS
 from .circle_section import circle_section, feed_runs
 from .data_section import data_section
 from .explorer import explorer_context, explorer_json
-from .figures import figure_svg, relabel
+from .figures import inline_svg
 from .markup import _CSP_MARK, _quantity, _with_csp, is_derivation_markup
-from .study_figures import convergence_figure, experiments_figure, friction_loops_figure
+from .study_figures import experiments_figure, friction_loops_figure
 
-__all__ = ["render_page", "convergence_part", "loops_part", "circle_part", "derivation_markup"]
-
-
-def _svg(fig, units=None) -> str:
-    """Inline SVG of a figure (its units those of ``units``, an AxisSpec): no XML prolog, no RDF metadata block."""
-    text = figure_svg(relabel(fig, units))
-    text = text[text.index("<svg"):]
-    return re.sub(r"<metadata>.*?</metadata>", "", text, flags=re.S)
+__all__ = ["render_page", "loops_part", "circle_part", "derivation_markup"]
 
 
 def _eigen_figure(design):
@@ -58,24 +50,19 @@ def _eigen_figure(design):
 
 
 def _bode_figure(curves, bound=None, ylabel=""):
+    """Magnitude plot of ``(label, result, system name)`` curves (:func:`obsdesign.design.pid.kept_response`)."""
     import matplotlib.pyplot as plt
 
     w = np.logspace(-1, 5, 600)
     fig, ax = plt.subplots(figsize=(7, 3.6), constrained_layout=True)
-    for label, sys in curves:
-        ax.loglog(w, np.abs(ct.frequency_response(sys, w).complex.ravel()), label=label)
+    for label, result, name in curves:
+        ax.loglog(w, np.abs(kept_response(result, name, w)), label=label)
     if bound is not None:
         ax.axhline(bound, color="r", ls="--", label=f"bound 1/k = {bound:.4g}")
     ax.set_xlabel("frequency [rad/s]")
     ax.set_ylabel(ylabel)
     ax.legend(loc="best")
     return fig
-
-
-def convergence_part() -> tuple[list, str]:
-    """The Table 1 convergence study's claims and figure (the report helper's task)."""
-    conv = studies.convergence_study(seeds=3)
-    return list(conv.claims), _svg(convergence_figure(conv))
 
 
 def _derivation_html(variant: str) -> str:
@@ -112,7 +99,7 @@ def loops_part(cfg: Config, experiments) -> tuple[list, str]:
         :func:`obsdesign.studies.experiments_study` of ``cfg``.
     """
     loops = studies.friction_loops_study(cfg, experiments=experiments)
-    return list(loops.claims), _svg(friction_loops_figure(loops), cfg.units)
+    return list(loops.claims), inline_svg(friction_loops_figure(loops), cfg.units)
 
 
 def circle_part(cfg: Config, runs: dict) -> dict:
@@ -127,7 +114,7 @@ def circle_part(cfg: Config, runs: dict) -> dict:
     """
     section = circle_section(cfg, runs=runs)
     fig = section.pop("figure")
-    section["svg"] = _svg(fig, cfg.units) if fig is not None else None
+    section["svg"] = inline_svg(fig, cfg.units) if fig is not None else None
     return section
 
 
@@ -140,7 +127,7 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     cfg : Config
         The design.
     jobs : dict
-        The helper's futures: ``convergence`` (:func:`convergence_part`, ``None`` without the paper's
+        The helper's futures: ``convergence`` (:func:`obsdesign.report.html.convergence_part`, ``None`` without the paper's
         studies) and ``circle`` (feed -> the future of its runs, for the feeds the helper computes; empty
         without the circle test).
     steps : list of str
@@ -158,7 +145,7 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     units = cfg.units  # every unit the report prints is written for this axis
 
     def svg(fig):
-        return _svg(fig, units)
+        return inline_svg(fig, units)
 
     conv_job, helper_feeds = jobs["convergence"], jobs["circle"]
     bar = progress_bar(progress, iterable=steps, desc="obsdesign report", leave=False)  # no thread without a bar
@@ -182,7 +169,7 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     bar.set_postfix_str(steps[2])
     pid = pid_from_config(cfg)
     ctx["pid"] = pid
-    ctx["pid_svg"] = svg(_bode_figure([("|S| = |H/(1+HC)|", pid.S)], bound=1 / pid.k, ylabel="|S| [m/V]"))
+    ctx["pid_svg"] = svg(_bode_figure([("|S| = |H/(1+HC)|", pid, "S")], bound=1 / pid.k, ylabel="|S| [m/V]"))
     from ..design.loop import loop_analysis, loop_figure
 
     ctx["loop_view"] = loop_analysis(cfg)
@@ -192,8 +179,8 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     bar.set_postfix_str(steps[3])
     na = noise_analysis(cfg)
     ctx["noise"] = na
-    ctx["noise_svg"] = svg(_bode_figure([("noise -> friction estimate", na.G_friction),
-                                          ("after the low-pass eq:3:4:5", na.lowpass * na.G_friction)],
+    ctx["noise_svg"] = svg(_bode_figure([("noise -> friction estimate", na, "G_friction"),
+                                          ("after the low-pass eq:3:4:5", na, "G_friction_filtered")],
                                          ylabel="gain [N/m]"))
     bar.update()
 
