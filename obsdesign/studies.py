@@ -324,7 +324,7 @@ def friction_loops_study(cfg: Config | None = None, *, experiments: ExperimentsS
     pre-sliding map, ``f = Fc + sigma v``. (tests/test_report.py checks that the study of the
     experiments' run equals the study that simulates it again, array for array.)
     """
-    import scipy.signal
+    from .design.bilinear import bilinear_lowpass, iir_filter
 
     cfg = cfg or load_preset("vcm")
     if experiments is None:
@@ -335,8 +335,7 @@ def friction_loops_study(cfg: Config | None = None, *, experiments: ExperimentsS
             raise ValueError(f"experiments: expected the experiments study of the config {cfg.name!r}, "
                              f"found one of {res.config.name!r} with other values")
     w, dt = cfg.observer.omega_co, cfg.observer.dt
-    b, a = scipy.signal.cont2discrete(([w * w], [1, 2 * w, w * w]), dt, method="bilinear")[:2]
-    v_f = scipy.signal.lfilter(np.ravel(b), a, res.v_hat)
+    v_f = iir_filter(*bilinear_lowpass(w, dt), res.v_hat)  # scipy.signal's bilinear low-pass and lfilter
     fc = coulomb_along(res.x_meas, v_f, cfg.friction.Cf, cfg.friction.s)
     f_model = fc + cfg.friction.sigma * v_f
     est = res.f_hat_filtered

@@ -251,3 +251,20 @@ def test_band_limited_rms_stays_accurate_far_beyond_the_corners():
     power = np.abs(np.polyval(num, 1j * w) / np.polyval(den, 1j * w)) ** 2
     reference = 1e-6 * math.sqrt(np.trapezoid(power, w) / W)
     assert na.rms_filtered == pytest.approx(reference, rel=1e-6)
+
+
+@pytest.mark.parametrize("omega_co, dt", [(2 * math.pi * 40, 1e-4), (2 * math.pi * 5, 1e-3), (3e3, 2.5e-4)])
+def test_the_bilinear_low_pass_is_scipy_s_bit_for_bit(omega_co, dt, tmp_path, monkeypatch):
+    """obsdesign.design.bilinear: SciPy's coefficients (kept) and lfilter's floats, without scipy.signal."""
+    from obsdesign.design.bilinear import bilinear_lowpass, iir_filter
+
+    monkeypatch.setenv("OBSDESIGN_CACHE_DIR", str(tmp_path))
+    b_ref, a_ref = scipy.signal.cont2discrete(([omega_co**2], [1, 2 * omega_co, omega_co**2]), dt, method="bilinear")[:2]
+    for _ in range(2):  # computed, then read back
+        b, a = bilinear_lowpass(omega_co, dt)
+        assert np.array_equal(b, np.ravel(b_ref)) and np.array_equal(a, a_ref)
+    rng = np.random.default_rng(5)
+    for x in (rng.standard_normal(50000) * 1e-3, np.cumsum(rng.standard_normal(50000)), np.r_[np.zeros(10), np.ones(100)]):
+        assert np.array_equal(iir_filter(b, a, x), scipy.signal.lfilter(b, a, x))
+    scaled = iir_filter(2.0 * b, 2.0 * a, x)  # normalized by a[0], as lfilter does
+    assert np.allclose(scaled, scipy.signal.lfilter(b, a, x), rtol=1e-12, atol=1e-15)
