@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .figures import figure_svg, plt, relabel
+from .figures import inline_svg, plt
 
 __all__ = ["observation_figure", "fit_figure", "data_section", "MOVING_FRACTION", "moving_mask"]
 
@@ -108,13 +108,6 @@ def fit_figure(ident, trace):
     for ax in axes:
         ax.legend(loc="best")
     return fig
-
-
-def _svg(fig, units=None) -> str:
-    import re
-
-    text = figure_svg(relabel(fig, units))
-    return re.sub(r"<metadata>.*?</metadata>", "", text[text.index("<svg"):], flags=re.S)
 
 
 def moving_mask(v: np.ndarray, moving_speed: float | None = None) -> tuple[np.ndarray, float]:
@@ -221,6 +214,6 @@ def data_section(trace, cfg=None, *, moving_speed: float | None = None, label: s
             "rms_error_standstill": _rms(error[~moving]), "moving_speed": threshold, "moving_speed_given": moving_speed is not None,
             "moving_fraction": float(np.mean(moving)),
             "rms_residual": float(np.sqrt(np.mean((measured - model) ** 2))),
-            "observer": obs, "fit_svg": _svg(fit_figure(ident, trace), units),
-            "observe_svg": _svg(observation_figure(obs, w3), units), "units": units,
+            "observer": obs, "fit_svg": inline_svg(fit_figure(ident, trace), units),
+            "observe_svg": inline_svg(observation_figure(obs, w3), units), "units": units,
             "observer_label": label, "observer_note": note}

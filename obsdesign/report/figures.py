@@ -26,7 +26,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 #: No creation date in the files, so that identical figures are identical files.
 _METADATA = {"svg": {"Date": None}, "png": {}, "pdf": {"CreationDate": None}}
 
-__all__ = ["trace_figure", "save_figure", "save_trace_figure", "trace_figure_svg", "figure_svg", "envelope", "relabel"]
+__all__ = ["trace_figure", "save_figure", "save_trace_figure", "trace_figure_svg", "figure_svg", "inline_svg",
+           "envelope", "relabel"]
 
 #: Columns of :func:`envelope`: more than a figure's width in pixels (8 in at 100 dpi: 800).
 ENVELOPE_COLUMNS = 2000
@@ -183,6 +184,30 @@ def figure_svg(fig) -> str:
     fig.savefig(buf, format="svg", metadata=_METADATA["svg"])
     plt.close(fig)
     return buf.getvalue()
+
+
+def inline_svg(fig, units=None) -> str:
+    """A figure as an ``<svg>`` element for an HTML page, closing the figure: its units those of
+    ``units`` (an :class:`~obsdesign.axis.AxisSpec`, :func:`relabel`), no XML prolog, no RDF metadata.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure (closed afterwards).
+    units : AxisSpec, optional
+        The axis whose units the labels name (default SI).
+
+    Examples
+    --------
+    >>> fig, ax = plt.subplots()
+    >>> text = inline_svg(fig)
+    >>> text.startswith("<svg") and "<metadata>" not in text
+    True
+    """
+    import re
+
+    text = figure_svg(relabel(fig, units))
+    return re.sub(r"<metadata>.*?</metadata>", "", text[text.index("<svg"):], flags=re.S)
 
 
 def trace_figure_svg(res) -> str:

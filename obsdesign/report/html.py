@@ -26,7 +26,7 @@ from .circle_section import FEEDS as CIRCLE_FEEDS
 from .folder_files import read_json, svg_data_url
 from .markup import _CSP_MARK, ReportContentError, _quantity, _with_csp  # noqa: F401 (the page's, named here too)
 
-__all__ = ["render_report", "write_report", "ReportContentError"]
+__all__ = ["render_report", "write_report", "convergence_part", "ReportContentError"]
 
 
 def _sweep_section(sweep_dir) -> dict | None:
@@ -43,11 +43,18 @@ def _sweep_section(sweep_dir) -> dict | None:
     return {"summary": summary, "map_src": images[0], "dist_src": images[1], "folder": str(folder)}
 
 
-def _convergence_task() -> tuple[list, str]:
-    """The helper's first task: the Table 1 convergence study (imports what it needs in the helper)."""
-    from .page import convergence_part
+def convergence_part() -> tuple[list, str]:
+    """The Table 1 convergence study's claims and figure (the report helper's first task).
 
-    return convergence_part()
+    Imports only what the study and its figure need, in the helper (not python-control, not the page's
+    template), while this process imports the page.
+    """
+    from .. import studies
+    from .figures import inline_svg
+    from .study_figures import convergence_figure
+
+    conv = studies.convergence_study(seeds=3)
+    return list(conv.claims), inline_svg(convergence_figure(conv))
 
 
 def _feed_task(cfg: Config, feed: float) -> dict:
@@ -133,8 +140,8 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
         (:func:`obsdesign.report.circle_section.circle_section`; default yes).
     workers : int, optional
         Processes that compute: with 2 or more (default: the number of cores) the Table 1
-        convergence study and the circle test's two slowest feeds run in one
-        forked helper process (forked before the page's libraries are imported) while this one
+        convergence study and the circle test's slowest feed (without the paper's studies: every
+        feed) run in one forked helper process (forked before the page's libraries are imported) while this one
         computes the rest; 1 computes everything here. The page is the same either way.
     """
     from ..provenance import matching_preset
@@ -155,11 +162,12 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
     pool = _helper_pool(workers)
     try:
         # the independent heavy studies go to the helper first, before this process imports the page's
-        # libraries, so that the helper's imports and studies run while this process imports and works
-        # (on vcm: the convergence study and the two slowest feeds of the circle test, whose contours are
-        # longest; the two processes then end within about a second of each other)
-        slow = sorted(CIRCLE_FEEDS)[:2]  # the circle's lowest feeds have the longest contours
-        jobs = {"convergence": pool.submit(_convergence_task) if paper else None,
+        # libraries, so that the helper's imports and studies run while this process imports and works:
+        # the convergence study and the slowest feed of the circle test (the lowest feed: its contour is
+        # longest), or without the paper's studies every feed (on vcm the two processes then end within
+        # about half a second of each other; docs/report.md)
+        slow = sorted(CIRCLE_FEEDS)[:1] if paper else CIRCLE_FEEDS
+        jobs = {"convergence": pool.submit(convergence_part) if paper else None,
                 "circle": {feed: pool.submit(_feed_task, cfg, feed) for feed in slow} if circle else {}}
         from .page import render_page
 
