@@ -20,6 +20,7 @@ import bench_cli  # noqa: E402
 import bench_compare  # noqa: E402
 import bench_data  # noqa: E402
 import bench_derive  # noqa: E402
+import bench_friction_plants  # noqa: E402
 import bench_identify  # noqa: E402
 import bench_report  # noqa: E402
 import bench_sim  # noqa: E402
@@ -29,6 +30,7 @@ import bench_tune  # noqa: E402
 SUITES = {
     "Symbolic derivation (issue 2)": bench_derive.run,
     "Closed-loop simulator (issue 4)": bench_sim.run,
+    "Friction-model plants (issue 19)": bench_friction_plants.run,
     "Sweeps (issue 6)": bench_sweep.run,
     "Measured data (issue 10)": bench_data.run,
     "Identification (issue 17)": bench_identify.run,
