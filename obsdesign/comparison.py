@@ -48,7 +48,7 @@ from .params import Config
 from .plant_spec import PlantFrictionSpec
 from .sim.cases import CASES, TRANSIENT
 from .sim.metrics import rms
-from .sim.open_loop import run_shared
+from .sim.shared import run_shared
 from .sim.simulate import prepare
 from .sim.step_metrics import step_metrics
 from .sweeps.pool import Executor
@@ -157,9 +157,10 @@ def compare_one(cfg: Config, plant: Config, estimator: str | DiscreteEstimator, 
 
 
 def compare_rows(tasks: list[tuple]) -> list[dict[str, Any]]:
-    """The rows of several runs: :func:`compare_one` of each task, with the open-loop runs that share
-    their plant (the ``excitation`` rows of one plant and seed) simulating it once
-    (:func:`obsdesign.sim.open_loop.run_shared`: the same rows, bit for bit).
+    """The rows of several runs: :func:`compare_one` of each task, with identical runs made once (the
+    seeds of a closed-loop case without random sensor noise) and the open-loop runs that share their
+    plant (the ``excitation`` rows of one plant and seed) simulating it once
+    (:func:`obsdesign.sim.shared.run_shared`: the same rows, bit for bit).
 
     Parameters
     ----------
@@ -424,12 +425,14 @@ def compare(cfg: Config, *, plants=FRICTION_MODELS.names(), estimators=ESTIMATOR
                 noise[name] = friction_noise_rms(tuned[name], eta, band)
         cases = [(p, e, s, seed) for p in plants for e in estimators for s in scenarios for seed in range(seeds)]
         plant_cfgs = {p: plant_config(cfg, p) for p in plants}
-        tasks = [(design[e], plant_cfgs[p], tuned[e], s, seed, noise[e])
-                 for p, e, s, seed in cases if not isinstance(tuned[e], Exception)]
-        # one unit per run, but the open-loop runs of one plant and seed together (they share the plant)
+        ran_cases = [c for c in cases if not isinstance(tuned[c[1]], Exception)]
+        tasks = [(design[e], plant_cfgs[p], tuned[e], s, seed, noise[e]) for p, e, s, seed in ran_cases]
+        # the runs that may share work go in one unit (obsdesign.sim.shared): the open-loop runs of a plant
+        # and seed (one plant, every estimator), the seeds of a closed-loop case (the same run where the
+        # sensor draws no random noise)
         units: dict[tuple, list[int]] = {}
-        for i, (_, plant, _, s, seed, _) in enumerate(tasks):
-            units.setdefault((id(plant), s, seed) if SCENARIOS[s][0].open_loop else (i,), []).append(i)
+        for i, (p, e, s, seed) in enumerate(ran_cases):
+            units.setdefault((p, s, seed) if SCENARIOS[s][0].open_loop else (p, e, s), []).append(i)
         work = [[(i, tasks[i]) for i in unit] for unit in units.values()]
         for batch in pool.map_batches(_run_batch, [work[i:i + 4] for i in range(0, len(work), 4)]):
             done.update(batch)

@@ -273,3 +273,34 @@ def test_data_rows_name_a_baseline_that_cannot_be_tuned(tmp_path, monkeypatch):
     assert rows[0]["status"] == NOT_TUNED + "noise rule: no knob in [0.001, 100000] reaches the target"
     assert all(rows[0][c] is None for c in COLUMNS[4:-1]) and rows[0]["plant"] == f"data:{trace.source}"
     assert rows[1] == alone[0] and alone[0]["status"] == "ok"
+
+
+def test_equal_seeds_draw_no_negative_error_bar():
+    """Three equal seeds (an axis without random noise) whose rounded mean lies an ulp outside them
+    (0.7 three times: 0.7 - 1.1e-16; 0.1 three times: 0.1 + 1.4e-17): the figure draws (it raised in
+    matplotlib, exit 2 after the CSV was written) with error bars of zero."""
+    from obsdesign.report.comparison_section import comparison_figure
+
+    assert float(np.mean([0.7] * 3)) < 0.7 and float(np.mean([0.1] * 3)) > 0.1
+    rows = [{"plant": "paper", "estimator": e, "scenario": "positioning", "seed": s, "friction_rms_error": v,
+             "status": "ok"} for e, v in (("paper", 0.7), ("eso", 0.1)) for s in range(3)]
+    from matplotlib.container import ErrorbarContainer
+
+    fig = comparison_figure(rows)
+    bars = [c for c in fig.axes[0].containers if isinstance(c, ErrorbarContainer)]
+    assert len(bars) == 2
+    for c in bars:
+        for seg in c.lines[2][0].get_segments():
+            assert abs(seg[1][1] - seg[0][1]) < 1e-15
+
+
+@pytest.mark.slow  # a comparison of 3 seeds in a fresh interpreter
+def test_cli_three_seeds_of_an_axis_without_noise(tmp_path):
+    import subprocess
+    import sys
+
+    out = tmp_path / "c3"
+    proc = subprocess.run([sys.executable, "-m", "obsdesign", "compare", "--preset", "vcm", "--seeds", "3", "--plants",
+                           "paper", "--estimators", "paper,eso", "--out", str(out)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert (out / "compare.svg").is_file()

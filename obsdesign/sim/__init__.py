@@ -2,7 +2,7 @@
 
 Two public steps, :func:`prepare` (design and sample the inputs of a run) and :func:`run`
 (the numba kernel and the metrics); :func:`simulate` is both in one call; :func:`run_shared` runs
-open-loop runs that share their plant (:mod:`obsdesign.sim.open_loop`). :func:`simulate_circle`
+runs that share their work (:mod:`obsdesign.sim.shared`). :func:`simulate_circle`
 runs the two-axis circle (ballbar) test (:mod:`obsdesign.sim.circle`).
 """
 
@@ -31,7 +31,7 @@ _LAZY = {
     'prepare': '.simulate',
     'run': '.simulate',
     'simulate': '.simulate',
-    'run_shared': '.open_loop',
+    'run_shared': '.shared',
     'simulate_circle': '.circle',
     'CircleResult': '.circle',
 }

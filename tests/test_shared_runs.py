@@ -1,4 +1,5 @@
-"""obsdesign.sim.open_loop: runs sharing an open-loop plant equal the runs made one by one, bit for bit."""
+"""obsdesign.sim.shared: identical runs made once and runs sharing an open-loop plant equal the runs made one
+by one, bit for bit."""
 
 from __future__ import annotations
 
@@ -10,8 +11,8 @@ import pytest
 import obsdesign as od
 from obsdesign.comparison import plant_config
 from obsdesign.sim import prepare, run
-from obsdesign.sim.open_loop import run_shared, shares_plant
 from obsdesign.sim.result import COLUMNS
+from obsdesign.sim.shared import run_shared, same_run, shares_plant
 
 FIELDS = (*COLUMNS, "stiffness")
 
@@ -106,3 +107,61 @@ def test_what_does_not_share_runs_alone():
 def test_refuses_what_is_not_loop_inputs():
     with pytest.raises(TypeError, match=r"loops\[1\]: expected LoopInputs"):
         run_shared([prepare(od.load_preset("vcm"), "excitation", duration=0.1), "excitation"])
+
+
+def test_identical_runs_are_made_once_and_each_result_is_its_own():
+    cfg = od.load_preset("vcm")  # quantization only: the seed draws nothing in a closed-loop scenario
+    loops = [prepare(cfg, scenario, estimator=e, seed=s, duration=d)
+             for scenario, d in (("positioning", 4.0), ("tracking", 1.0)) for e in ("paper", "kalman") for s in (0, 1)]
+    assert same_run(loops[0], loops[1]) and not same_run(loops[0], loops[2])
+    calls = []
+    import obsdesign.sim.shared as shared
+
+    real = shared.run_kernel
+
+    def counted(loop):
+        calls.append(loop)
+        return real(loop)
+
+    shared.run_kernel = counted
+    try:
+        res = run_shared(loops)
+    finally:
+        shared.run_kernel = real
+    assert len(calls) == 4  # one run per scenario and estimator
+    for got, loop in zip(res, loops):
+        assert_same(got, run(loop))
+    res[1].x[:] = 0.0  # a result's arrays are its own
+    assert not np.array_equal(res[0].x, res[1].x)
+
+
+@pytest.mark.parametrize("change", ["noise", "negative zero", "negative zero scalar", "settle band", "scenario"])
+def test_a_run_that_differs_in_one_bit_is_not_the_same_run(change):
+    cfg = od.load_preset("vcm")
+    a = prepare(cfg, "positioning", duration=4.0)
+    if change == "noise":
+        b = prepare(cfg.override(noise_rms=1e-9), "positioning", duration=4.0)
+    elif change == "negative zero":  # -0.0 == 0.0 in Python, not for the kernel's sign tests
+        x_ref = a.x_ref.copy()
+        x_ref[0] = -0.0
+        b = dataclasses.replace(a, x_ref=x_ref)
+    elif change == "negative zero scalar":  # same bits or not the same run, whatever the kernel makes of it
+        a = prepare(cfg.override(quantization=0.0), "positioning", duration=4.0)
+        b = dataclasses.replace(a, quantization=-0.0)
+    elif change == "settle band":
+        b = prepare(cfg, "positioning", duration=4.0, settle_tol=3e-6)
+    else:
+        b = prepare(cfg, od.sim.Positioning(step_down=3.0000000001), duration=4.0)
+    assert not same_run(a, b)
+    for got, loop in zip(run_shared([a, b]), [a, b]):
+        assert_same(got, run(loop))
+
+
+def test_identical_diverging_runs_stop_alike():
+    cfg = od.load_preset("vcm")
+    loops = [prepare(cfg, "tracking", duration=0.5, initial_estimate=(0.0, 2e12), seed=s) for s in (0, 1)]
+    assert same_run(*loops)
+    for got, loop in zip(run_shared(loops), loops):
+        alone = run(loop)
+        assert alone.metrics["diverged"]
+        assert_same(got, alone)
