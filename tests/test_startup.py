@@ -46,6 +46,12 @@ CASES = {
                                           {"scipy"}, set()),
     "simulate positioning": (["simulate", "positioning"], {"numba", "scipy"}),
     "config": (["config", "--preset", "vcm"], set()),
+    # the report: SymPy for the derivation, python-control for the figures' responses, scipy.signal for the
+    # friction loops' low-pass, all kept; a second report imports only numba (with SciPy) and matplotlib
+    "report": (["report", "--preset", "vcm", "--no-circle", "--quiet", "-o", "{tmp}.html"],
+               {"sympy", "control", "scipy", "numba", "matplotlib"}, {"scipy", "numba", "matplotlib"}),
+    "compare": (["compare", "--preset", "vcm", "--plants", "paper", "--scenarios", "excitation", "--seeds", "1",
+                 "--out", "{tmp}"], {"control", "scipy", "numba", "matplotlib"}, {"scipy", "numba", "matplotlib"}),
 }
 
 _PROBE = ("import sys, runpy\nsys.argv = ['obsdesign', *sys.argv[1:]]\ntry:\n"
@@ -57,7 +63,8 @@ _PROBE = ("import sys, runpy\nsys.argv = ['obsdesign', *sys.argv[1:]]\ntry:\n"
 #: Cases that repeat what another case shows (the same modules), and the two longest (SymPy's derivation,
 #: numba's kernels: 4 s each): in ``make test`` only.
 SLOW = {"check --json", "noise", "derive --format json", "export --format octave", "export --format js",
-        "export --format latex", "export --format c --preset table1", "derive", "simulate positioning"}
+        "export --format latex", "export --format c --preset table1", "derive", "simulate positioning", "report",
+        "compare"}
 
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW else n for n in CASES])
