@@ -90,16 +90,12 @@ def shares_plant(a: LoopInputs, b: LoopInputs) -> bool:
     pa, sa = a.kernel_args()[3:]
     pb, sb = b.kernel_args()[3:]
     ca, cb = a.sampled.kernel_args()[2], b.sampled.kernel_args()[2]
-    return (a.dt == b.dt and a.n_samples == b.n_samples
-            and all(getattr(ca, name) == getattr(cb, name) for name in _OPEN_LOOP_FIELDS)
-            and all(_equal(x, y) for x, y in zip(pa, pb))
-            and all(_equal(getattr(sa, name), getattr(sb, name)) for name in ("u_open", "noise", "quantization")))
 
+    def read(plant, signals, ctrl, loop) -> tuple:  # what the open-loop plant and its sensor read
+        return (loop.dt, loop.n_samples, tuple(plant), signals.u_open, signals.noise, signals.quantization,
+                tuple(getattr(ctrl, name) for name in _OPEN_LOOP_FIELDS))
 
-def _equal(x, y) -> bool:
-    if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
-        return np.array_equal(x, y)
-    return bool(x == y)
+    return _same_bits(read(pa, sa, ca, a), read(pb, sb, cb, b))
 
 
 def _same_bits(x, y) -> bool:
