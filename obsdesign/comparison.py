@@ -49,7 +49,7 @@ from .plant_spec import PlantFrictionSpec
 from .sim.cases import CASES, TRANSIENT
 from .sim.metrics import rms
 from .sim.shared import run_shared
-from .sim.simulate import prepare
+from .sim.simulate import prepare, run
 from .sim.step_metrics import step_metrics
 from .sweeps.pool import Executor
 
@@ -184,15 +184,24 @@ def compare_rows(tasks: list[tuple]) -> list[dict[str, Any]]:
     ran = [loop for loop in loops if loop is not None]
     try:
         results = iter(run_shared(ran))
-    except (ValueError, TypeError, ArithmeticError) as e:
-        for row, loop in zip(rows, loops):
-            if loop is not None:
-                row["status"] = _failed(e)
-        return rows
+    except (ValueError, TypeError, ArithmeticError):  # one run failed: each on its own, so only its row says so
+        results = iter([_run_or_error(loop) for loop in ran])
     for row, loop in zip(rows, loops):
-        if loop is not None:
-            _row_metrics(row, next(results))
+        if loop is None:
+            continue
+        res = next(results)
+        if isinstance(res, Exception):
+            row["status"] = _failed(res)
+        else:
+            _row_metrics(row, res)
     return rows
+
+
+def _run_or_error(loop):
+    try:
+        return run(loop)
+    except (ValueError, TypeError, ArithmeticError) as e:
+        return e
 
 
 def _failed(error: Exception) -> str:

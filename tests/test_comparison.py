@@ -304,3 +304,30 @@ def test_cli_three_seeds_of_an_axis_without_noise(tmp_path):
                            "paper", "--estimators", "paper,eso", "--out", str(out)], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     assert (out / "compare.svg").is_file()
+
+
+def test_a_run_that_raises_fails_its_own_row_only(monkeypatch):
+    """Runs that share work are made together; when one of them raises, each runs on its own and only the
+    failing row says "failed" (as when every row was simulated alone)."""
+    import obsdesign.comparison as comparison
+
+    real_run = comparison.run
+
+    def run(loop):
+        if loop.estimator == "eso":
+            raise ArithmeticError("eso blew up")
+        return real_run(loop)
+
+    def shared(loops):
+        for loop in loops:
+            run(loop)
+        return [real_run(loop) for loop in loops]
+
+    monkeypatch.setattr(comparison, "run", run)
+    monkeypatch.setattr(comparison, "run_shared", shared)
+    cfg = od.load_preset("vcm")
+    plant = comparison.plant_config(cfg, "paper")
+    tasks = [(cfg, plant, e, "excitation", 0, 0.0) for e in ("paper", "eso", "paper-k0")]
+    rows = comparison.compare_rows(tasks)
+    assert [r["status"] for r in rows] == ["ok", "failed: ArithmeticError: eso blew up", "ok"]
+    assert rows[0]["friction_rms_error"] > 0 and rows[1]["friction_rms_error"] is None

@@ -113,6 +113,7 @@ def kept_response(result, name: str, w) -> np.ndarray:
     resp.real, resp.imag = re, im  # every bit of both parts (no arithmetic: -0.0, inf and nan stay)
     return resp
 
+
 _POS = POSITIVE
 _PHASE = Range(low=0.0, high=90.0)
 

@@ -57,13 +57,21 @@ _OPEN = CONTROLLERS.code("open-loop")
 _TRUE = SCHEDULES.code("true")
 
 
-def _standalone(loop: LoopInputs) -> bool:
-    """Whether the plant of ``loop`` depends on its estimator (so it cannot be shared)."""
-    obs, _, ctrl = loop.sampled.kernel_args()
-    # The estimator is fed the net force ``K command - G`` of the controller's K and G, the plant's
-    # output u is that of its own: the two agree only where the plant's gain and load are the design's.
-    return (ctrl.controller != _OPEN or obs.schedule == _TRUE
-            or loop.K_plant != ctrl.K or loop.G_plant != ctrl.G)
+def _keys(loop: LoopInputs) -> tuple[tuple, tuple | None]:
+    """What a run reads (its kernel's inputs and the metrics' bookkeeping), and what its open-loop plant
+    reads (``None`` where the plant depends on the estimator, so it cannot be shared); compared by
+    :func:`_same_bits`. The kernel's inputs are built once per run here."""
+    obs, est, ctrl, plant, signals = args = loop.kernel_args()
+    sc, fr = loop.scenario, loop.config.friction
+    run = (loop.n_samples, sc.spec, sc.dt, sc.duration, tuple(sc.steps), tuple(sc.holds), loop.settle_tol,
+           fr.sigma, fr.kappa, fr.beta, tuple(args))
+    # The estimator is fed the net force ``K command - G`` of the controller's K and G, the plant's output
+    # u is that of its own: the two agree only where the plant's gain and load are the design's.
+    if (ctrl.controller != _OPEN or obs.schedule == _TRUE
+            or loop.K_plant != ctrl.K or loop.G_plant != ctrl.G):
+        return run, None
+    return run, (loop.dt, loop.n_samples, tuple(plant), signals.u_open, signals.noise, signals.quantization,
+                 tuple(getattr(ctrl, name) for name in _OPEN_LOOP_FIELDS))
 
 
 def shares_plant(a: LoopInputs, b: LoopInputs) -> bool:
@@ -85,22 +93,18 @@ def shares_plant(a: LoopInputs, b: LoopInputs) -> bool:
     >>> shares_plant(prepare(cfg, "excitation", duration=0.1), prepare(cfg, "excitation", duration=0.1, seed=1))
     False
     """
-    if _standalone(a) or _standalone(b):
-        return False
-    pa, sa = a.kernel_args()[3:]
-    pb, sb = b.kernel_args()[3:]
-    ca, cb = a.sampled.kernel_args()[2], b.sampled.kernel_args()[2]
+    return _same_plant(_keys(a)[1], _keys(b)[1])
 
-    def read(plant, signals, ctrl, loop) -> tuple:  # what the open-loop plant and its sensor read
-        return (loop.dt, loop.n_samples, tuple(plant), signals.u_open, signals.noise, signals.quantization,
-                tuple(getattr(ctrl, name) for name in _OPEN_LOOP_FIELDS))
 
-    return _same_bits(read(pa, sa, ca, a), read(pb, sb, cb, b))
+def _same_plant(pa: tuple | None, pb: tuple | None) -> bool:
+    """Whether two plant keys of :func:`_keys` are one shareable plant."""
+    return pa is not None and pb is not None and _same_bits(pa, pb)
 
 
 def _same_bits(x, y) -> bool:
     """Equal to the bit: floats by their representation (``-0.0`` is not ``0.0``, NaN equals itself),
-    arrays by dtype, shape and bytes, tuples (the kernel's argument groups) item by item."""
+    arrays by dtype, shape and bytes, tuples (the kernel's argument groups) item by item; ``None`` and
+    other values (a scenario's spec) by ``==``."""
     if isinstance(x, tuple) or isinstance(y, tuple):
         return (isinstance(x, tuple) and isinstance(y, tuple) and len(x) == len(y)
                 and all(_same_bits(a, b) for a, b in zip(x, y)))
@@ -132,13 +136,7 @@ def same_run(a: LoopInputs, b: LoopInputs) -> bool:
     >>> same_run(prepare(noisy, "positioning", seed=0), prepare(noisy, "positioning", seed=1))
     False
     """
-    sa, sb = a.scenario, b.scenario
-    fa, fb = a.config.friction, b.config.friction
-    return (a.n_samples == b.n_samples and sa.spec == sb.spec
-            and _same_bits((sa.dt, sa.duration, tuple(sa.steps), tuple(sa.holds), a.settle_tol, fa.sigma, fa.kappa),
-                           (sb.dt, sb.duration, tuple(sb.steps), tuple(sb.holds), b.settle_tol, fb.sigma, fb.kappa))
-            and fa.beta == fb.beta and a.config.observer.variant == b.config.observer.variant
-            and _same_bits(tuple(a.kernel_args()), tuple(b.kernel_args())))
+    return _same_bits(_keys(a)[0], _keys(b)[0])
 
 
 def _observed(leader: dict[str, np.ndarray], loop: LoopInputs) -> tuple[dict[str, np.ndarray], int, float]:
@@ -202,9 +200,10 @@ def run_shared(loops: Sequence[LoopInputs], *, keep_trace: bool = True) -> list[
         if not isinstance(loop, LoopInputs):
             raise TypeError(f"loops[{i}]: expected LoopInputs (from obsdesign.sim.prepare), found "
                             f"{type(loop).__name__}")
-    same = _groups(list(range(len(loops))), lambda i, j: same_run(loops[i], loops[j]))
+    keys = [_keys(loop) for loop in loops]
+    same = _groups(list(range(len(loops))), lambda i, j: _same_bits(keys[i][0], keys[j][0]))
     kernel_out: dict[int, tuple[dict[str, np.ndarray], int, float]] = {}
-    for first, *others in _groups([g[0] for g in same], lambda i, j: shares_plant(loops[i], loops[j])):
+    for first, *others in _groups([g[0] for g in same], lambda i, j: _same_plant(keys[i][1], keys[j][1])):
         leader, n_written, wall = run_kernel(loops[first])
         kernel_out[first] = leader, n_written, wall
         diverged = n_written < loops[first].n_samples

@@ -122,6 +122,11 @@ class LoopInputs:
         """The estimator's name."""
         return self.sampled.estimator
 
+    @property
+    def lag_model(self) -> bool:
+        """Whether the observer's variant is ``lag`` (its estimated state w3 holds Fc + Fv)."""
+        return self.config.observer.variant == "lag"
+
     def reference_feedforward(self) -> tuple[np.ndarray, np.ndarray]:
         """The reference velocity [m/s] and feed-forward weight of every sample
         (:func:`obsdesign.sampled.reference.reference_feedforward` of ``x_ref`` with the config's
@@ -138,7 +143,7 @@ class LoopInputs:
     def kernel_args(self) -> tuple:
         """The groups of :func:`obsdesign.sim.kernel.run_loop` before its outputs: the controller's
         ``(ObserverArgs, EstimatorArgs, ControllerArgs)``, then ``PlantArgs`` and ``Signals``."""
-        plant = kernel.PlantArgs(n_sub=self.n_sub, mode=self.mode, lag_model=self.config.observer.variant == "lag",
+        plant = kernel.PlantArgs(n_sub=self.n_sub, mode=self.mode, lag_model=self.lag_model,
                                  m=self.m, K=self.K_plant, G=self.G_plant, friction_code=self.friction_code,
                                  plant_params=self.plant_params)
         v_ref, w_ff = self.reference_feedforward()
@@ -351,7 +356,7 @@ def loop_result(loop: LoopInputs, out: dict[str, np.ndarray], n_written: int, wa
     fr = loop.config.friction
     stable_step = step_is_stable(dt=loop.dt, n_sub=loop.n_sub, m=loop.m, sigma=fr.sigma, kappa=fr.kappa,
                                  beta=fr.beta if fr.beta is not None else 0.0,
-                                 model_lag=loop.mode == kernel.PLANT_MODEL and loop.config.observer.variant == "lag")
+                                 model_lag=loop.mode == kernel.PLANT_MODEL and loop.lag_model)
     metrics = loop_metrics(loop.scenario, out, e, n_written, loop.settle_tol, wall, step_stable=stable_step)
     traces = {}
     if keep_trace:
