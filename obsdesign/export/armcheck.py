@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["CFLAGS", "ArmBuild", "EmulatedRun", "toolchain_missing", "build", "emulate"]
+__all__ = ["CFLAGS", "ArmBuild", "EmulatedRun", "toolchain_missing", "build", "emulate", "host_run"]
 
 #: The target's compiler flags (issue 34): Cortex-M4 with its single-precision FPU, hard-float ABI.
 CFLAGS = ("-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard", "-O2")
@@ -282,3 +282,55 @@ def _step_entry(arm: ArmBuild) -> int:
         if len(parts) == 3 and parts[2] == "obsdesign_controller_step":
             return int(parts[0], 16) & ~1
     raise RuntimeError("od_run.elf: expected the symbol obsdesign_controller_step, found none")
+
+
+_HOST_DRIVER = r"""
+#include <stdio.h>
+#include "obsdesign_controller.h"
+/* stdin: pairs of doubles (x_ref, x_meas); stdout: command, v_hat, f_hat, f_hat_filtered as doubles. */
+int main(void) {
+    double in[2], out[4];
+    obsdesign_controller c;
+    obsdesign_controller_init(&c);
+    while (fread(in, sizeof in, 1, stdin) == 1) {
+        out[0] = obsdesign_controller_step(&c, in[0], in[1]);
+        out[1] = c.v_hat;
+        out[2] = c.f_hat;
+        out[3] = c.f_hat_filtered;
+        fwrite(out, sizeof out, 1, stdout);
+    }
+    return 0;
+}
+"""
+
+
+def host_run(files: dict[str, str], x_ref, x_meas, folder) -> EmulatedRun:
+    """Run the ``host`` C controller (double, bit-exact with simulate) compiled by ``gcc`` on this machine.
+
+    The double reference of :func:`emulate`: the same inputs in metres (``counts * resolution``).
+
+    Parameters
+    ----------
+    files : dict of str to str
+        ``obsdesign_controller.h`` and ``.c`` of the host target.
+    x_ref, x_meas : array_like of float
+        Set-point and measurement of each sample [m].
+    folder : path
+        A folder to work in (created if missing).
+
+    Returns
+    -------
+    EmulatedRun
+        Without instruction counts.
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, text in files.items():
+        (folder / name).write_text(text)
+    (folder / "od_host.c").write_text(_HOST_DRIVER)
+    _run(["gcc", "-std=c99", "-O2", "-I.", "-o", "od_host", "od_host.c", "obsdesign_controller.c", "-lm"], folder)
+    data = np.column_stack([np.asarray(x_ref, float), np.asarray(x_meas, float)]).astype("<f8").tobytes()
+    out = subprocess.run([str(folder / "od_host")], input=data, capture_output=True, check=True).stdout
+    table = np.frombuffer(out, dtype="<f8").reshape(-1, 4)
+    return EmulatedRun(command=table[:, 0].copy(), v_hat=table[:, 1].copy(), f_hat=table[:, 2].copy(),
+                       f_hat_filtered=table[:, 3].copy(), instructions=None)

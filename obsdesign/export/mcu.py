@@ -133,8 +133,8 @@ def mcu_controller_files(cfg, *, controller: str | None = None, schedule: str | 
         "INV_COMP_DEADZONE": 1.0 / host["COMP_DEADZONE"] if host["COMP_DEADZONE"] > 0 else 0.0,
         "KAPPA": host["KAPPA"], "S_RES": host["S"] * res, "MINUS_S_CF": -host["S"] * host["CF"],
         "SEGMENTS_PER_KAPPA": table.segments / table.kappa, "SQRT2": math.sqrt(2.0), "LN2": math.log(2.0),
-        **{f"LP_{name}": host[f"LP_{name}"] for name in ("PHI_0", "PHI_1", "PHI_2", "PHI_3", "G0_0", "G0_1", "G1_0",
-                                                         "G1_1")},
+        "LP_PHI_0M1": host["LP_PHI_0"] - 1.0, "LP_PHI_3M1": host["LP_PHI_3"] - 1.0,
+        **{f"LP_{name}": host[f"LP_{name}"] for name in ("PHI_1", "PHI_2", "G0_0", "G0_1", "G1_0", "G1_1")},
     }
     consts = {key: float_literal(v) for key, v in floats.items()}
     consts["SEGMENTS"] = str(table.segments)

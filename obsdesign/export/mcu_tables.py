@@ -12,7 +12,11 @@ observer runs in increment form (the estimate itself is the state)::
 which is the host's recursion ``y[n+1] = Phi y[n] + b_u u[n] + g0 x[n] + g1 x[n+1]`` with
 ``w = y + L x``: it holds because the measurement gain is ``g = A L`` (the plant's velocity and
 friction rows do not read the absolute position), so the position's coefficients sum to zero and
-only its increment enters. :func:`stiffness_table` checks that identity at every node.
+only its increment enters. :func:`stiffness_table` checks that identity at every node. The step
+computes it as ``w[n+1] = w[n] + E w[n] + b_u u[n] + g_d (dx - dt v_hat[n])`` with
+``E = Phi - I + dt g_d e1'``: the innovation ``dx - dt v_hat`` is small, and the two large terms
+``g_d dx`` and ``dt g_d v_hat`` that cancel in sliding are combined in double at export time, so the
+float32 rounding of the stored numbers does not bias the estimate.
 
 The natural logarithm of the stiffness (eq:2:3:5) and of the pre-sliding shape is a polynomial
 fitted here (:func:`log_polynomial`) on the mantissa ``[sqrt(1/2), sqrt(2))``; the exponent comes
@@ -45,7 +49,7 @@ __all__ = ["StiffnessTable", "LogPolynomial", "stiffness_table", "log_polynomial
            "COEFFICIENT_NAMES"]
 
 #: The eight numbers of the recursion for one stiffness, in the order the table stores them.
-COEFFICIENT_NAMES = ("D11", "D12", "D21", "D22", "BU1", "BU2", "GD1", "GD2")
+COEFFICIENT_NAMES = ("E11", "E12", "E21", "E22", "BU1", "BU2", "GD1", "GD2")
 
 _FIT_POINTS = 12     # least-squares points per segment (Chebyshev nodes)
 _CHECK_POINTS = 64   # points per segment where the error bound is measured
@@ -112,7 +116,7 @@ def exact_coefficients(ctrl, k: float) -> np.ndarray:
 
     The same arithmetic as :func:`obsdesign.sampled.kernel.observer_sample` (``Phi``, ``b_u``,
     ``g1``) of the controller ``ctrl`` (a :class:`~obsdesign.sampled.SampledController`), turned
-    into the increment form: ``D = Phi - I``, ``g_d = g1 + L``.
+    into the increment form: ``E = Phi - I + dt g_d e1'``, ``g_d = g1 + L``.
     """
     obs = ctrl.observer
     A = obs.A0 + k * obs.A1
@@ -134,8 +138,9 @@ def exact_coefficients(ctrl, k: float) -> np.ndarray:
         raise ValueError(f"variant: the increment form needs a measurement gain g = A L (no absolute-position "
                          f"term in the observer); expected a residual below {tol:.3g}, found "
                          f"{float(np.max(np.abs(residual))):.3g} at k = {k!r}")
-    D = Phi - np.eye(2)
-    return np.array([D[0, 0], D[0, 1], D[1, 0], D[1, 1], bu[0], bu[1], gd[0], gd[1]])
+    E = Phi - np.eye(2)
+    E[:, 0] += ctrl.dt * gd  # innovation form: the large L v and L dx / h terms cancel here, in double
+    return np.array([E[0, 0], E[0, 1], E[1, 0], E[1, 1], bu[0], bu[1], gd[0], gd[1]])
 
 
 def _segment_fit(ctrl, lo: float, hi: float) -> np.ndarray:
