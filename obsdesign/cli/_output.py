@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from ..export import FORMATS as EXPORT_FORMATS
+from ..export import TARGETS as EXPORT_TARGETS
 from ..export import WHAT as EXPORT_WHAT
 from ..params import PARAMETERS, VARIANTS
 from ..sampled.choices import CONTROLLERS, ESTIMATORS, SCHEDULES
@@ -28,11 +29,15 @@ def _cmd_export(args: argparse.Namespace) -> int:
                         ("--estimator", args.estimator)):
         if value is not None and args.what != "controller":
             raise UsageError(f"obsdesign export: argument {flag}: applies to --what controller only, found {value!r}")
+    if args.target != "host" and (args.what != "controller" or args.format != "c"):
+        raise UsageError(f"obsdesign export: argument --target: {args.target} applies to --what controller "
+                         f"--format c only, found --what {args.what} --format {args.format}")
     cfg = load(args).override(dt=args.dt)  # --rho, --kappa, --variant: applied by load, once
     from ._table import table_options  # --what friction-table: its flags, refused with the others
 
     paths = export(cfg, args.format, args.output, what=args.what, controller=args.controller,
-                   schedule=args.stiffness, estimator=args.estimator, table=table_options(args))
+                   schedule=args.stiffness, estimator=args.estimator, table=table_options(args),
+                   target=args.target)
     warn_unstable(cfg, "the exported observer diverges")
     if cfg.sensor.noise_rms > 0 and args.what == "observer" and args.format != "latex":
         print_warnings([f"the exported observer's stiffness schedule reverses at sign changes of v_hat (the "
@@ -83,6 +88,10 @@ def add_commands(sub) -> None:
     p.add_argument("--estimator", choices=ESTIMATORS.names(),
                    help="with --what controller: the estimator, as in simulate (default paper; the baselines "
                         "tuned by the fair noise rule)")
+    p.add_argument("--target", choices=EXPORT_TARGETS, default="host",
+                   help="with --what controller --format c: host (double, bit-exact with simulate; default) or "
+                        "cortex-m4f (float32, encoder counts of sensor.quantization, fixed cost a sample; "
+                        "docs/on-the-drive.md)")
     add_config_flags(p, default_preset="vcm")
     p.add_argument("--variant", choices=VARIANTS, help="override the config's model variant")
     p.add_argument("--rho", type=POSITIVE_ARG, help="gain parameter rho (> 0)")

@@ -24,8 +24,11 @@ FORMATS = ("latex", "python", "c", "octave", "js")
 WHAT = ("observer", "controller", "friction-table")
 #: The formats of the whole sampled controller: the code formats (not the derivation's LaTeX).
 CONTROLLER_FORMATS = tuple(fmt for fmt in FORMATS if fmt != "latex")
+#: The targets of the C controller: ``host`` (double, bit-exact with simulate) and ``cortex-m4f``
+#: (float32, encoder counts, fixed cost: :mod:`obsdesign.export.mcu`).
+TARGETS = ("host", "cortex-m4f")
 
-__all__ = ["export", "FORMATS", "WHAT", "CONTROLLER_FORMATS"]
+__all__ = ["export", "FORMATS", "WHAT", "CONTROLLER_FORMATS", "TARGETS"]
 
 
 def __getattr__(name: str):

@@ -28,7 +28,7 @@ from pathlib import Path
 
 from .._io import atomic_write
 from ..params import Config
-from . import CONTROLLER_FORMATS, FORMATS, WHAT
+from . import CONTROLLER_FORMATS, FORMATS, TARGETS, WHAT
 from .codegen import c_files, export_spec, js_module, latex_document, octave_files, python_module
 
 __all__ = ["export"]
@@ -37,7 +37,7 @@ __all__ = ["export"]
 
 def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "observer",
            controller: str | None = None, schedule: str | None = None,
-           estimator: str | None = None, table: dict | None = None) -> list[Path]:
+           estimator: str | None = None, table: dict | None = None, target: str = "host") -> list[Path]:
     """Write the export files of one format into ``out_dir`` (created if missing).
 
     Parameters
@@ -68,6 +68,11 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
         the options of :func:`obsdesign.export.friction_table.friction_table` (``points``,
         ``v_max``, ``velocities``, ``motor_constant``).
 
+    target : str
+        With ``what='controller'`` and format ``c``: a name of :data:`obsdesign.export.TARGETS`;
+        ``host`` (double, bit-exact with :func:`obsdesign.simulate`) or ``cortex-m4f`` (float32, encoder
+        counts, a fixed cost a sample: :func:`obsdesign.export.mcu.mcu_controller_files`).
+
     Returns
     -------
     list of Path
@@ -77,6 +82,11 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
         raise ValueError(f"format: expected one of {', '.join(FORMATS)}, found {fmt!r}")
     if not isinstance(what, str) or what not in WHAT:
         raise ValueError(f"what: expected one of {', '.join(WHAT)}, found {what!r}")
+    if not isinstance(target, str) or target not in TARGETS:
+        raise ValueError(f"target: expected one of {', '.join(TARGETS)}, found {target!r}")
+    if target != "host" and (what != "controller" or fmt != "c"):
+        raise ValueError(f"target: {target!r} applies to what='controller' in format 'c' only, found "
+                         f"what={what!r}, format={fmt!r}")
     if what == "friction-table":
         if fmt != "c":
             raise ValueError(f"format: the friction table is written as CSV and a C array; expected c, found {fmt!r}")
@@ -93,7 +103,12 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
 
         if not isinstance(cfg, Config):
             raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
-        files = controller_files(cfg, fmt, controller=controller, schedule=schedule, estimator=estimator)
+        if target == "cortex-m4f":
+            from .mcu import mcu_controller_files
+
+            files = mcu_controller_files(cfg, controller=controller, schedule=schedule, estimator=estimator)
+        else:
+            files = controller_files(cfg, fmt, controller=controller, schedule=schedule, estimator=estimator)
         return _write(files, out_dir)
     for name, value in (("controller", controller), ("schedule", schedule), ("estimator", estimator)):
         if value is not None:

@@ -37,13 +37,12 @@ import numpy as np
 
 from ..sampled.controller import SampledController
 from .controller import SCHEDULE_ZERO, controller_constants, exported_controller, sanitize_comment, _environment
+from . import TARGETS
 from .codegen import axis_note
 from .mcu_tables import COEFFICIENT_NAMES, _CHECK_POINTS, log_polynomial, stiffness_table
 
 __all__ = ["mcu_controller_files", "TARGETS", "MCU_ESTIMATORS", "float_literal"]
 
-#: The targets of the C controller export: ``host`` (double, bit-exact with simulate) and the microcontroller's.
-TARGETS = ("host", "cortex-m4f")
 #: The estimators the ``cortex-m4f`` target runs.
 MCU_ESTIMATORS = ("paper", "paper-k0")
 
