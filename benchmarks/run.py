@@ -22,6 +22,7 @@ import bench_data  # noqa: E402
 import bench_derive  # noqa: E402
 import bench_friction_plants  # noqa: E402
 import bench_identify  # noqa: E402
+import bench_mcu  # noqa: E402
 import bench_report  # noqa: E402
 import bench_sim  # noqa: E402
 import bench_sweep  # noqa: E402
@@ -39,6 +40,7 @@ SUITES = {
     "Stability certificate (issue 18)": bench_certificate.run,
     "Tuning (issue 18)": bench_tune.run,
     "Report (issue 19)": bench_report.run,
+    "Controller on a Cortex-M4 (issue 34)": bench_mcu.run,
 }
 
 
