@@ -51,7 +51,7 @@ def float_literal(value: float) -> str:
     """A C float literal (``f`` suffix) that rounds to the float32 nearest ``value``.
 
     >>> float_literal(0.1), float_literal(2.0), float_literal(-3e-9)
-    ('0.100000001f', '2.0f', '-3.00000008e-09f')
+    ('0.100000001f', '2.0f', '-3.00000003e-09f')
     """
     value = float(value)
     if not math.isfinite(value) or abs(value) > float(np.finfo(np.float32).max):
