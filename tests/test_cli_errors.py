@@ -265,13 +265,15 @@ def test_the_report_study_of_a_diverging_design_says_so():  # m5, m6 (the report
     assert "none (diverged)" in ss.measured and ss.reproduced is False
 
 
-def test_export_says_when_its_schedule_differs_from_the_simulators(capsys, tmp_path):
-    """The exports reverse the schedule at sign changes of v_hat ('estimated-raw'); a config with sensor
-    noise, whose simulator default adds a hysteresis, gets one warning line; vcm (no random noise) none."""
+def test_the_observer_export_has_the_simulators_schedule_and_no_warning(capsys, tmp_path):
+    """The observer export runs the simulator's default schedule 'estimated' with its reversal hysteresis
+    (issue 34): under sensor noise (table1) it is written without a warning, the threshold in the code."""
     code, _, err = run(capsys, "export", "--format", "python", "--preset", "table1", "-o", str(tmp_path / "a"))
-    assert code == 0 and len(err) == 1 and "estimated-raw" in err[0] and "1e-06 m" in err[0]
-    code, _, err = run(capsys, "export", "--format", "python", "--preset", "vcm", "-o", str(tmp_path / "b"))
     assert code == 0 and err == []
+    assert "REVERSAL_THRESHOLD = 4e-06" in (tmp_path / "a" / "obsdesign_observer.py").read_text()
+    code, _, err = run(capsys, "export", "--format", "c", "--preset", "table1", "-o", str(tmp_path / "b"))
+    assert code == 0 and err == [] and "#define OD_REVERSAL_THRESHOLD 3.9999999999999998e-06" in (
+        tmp_path / "b" / "obsdesign_observer.c").read_text()
 
 
 def test_the_controller_export_has_the_simulators_schedule_and_no_warning(capsys, tmp_path):

@@ -11,7 +11,7 @@ from ..export import WHAT as EXPORT_WHAT
 from ..params import PARAMETERS, VARIANTS
 from ..sampled.choices import CONTROLLERS, ESTIMATORS, SCHEDULES
 from ._common import (DESIGN_FLAGS, INPUT_DIR, INPUT_FILE, POSITIVE_ARG, UsageError, add_config_flags,
-                      add_design_flags, check_output_dir, check_output_file, load, print_warnings, warn_unstable,
+                      add_design_flags, check_output_dir, check_output_file, load, warn_unstable,
                       workers_arg)
 from ._data import add_trace_flags, load_trace_args
 
@@ -39,10 +39,6 @@ def _cmd_export(args: argparse.Namespace) -> int:
                    schedule=args.stiffness, estimator=args.estimator, table=table_options(args),
                    target=args.target)
     warn_unstable(cfg, "the exported observer diverges")
-    if cfg.sensor.noise_rms > 0 and args.what == "observer" and args.format != "latex":
-        print_warnings([f"the exported observer's stiffness schedule reverses at sign changes of v_hat (the "
-                        f"simulator's 'estimated-raw'); with sensor.noise_rms = {cfg.sensor.noise_rms:g} m the "
-                        "simulator's default 'estimated' adds a reversal hysteresis: '--what controller' exports it"])
     for path in paths:
         print(path)
     return 0
