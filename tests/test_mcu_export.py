@@ -165,3 +165,29 @@ def test_export_target_errors(kwargs, match, tmp_path):
     with pytest.raises(ValueError, match="target: expected one of host, cortex-m4f, found 'avr'"):
         export(VCM, "c", tmp_path, what="controller", target="avr")
     assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("args, match", [
+    (["--target", "cortex-m4f"], "argument --target: cortex-m4f applies to --what controller --format c only"),
+    (["--what", "controller", "--target", "cortex-m4f", "--preset", "table1"],
+     "sensor.quantization: the cortex-m4f target reads the position in encoder counts"),
+    (["--what", "controller", "--target", "cortex-m4f", "--estimator", "kalman"],
+     "estimator: the cortex-m4f target runs the paper observer"),
+    (["--what", "controller", "--target", "arm"], "argument --target: invalid choice: 'arm'"),
+])
+def test_cli_target_errors(args, match, tmp_path, monkeypatch, capsys):
+    from obsdesign.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["export", "--format", "c", *args, "-o", "out"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and match in err[0]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_writes_the_target_files(tmp_path, capsys):
+    from obsdesign.cli import main
+
+    assert main(["export", "--format", "c", "--what", "controller", "--target", "cortex-m4f", "-o", str(tmp_path)]) == 0
+    assert "float obsdesign_controller_step(obsdesign_controller *c, int32_t x_ref, int32_t x_meas);" in (
+        tmp_path / "obsdesign_controller.h").read_text()
