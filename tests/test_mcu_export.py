@@ -67,9 +67,13 @@ def test_the_log_polynomial_against_math_log():
     assert np.max(np.abs(approx - np.log1p(t))) <= poly.max_error <= 1e-7
 
 
+#: Every shape of the generated code: the three schedules, paper-k0, the knobs, pid.
+SHAPES = [(VCM, {}), (NOISY, {}), (LAG, {}), (VCM, {"estimator": "paper-k0"}), (VCM, {"schedule": "constant"}),
+          (VCM.override(gain=0.8, deadzone=1e-4, viscous=True), {}), (VCM, {"controller": "pid"})]
+
+
 def test_generated_code_has_no_double_no_division_no_library():
-    for cfg, kw in ((VCM, {}), (NOISY, {}), (LAG, {}), (VCM, {"estimator": "paper-k0"}), (VCM, {"schedule": "constant"}),
-                    (VCM.override(gain=0.8, deadzone=1e-4, viscous=True), {}), (VCM, {"controller": "pid"})):
+    for cfg, kw in SHAPES:
         text = mcu_controller_files(cfg, **kw)["obsdesign_controller.c"]
         code = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
         assert "double" not in code and "#include <math.h>" not in code
@@ -80,13 +84,14 @@ def test_generated_code_has_no_double_no_division_no_library():
 
 @pytest.mark.skipif(not HAS_GCC, reason="gcc not installed")
 def test_host_build_is_strict_and_float_only(tmp_path):
-    for name, text in mcu_controller_files(NOISY).items():
-        (tmp_path / name).write_text(text)
-    subprocess.run(["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-Wdouble-promotion",
-                    "-Wfloat-conversion", "-O2", "-c", "obsdesign_controller.c"], cwd=tmp_path, check=True)
-    undefined = subprocess.run(["nm", "-u", "obsdesign_controller.o"], cwd=tmp_path, capture_output=True,
-                               text=True, check=True).stdout.split()
-    assert [s for s in undefined if s != "U"] == []  # no libm, no memset/memcpy
+    for cfg, kw in SHAPES:
+        for name, text in mcu_controller_files(cfg, **kw).items():
+            (tmp_path / name).write_text(text)
+        subprocess.run(["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-Wdouble-promotion",
+                        "-Wfloat-conversion", "-O2", "-c", "obsdesign_controller.c"], cwd=tmp_path, check=True)
+        undefined = subprocess.run(["nm", "-u", "obsdesign_controller.o"], cwd=tmp_path, capture_output=True,
+                                   text=True, check=True).stdout.split()
+        assert [s for s in undefined if s != "U"] == []  # no libm, no memset/memcpy
 
 
 @pytest.mark.skipif(MISSING is not None, reason=f"the ARM toolchain: {MISSING}")

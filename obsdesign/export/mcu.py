@@ -145,6 +145,7 @@ def mcu_controller_files(cfg, *, controller: str | None = None, schedule: str | 
     rows = [", ".join(float_literal(v) for v in table.coefficients[i].ravel()) for i in range(table.segments)]
     bound_lines = [f"{name:<4} {err:.3g} (relative {err / s if s > 0 else 0.0:.2g})"
                    for name, err, s in zip(COEFFICIENT_NAMES, table.max_error, table.scale)]
+    count_force = float(np.max(np.abs(table.coefficients[:, 7, 0]))) * res  # g_d2 x one count [N]
     cfg = ctrl.config
     ctx = {
         "name": sanitize_comment(cfg.name), "variant": cfg.observer.variant, "controller": ctrl.controller,
@@ -152,6 +153,7 @@ def mcu_controller_files(cfg, *, controller: str | None = None, schedule: str | 
         "dt": repr(dt), "resolution": repr(res), "kappa": repr(table.kappa), "axis": axis_note(cfg),
         "segments": table.segments, "check_points": _CHECK_POINTS, "bound_lines": bound_lines,
         "log_degree": len(q) - 1, "log_error": f"{log.max_error:.2g}",
+        "count_force": f"{count_force:.3g}", "count_force_cf": f"{count_force / host['CF'] * 100:.3g}",
         "resolution_literal": float_literal(res), "dt_literal": float_literal(dt),
         "consts": consts, "table": rows, "log_horner": horner, "schedule_code": schedule_code,
         "comp_on": comp_on, "comp_default": comp.gain == 1.0 and not comp.viscous and comp.deadzone == 0.0,
