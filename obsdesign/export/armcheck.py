@@ -164,7 +164,7 @@ def build(files: dict[str, str], folder) -> ArmBuild:
     if undefined:
         raise RuntimeError(f"obsdesign_controller.o: expected no outside symbol (no __aeabi_d*, libm or libc), "
                            f"found {', '.join(undefined)}")
-    text, data, bss = (int(v) for v in _run(["arm-none-eabi-size", "obsdesign_controller.o"], folder)
+    text_bytes, data, bss = (int(v) for v in _run(["arm-none-eabi-size", "obsdesign_controller.o"], folder)
                        .splitlines()[1].split()[:3])
     stack = max(int(line.split()[-2]) for line in (folder / "obsdesign_controller.su").read_text().splitlines()
                 if line.strip())
@@ -180,7 +180,7 @@ def build(files: dict[str, str], folder) -> ArmBuild:
     sections = _run(["arm-none-eabi-size", "-A", "obsdesign_controller.o"], folder)
     code = int(re.search(r"^\.text\s+(\d+)", sections, re.M).group(1))
     state = _state_size(folder)
-    return ArmBuild(folder=folder, flash=text + data, ram=data + bss, state=state, stack=stack, symbols=symbols,
+    return ArmBuild(folder=folder, flash=text_bytes + data, ram=data + bss, state=state, stack=stack, symbols=symbols,
                     step_range=(_TEXT, _TEXT + code), run_address=table["od_run"],
                     image=(folder / "od_run.bin").read_bytes())
 

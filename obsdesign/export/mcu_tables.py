@@ -129,7 +129,6 @@ def exact_coefficients(ctrl, k: float) -> np.ndarray:
     L = np.array([obs.design.L1, obs.design.L2])
     bu = G0 @ b
     gx1 = G1 @ g
-    gx0 = G0 @ g - gx1
     gd = gx1 + L
     # increment form: the position's coefficients gx0 - Phi L and gx1 + L cancel when g = A L (checked on the
     # affine arrays, where it is structural; g1 = g(1) - g(0) carries the rounding of g0's magnitude)
