@@ -35,6 +35,7 @@ import math
 
 import numpy as np
 
+from ..sampled.choices import ESTIMATORS, SCHEDULES
 from ..sampled.controller import SampledController
 from .controller import SCHEDULE_ZERO, controller_constants, exported_controller, sanitize_comment, _environment
 from . import TARGETS
@@ -43,13 +44,20 @@ from .mcu_tables import COEFFICIENT_NAMES, _CHECK_POINTS, log_polynomial, stiffn
 
 __all__ = ["mcu_controller_files", "TARGETS", "MCU_ESTIMATORS", "float_literal"]
 
-#: The estimators the ``cortex-m4f`` target runs.
-MCU_ESTIMATORS = ("paper", "paper-k0")
+#: The estimators the ``cortex-m4f`` target runs: the paper's entries of the registry (not the baselines).
+MCU_ESTIMATORS = tuple(name for name in ESTIMATORS.names() if not ESTIMATORS[name].baseline)
 
 
 def float_literal(value: float) -> str:
     """A C float literal (``f`` suffix) that rounds to the float32 nearest ``value``.
 
+    Parameters
+    ----------
+    value : float
+        A finite number within float32's range.
+
+    Examples
+    --------
     >>> float_literal(0.1), float_literal(2.0), float_literal(-3e-9)
     ('0.100000001f', '2.0f', '-3.00000003e-09f')
     """
@@ -111,13 +119,12 @@ def mcu_controller_files(cfg, *, controller: str | None = None, schedule: str | 
     log = log_polynomial()
     comp = ctrl.compensation
     comp_on = ctrl.controller == "pid+observer"
-    code = host["SCHEDULE"]
-    schedule_code = {SCHEDULE_ZERO: "zero"}.get(int(code)) if code == SCHEDULE_ZERO else None
-    if schedule_code is None:
-        from ..sampled.choices import SCHEDULES
-
-        schedule_code = {SCHEDULES.code("estimated"): "hysteresis", SCHEDULES.code("estimated-raw"): "raw",
-                         SCHEDULES.code("constant"): "constant"}[int(code)]
+    # the shape of the generated schedule, from the code the host export runs (paper-k0: SCHEDULE_ZERO)
+    code = int(host["SCHEDULE"])
+    # choice subset: the template's three shapes of the runnable schedules
+    shapes = {SCHEDULES.code("estimated"): "hysteresis", SCHEDULES.code("estimated-raw"): "raw",
+              SCHEDULES.code("constant"): "constant", SCHEDULE_ZERO: "zero"}
+    schedule_code = shapes[code]
     threshold = host["REVERSAL_THRESHOLD"] / res  # [counts]; a reversal needs more than that
     near = round(threshold)
     reversal_counts = int(near) if abs(threshold - near) <= 1e-9 * max(1.0, threshold) else int(math.floor(threshold))

@@ -117,6 +117,23 @@ def exact_coefficients(ctrl, k: float) -> np.ndarray:
     The same arithmetic as :func:`obsdesign.sampled.kernel.observer_sample` (``Phi``, ``b_u``,
     ``g1``) of the controller ``ctrl`` (a :class:`~obsdesign.sampled.SampledController`), turned
     into the increment form: ``E = Phi - I + dt g_d e1'``, ``g_d = g1 + L``.
+
+    Parameters
+    ----------
+    ctrl : SampledController
+        The controller (its observer arrays and ``dt``).
+    k : float
+        Stiffness [N/m].
+
+    Returns
+    -------
+    ndarray, shape (8,)
+        In the order of :data:`COEFFICIENT_NAMES`.
+
+    Raises
+    ------
+    ValueError
+        The observer reads the absolute position (``g != A L``): the increment form does not hold.
     """
     obs = ctrl.observer
     A = obs.A0 + k * obs.A1
