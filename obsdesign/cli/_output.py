@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..export import CONTROLLER_FORMATS, CONTROLLER_ONLY
 from ..export import FORMATS as EXPORT_FORMATS
 from ..export import WHAT as EXPORT_WHAT
 from ..params import PARAMETERS, VARIANTS
@@ -23,7 +24,10 @@ def _cmd_export(args: argparse.Namespace) -> int:
     check_output_dir("export", "-o/--output", args.output)
     if args.what == "controller" and args.format == "latex":
         raise UsageError("obsdesign export: argument --format: the controller is exported as one of "
-                         "python, c, octave, js, found 'latex'")
+                         f"{', '.join(CONTROLLER_FORMATS)}, found 'latex'")
+    if args.format in CONTROLLER_ONLY and args.what != "controller":
+        raise UsageError(f"obsdesign export: argument --format: {args.format} exports the whole controller; "
+                         f"expected --what controller, found --what {args.what}")
     for flag, value in (("--controller", args.controller), ("--stiffness", args.stiffness),
                         ("--estimator", args.estimator)):
         if value is not None and args.what != "controller":
@@ -38,6 +42,13 @@ def _cmd_export(args: argparse.Namespace) -> int:
         print_warnings([f"the exported observer's stiffness schedule reverses at sign changes of v_hat (the "
                         f"simulator's 'estimated-raw'); with sensor.noise_rms = {cfg.sensor.noise_rms:g} m the "
                         "simulator's default 'estimated' adds a reversal hysteresis: '--what controller' exports it"])
+    if args.format == "fmu":
+        import zipfile
+
+        with zipfile.ZipFile(paths[0]) as archive:
+            if not any(name.startswith("binaries/") for name in archive.namelist()):
+                print_warnings(["no C compiler found ($CC or cc): the FMU holds the sources only (a source FMU, "
+                                "compiled by the importer)"])
     for path in paths:
         print(path)
     return 0
@@ -73,7 +84,7 @@ def add_commands(sub) -> None:
     p.add_argument("--format", required=True, choices=EXPORT_FORMATS)
     p.add_argument("--what", choices=EXPORT_WHAT, default="observer",
                    help="observer (default), controller: observer, low-pass, PID and compensation of the "
-                        "simulator, step(x_ref, x_meas) -> command [V]; friction-table: the feed-forward model as "
+                        "simulator, step(x_ref, x_meas) -> command [V] (--format fmu and st: this only); friction-table: the feed-forward model as "
                         "a velocity -> force (current) table, CSV and C array (--format c)")
     p.add_argument("--controller", choices=[name for name in CONTROLLERS.names() if name != "open-loop"],
                    help="with --what controller: the simulator's controller to generate (default pid+observer)")

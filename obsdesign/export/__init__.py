@@ -1,4 +1,5 @@
-"""Export the derivation and a designed observer as LaTeX, Python, C, Octave or JavaScript.
+"""Export the derivation and a designed observer as LaTeX, Python, C, Octave or JavaScript, the controller
+also as an FMU (:mod:`~obsdesign.export.fmu`) and IEC 61131-3 Structured Text (:mod:`~obsdesign.export.st`).
 
 :func:`export` (in :mod:`~obsdesign.export.files`) writes one format's files;
 :mod:`~obsdesign.export.codegen` prints them from the symbolic derivation. The
@@ -18,14 +19,17 @@ Examples
 from __future__ import annotations
 
 #: The export formats, in the order the command line lists them.
-FORMATS = ("latex", "python", "c", "octave", "js")
+FORMATS = ("latex", "python", "c", "octave", "js", "fmu", "st")
 #: What can be exported: the observer (default), the whole sampled controller, or the feed-forward
 #: friction model as a drive's velocity table (:mod:`obsdesign.export.friction_table`).
 WHAT = ("observer", "controller", "friction-table")
 #: The formats of the whole sampled controller: the code formats (not the derivation's LaTeX).
 CONTROLLER_FORMATS = tuple(fmt for fmt in FORMATS if fmt != "latex")
+#: The formats of the controller only: an FMI 2.0 co-simulation FMU and the IEC 61131-3 function block.
+# choice subset: the exports built around the whole controller, not the derivation or the observer alone
+CONTROLLER_ONLY = ("fmu", "st")
 
-__all__ = ["export", "FORMATS", "WHAT", "CONTROLLER_FORMATS"]
+__all__ = ["export", "FORMATS", "WHAT", "CONTROLLER_FORMATS", "CONTROLLER_ONLY"]
 
 
 def __getattr__(name: str):

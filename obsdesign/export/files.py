@@ -14,7 +14,11 @@ Examples
 >>> export(od.load_preset("vcm"), "latex", ".", what="controller")
 Traceback (most recent call last):
 ...
-ValueError: format: the controller is exported as one of python, c, octave, js, found 'latex'
+ValueError: format: the controller is exported as one of python, c, octave, js, fmu, st, found 'latex'
+>>> export(od.load_preset("vcm"), "fmu", ".")
+Traceback (most recent call last):
+...
+ValueError: format: 'fmu' exports the whole controller; expected what='controller', found what='observer'
 >>> export(od.load_preset("vcm"), "c", ".", estimator="eso")
 Traceback (most recent call last):
 ...
@@ -28,7 +32,7 @@ from pathlib import Path
 
 from .._io import atomic_write
 from ..params import Config
-from . import CONTROLLER_FORMATS, FORMATS, WHAT
+from . import CONTROLLER_FORMATS, CONTROLLER_ONLY, FORMATS, WHAT
 from .codegen import c_files, export_spec, js_module, latex_document, octave_files, python_module
 
 __all__ = ["export"]
@@ -52,7 +56,10 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
         ``observer``: the derivation (LaTeX) or the discrete observer; ``controller``: the whole
         sampled controller of the simulator (observer, low-pass, PID, compensation of the config's
         ``[compensation]`` section, saturation): ``obsdesign_controller.h/.c``, ``obsdesign_controller.py``,
-        ``obsdesign_controller*.m``, ``obsdesign_controller.mjs``.
+        ``obsdesign_controller*.m``, ``obsdesign_controller.mjs``, ``obsdesign_controller.fmu``
+        (:mod:`~obsdesign.export.fmu`: compiled for this platform when a C compiler is found),
+        ``obsdesign_controller.st`` and ``.xml`` (:mod:`~obsdesign.export.st`). ``fmu`` and ``st``
+        are controller formats only, and need ``[pid] delay_samples = 0``.
     controller : str, optional
         With ``what='controller'``: the controller of :func:`obsdesign.simulate` to generate
         (:data:`obsdesign.export.controller.EXPORTED_CONTROLLERS`, default ``pid+observer``).
@@ -93,8 +100,21 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
 
         if not isinstance(cfg, Config):
             raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
-        files = controller_files(cfg, fmt, controller=controller, schedule=schedule, estimator=estimator)
-        return _write(files, out_dir)
+        choices = {"controller": controller, "schedule": schedule, "estimator": estimator}
+        if fmt == "fmu":
+            from .fmu import FMU_NAME, fmu_archive
+
+            out: dict[str, str | bytes] = {FMU_NAME: fmu_archive(cfg, **choices)}
+        elif fmt == "st":
+            from .st import st_files
+
+            out = dict(st_files(cfg, **choices))
+        else:
+            out = dict(controller_files(cfg, fmt, **choices))
+        return _write(out, out_dir)
+    if fmt in CONTROLLER_ONLY:
+        raise ValueError(f"format: {fmt!r} exports the whole controller; expected what='controller', "
+                         f"found what={what!r}")
     for name, value in (("controller", controller), ("schedule", schedule), ("estimator", estimator)):
         if value is not None:
             raise ValueError(f"{name}: applies to what='controller' only, found {value!r} with what='observer'")
@@ -112,7 +132,7 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
     return _write(files, out_dir)
 
 
-def _write(files: dict[str, str], out_dir) -> list[Path]:
+def _write(files: dict[str, str] | dict[str, str | bytes], out_dir) -> list[Path]:
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ValueError(f"output: expected a directory, found the file {str(out)!r}")

@@ -187,7 +187,7 @@ def _build(sources: dict[str, str], cc: list[str]) -> bytes:
             subprocess.run(argv, cwd=tmp, check=True, capture_output=True, text=True)
         except subprocess.CalledProcessError as exc:
             first = (exc.stderr or "").strip().splitlines()[:1]
-            raise RuntimeError(f"compiler: {shlex.join(argv)} failed: {first[0] if first else exc}") from exc
+            raise OSError(f"compiler: {shlex.join(argv)} failed: {first[0] if first else exc}") from exc
         return (Path(tmp) / out).read_bytes()
 
 
@@ -215,7 +215,7 @@ def fmu_archive(cfg, *, binary: bool | None = None, controller: str | None = Non
     ValueError
         ``delay_samples`` > 0; ``binary=True`` without a compiler or on a platform with no FMI folder;
         and the errors of :func:`~obsdesign.export.controller.controller_files`.
-    RuntimeError
+    OSError
         The compiler failed.
     """
     ctrl = exported_controller(cfg, controller=controller, schedule=schedule, estimator=estimator)
