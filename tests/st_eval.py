@@ -31,6 +31,18 @@ _BINARY = {"+": operator.add, "-": operator.sub, "*": operator.mul, "/": _div, "
            "AND": lambda a, b: a and b, "OR": lambda a, b: a or b, "XOR": operator.xor}
 
 
+def _array_thunk(n):
+    def fresh():
+        return [0.0] * n
+    return fresh
+
+
+def _value_thunk(expr, default):
+    def fresh():
+        return expr({}) if expr is not None else default
+    return fresh
+
+
 class _Return(Exception):
     pass
 
@@ -64,12 +76,11 @@ class Program:
                     lo, hi = int(str(rng.start.value)), int(str(rng.stop.value))
                     if lo != 0 or init.value is not None:
                         raise NotImplementedError("array bounds other than 0..n or an array initializer")
-                    thunk = (lambda n=hi + 1: [0.0] * n)
+                    thunk = _array_thunk(hi + 1)
                 else:
                     type_name = str(init.spec.type).upper()
                     default = {"LREAL": 0.0, "REAL": 0.0, "BOOL": False, "DINT": 0, "INT": 0}[type_name]
-                    value = self._expr(init.value) if init.value is not None else (lambda env, d=default: d)
-                    thunk = (lambda value=value: value({}))
+                    thunk = _value_thunk(self._expr(init.value) if init.value is not None else None, default)
                 for var in item.variables:
                     out.append((kind, str(var.variable.name).upper(), thunk))
         return out

@@ -83,6 +83,26 @@ def check_no_delay(ctrl, fmt: str) -> None:
 
     The delay is the drive's (the hardware's), not the controller's: the FMU and the PLC block
     run the controller without it. Set ``delay_samples = 0`` to export.
+
+    Parameters
+    ----------
+    ctrl : SampledController
+        The controller to export.
+    fmt : str
+        The format's name, for the message.
+
+    Raises
+    ------
+    ValueError
+        ``ctrl.delay`` > 0.
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> check_no_delay(exported_controller(od.load_preset("vcm").override(delay_samples=1)), "fmu")
+    Traceback (most recent call last):
+    ...
+    ValueError: delay_samples: the fmu export runs the controller without the computation delay (it is the drive's); expected 0, found 1
     """
     if ctrl.delay:
         raise ValueError(f"delay_samples: the {fmt} export runs the controller without the computation delay "
@@ -90,7 +110,13 @@ def check_no_delay(ctrl, fmt: str) -> None:
 
 
 def fmu_platform() -> str | None:
-    """The FMI 2.0 platform folder of this machine (``linux64``, ``darwin64``), None where not built."""
+    """The FMI 2.0 platform folder of this machine (``linux64``, ``darwin64``), None where not built.
+
+    Examples
+    --------
+    >>> fmu_platform() in ("linux64", "linux32", "darwin64", "darwin32", None)
+    True
+    """
     bits = "64" if sys.maxsize > 2**32 else "32"
     if sys.platform.startswith("linux"):
         return "linux" + bits

@@ -68,7 +68,33 @@ _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
 
 def check_st_identifier(name: str) -> str:
-    """``name`` if it is a valid ST identifier that is not in :data:`ST_KEYWORDS`; else a ValueError."""
+    """``name`` if it is a valid ST identifier that is not in :data:`ST_KEYWORDS`; else a ValueError.
+
+    Parameters
+    ----------
+    name : str
+        An identifier the generator writes.
+
+    Returns
+    -------
+    str
+        ``name``.
+
+    Raises
+    ------
+    ValueError
+        Not letters, digits and single inner underscores, or a keyword or standard function name
+        in any case.
+
+    Examples
+    --------
+    >>> check_st_identifier("x_meas")
+    'x_meas'
+    >>> check_st_identifier("Exp")
+    Traceback (most recent call last):
+    ...
+    ValueError: identifier: 'Exp' is an IEC 61131-3 keyword or standard function name; expected another name
+    """
     if not isinstance(name, str) or not _IDENTIFIER.match(name) or "__" in name or name.endswith("_"):
         raise ValueError(f"identifier: expected letters, digits and single inner underscores (IEC 61131-3), "
                          f"found {name!r}")
@@ -79,7 +105,23 @@ def check_st_identifier(name: str) -> str:
 
 
 def st_literal(value: float) -> str:
-    """An ST ``LREAL`` literal of ``value`` that reads back exactly (a mantissa with a point, ``E`` exponent)."""
+    """An ST ``LREAL`` literal of ``value`` that reads back exactly (a mantissa with a point, ``E`` exponent).
+
+    Parameters
+    ----------
+    value : float
+        A finite number.
+
+    Returns
+    -------
+    str
+        The shortest decimal that reads back as ``value``.
+
+    Examples
+    --------
+    >>> st_literal(1e16), st_literal(0.0001)
+    ('1.0E+16', '0.0001')
+    """
     text = _literal(value)  # repr: shortest round-trip, finite only
     mantissa, _, exponent = text.partition("e")
     if "." not in mantissa:
@@ -205,6 +247,7 @@ def _block(ctrl, units) -> _Pou:
         temps += _lreal("qv")
     constants = tuple(_Var("OD_" + k, "LREAL", st_literal(v)) for k, v in consts.items())
     code = consts.get("SCHEDULE")  # the branch the C selects by its constant OD_SCHEDULE
+    # choice subset: the schedules with a branch of their own in the template ('constant' is the rest)
     kinds = {float(SCHEDULE_ZERO): "zero", **{float(SCHEDULES.code(n)): n for n in ("estimated", "estimated-raw")}}
     kind = kinds.get(code, "constant") if code is not None else ""
     env = _environment(units)
