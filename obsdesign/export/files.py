@@ -100,17 +100,17 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
 
         if not isinstance(cfg, Config):
             raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
-        choices = {"controller": controller, "schedule": schedule, "estimator": estimator}
         if fmt == "fmu":
             from .fmu import FMU_NAME, fmu_archive
 
-            out: dict[str, str | bytes] = {FMU_NAME: fmu_archive(cfg, **choices)}
+            out: dict[str, str | bytes] = {FMU_NAME: fmu_archive(cfg, controller=controller, schedule=schedule,
+                                                                  estimator=estimator)}
         elif fmt == "st":
             from .st import st_files
 
-            out = dict(st_files(cfg, **choices))
+            out = dict(st_files(cfg, controller=controller, schedule=schedule, estimator=estimator))
         else:
-            out = dict(controller_files(cfg, fmt, **choices))
+            out = dict(controller_files(cfg, fmt, controller=controller, schedule=schedule, estimator=estimator))
         return _write(out, out_dir)
     if fmt in CONTROLLER_ONLY:
         raise ValueError(f"format: {fmt!r} exports the whole controller; expected what='controller', "

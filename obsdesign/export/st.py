@@ -215,7 +215,7 @@ def _block(ctrl, units) -> _Pou:
     ffmode = ctrl.controller == "pid+observer" and ctrl.compensation.mode != "observer"
     blend = ffmode and ctrl.compensation.mode == "blend"
     u = units.unit
-    inputs = (_Var("x_ref", "LREAL", None, f"set-point [{u('m')}]"),
+    inputs: tuple[_Var, ...] = (_Var("x_ref", "LREAL", None, f"set-point [{u('m')}]"),
               _Var("x_meas", "LREAL", None, f"measured position [{u('m')}]"))
     if ffmode:
         inputs += (_Var("v_ref", "LREAL", None, f"reference velocity [{u('m/s')}]"),
@@ -224,7 +224,8 @@ def _block(ctrl, units) -> _Pou:
                _Var("v_hat", "LREAL", None, f"velocity estimate [{u('m/s')}]"),
                _Var("f_hat", "LREAL", None, f"friction estimate [{u('N')}]"),
                _Var("f_hat_filtered", "LREAL", None, f"friction estimate that compensates [{u('N')}]"))
-    state = (_Var("started", "BOOL", "FALSE", "FALSE until the first call"),)
+    state: tuple[_Var, ...] = (_Var("started", "BOOL", "FALSE", "FALSE until the first call"),)
+    temps: tuple[_Var, ...]
     if baseline:
         nz = int(consts["E_NZ"])
         state += _array(nz, "z") + _lreal("x_prev")
