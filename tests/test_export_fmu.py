@@ -210,3 +210,31 @@ def test_export_writes_the_fmu_and_refuses_the_observer(tmp_path):
     assert path.name == FMU_NAME and zipfile.is_zipfile(path)
     with pytest.raises(ValueError, match="format: 'fmu' exports the whole controller"):
         export(VCM, "fmu", tmp_path)
+
+
+def _cli(capsys, *argv):
+    from obsdesign.cli import main
+
+    status = main(list(argv))
+    out, err = capsys.readouterr()
+    return status, out, err.strip().splitlines()
+
+
+def test_cli_writes_the_fmu_and_the_st_and_refuses_in_one_line(tmp_path, capsys, monkeypatch):
+    out = tmp_path / "gen"
+    for fmt, names in (("fmu", [FMU_NAME]), ("st", ["obsdesign_controller.st", "obsdesign_controller.xml"])):
+        status, stdout, err = _cli(capsys, "export", "--format", fmt, "--what", "controller", "-o", str(out))
+        assert status == 0 and stdout.split() == [str(out / n) for n in names]
+        code, _, err = _cli(capsys, "export", "--format", fmt, "-o", str(tmp_path / "no"))
+        assert code == 2 and err == [f"obsdesign export: argument --format: {fmt} exports the whole controller; "
+                                     "expected --what controller, found --what observer"]
+    assert not (tmp_path / "no").exists()
+    config = tmp_path / "delayed.toml"
+    config.write_text(od.load_preset("vcm").override(delay_samples=1).to_toml())
+    code, _, err = _cli(capsys, "export", "--format", "st", "--what", "controller", "--config", str(config),
+                        "-o", str(tmp_path / "d"))
+    assert code == 2 and len(err) == 1 and "delay_samples" in err[0] and "expected 0, found 1" in err[0]
+    assert not (tmp_path / "d" / "obsdesign_controller.st").exists()
+    monkeypatch.setenv("CC", "no-such-compiler-obsdesign")
+    code, _, err = _cli(capsys, "export", "--format", "fmu", "--what", "controller", "-o", str(tmp_path / "s"))
+    assert code == 0 and len(err) == 1 and "a source FMU" in err[0]
