@@ -17,7 +17,7 @@ import pytest
 
 import obsdesign as od
 from obsdesign.export import export
-from obsdesign.export.fmu import FMU_NAME, MODEL_IDENTIFIER, fmu_archive, fmu_platform
+from obsdesign.export.fmu import FMU_NAME, MODEL_IDENTIFIER, OBSERVER_FMU_NAME, fmu_archive, fmu_platform
 
 fmpy = pytest.importorskip("fmpy", reason="fmpy (the test extra) is not installed")
 from fmpy.fmi2 import FMU2Slave  # noqa: E402
@@ -205,11 +205,62 @@ def test_binary_without_a_compiler_is_refused(monkeypatch):
     assert b"binaries/" not in fmu_archive(VCM)  # the default falls back to a source FMU
 
 
-def test_export_writes_the_fmu_and_refuses_the_observer(tmp_path):
+def test_export_writes_the_controller_and_the_observer_fmu(tmp_path):
     (path,) = export(VCM, "fmu", tmp_path, what="controller")
     assert path.name == FMU_NAME and zipfile.is_zipfile(path)
-    with pytest.raises(ValueError, match="format: 'fmu' exports the whole controller"):
-        export(VCM, "fmu", tmp_path)
+    (path,) = export(VCM, "fmu", tmp_path)
+    assert path.name == OBSERVER_FMU_NAME and validate_fmu(str(path)) == []
+    with pytest.raises(ValueError, match="estimator: applies to what='controller' only"):
+        fmu_archive(VCM, what="observer", estimator="eso")
+    with pytest.raises(ValueError, match="what: expected one of observer, controller, found 'table'"):
+        fmu_archive(VCM, what="table")
+
+
+def _observer_reference(cfg, u_prev, x_meas, tmp_path):
+    """(v_hat, f_hat) of the Python observer export (``Observer``) on the same inputs."""
+    import importlib.util
+
+    from obsdesign.export.codegen import export_spec, python_module
+
+    path = tmp_path / "obsdesign_observer.py"
+    path.write_text(python_module(export_spec(cfg)))
+    spec = importlib.util.spec_from_file_location(f"observer_reference_{id(cfg)}", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    obs = mod.Observer(float(x_meas[0]))
+    out = [(obs.velocity, obs.friction)]
+    for u, x in zip(u_prev[1:], x_meas[1:]):
+        obs.step(float(u), float(x))
+        out.append((obs.velocity, obs.friction))
+    return np.array(out)
+
+
+@needs_cc
+@pytest.mark.parametrize("cfg", [VCM, TABLE1.override(rho=3.0)], ids=["vcm", "table1-rho3"])
+def test_the_observer_fmu_reproduces_the_simulated_estimates_bit_for_bit(cfg, tmp_path):
+    res = od.simulate(cfg, "tracking", duration=0.5, stiffness="estimated-raw")  # the observer export's schedule
+    path = _write(tmp_path, fmu_archive(cfg, what="observer", binary=True), OBSERVER_FMU_NAME)
+    assert validate_fmu(str(path)) == []
+    md = fmpy.read_model_description(str(path))
+    vrs = {v.name: v.valueReference for v in md.modelVariables}
+    unzipped = fmpy.extract(str(path))
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier="obsdesign_observer", instanceName="o")
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    u_prev = np.concatenate([[0.0], res.u[:-1]])  # the net force held over the interval that ends at sample n
+    out = []
+    for n, (u, x) in enumerate(zip(u_prev, res.x_meas)):
+        fmu.setReal([vrs["u_prev"], vrs["x_meas"]], [float(u), float(x)])
+        fmu.doStep(currentCommunicationPoint=n * cfg.observer.dt, communicationStepSize=cfg.observer.dt)
+        out.append(fmu.getReal([vrs["v_hat"], vrs["f_hat"]]))
+    fmu.terminate()
+    fmu.freeInstance()
+    shutil.rmtree(unzipped, ignore_errors=True)
+    out = np.array(out)
+    assert np.array_equal(out[:, 0], res.v_hat) and np.array_equal(out[:, 1], res.f_hat)
+    assert np.array_equal(out, _observer_reference(cfg, u_prev, res.x_meas, tmp_path))
 
 
 def _cli(capsys, *argv):
@@ -225,9 +276,11 @@ def test_cli_writes_the_fmu_and_the_st_and_refuses_in_one_line(tmp_path, capsys,
     for fmt, names in (("fmu", [FMU_NAME]), ("st", ["obsdesign_controller.st", "obsdesign_controller.xml"])):
         status, stdout, err = _cli(capsys, "export", "--format", fmt, "--what", "controller", "-o", str(out))
         assert status == 0 and stdout.split() == [str(out / n) for n in names]
-        code, _, err = _cli(capsys, "export", "--format", fmt, "-o", str(tmp_path / "no"))
-        assert code == 2 and err == [f"obsdesign export: argument --format: {fmt} exports the whole controller; "
-                                     "expected --what controller, found --what observer"]
+        status, stdout, err = _cli(capsys, "export", "--format", fmt, "-o", str(out))
+        assert status == 0 and [p.rsplit("/", 1)[1] for p in stdout.split()] == [
+            n.replace("controller", "observer") for n in names]
+        code, _, err = _cli(capsys, "export", "--format", fmt, "--estimator", "eso", "-o", str(tmp_path / "no"))
+        assert code == 2 and len(err) == 1 and "applies to --what controller only" in err[0]
     assert not (tmp_path / "no").exists()
     config = tmp_path / "delayed.toml"
     config.write_text(od.load_preset("vcm").override(delay_samples=1).to_toml())

@@ -21,7 +21,7 @@ import pytest
 import obsdesign as od
 from obsdesign.export import export
 from obsdesign.export.controller import controller_files
-from obsdesign.export.st import FB_NAME, ST_KEYWORDS, check_st_identifier, st_files, st_literal
+from obsdesign.export.st import FB_NAME, OBSERVER_FB_NAME, ST_KEYWORDS, check_st_identifier, st_files, st_literal
 from obsdesign.friction.presliding import coulomb_normalized, stiffness
 
 blark = pytest.importorskip("blark", reason="blark (the test extra) is not installed")
@@ -188,10 +188,27 @@ def test_st_literals_read_back_exactly(value):
     assert float(text) == value and math.copysign(1, float(text)) == math.copysign(1, value)
 
 
-def test_st_export_errors(tmp_path):
+def test_st_export_errors_and_files(tmp_path):
     with pytest.raises(ValueError, match="delay_samples: the st export .* expected 0, found 2"):
         st_files(VCM.override(delay_samples=2))
-    with pytest.raises(ValueError, match="format: 'st' exports the whole controller"):
-        export(VCM, "st", tmp_path)
+    with pytest.raises(ValueError, match="schedule: applies to what='controller' only"):
+        st_files(VCM, what="observer", schedule="constant")
     paths = export(VCM, "st", tmp_path, what="controller")
     assert sorted(p.name for p in paths) == [ST, XML]
+    paths = export(VCM.override(delay_samples=2), "st", tmp_path)  # the observer has no delay to refuse
+    assert sorted(p.name for p in paths) == ["obsdesign_observer.st", "obsdesign_observer.xml"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("cfg", [VCM, TABLE1.override(noise_rms=2e-7)], ids=["vcm", "table1-noisy"])
+def test_the_observer_block_matches_the_python_observer_and_the_simulator(cfg, tmp_path):
+    from test_export_fmu import _observer_reference
+
+    res = od.simulate(cfg, "tracking", duration=0.4, stiffness="estimated-raw")  # the observer export's schedule
+    u_prev = np.concatenate([[0.0], res.u[:-1]])
+    block = Program(st_files(cfg, what="observer")["obsdesign_observer.st"]).block(OBSERVER_FB_NAME)
+    out = [block(float(u), float(x)) for u, x in zip(u_prev, res.x_meas)]
+    est = np.array([(o["V_HAT"], o["F_HAT"]) for o in out])
+    reference = _observer_reference(cfg, u_prev, res.x_meas, tmp_path)
+    assert np.all(np.max(np.abs(est - reference), axis=0) <= 1e-12 * np.max(np.abs(reference), axis=0))
+    assert np.max(np.abs(est[:, 1] - res.f_hat)) <= 1e-12 * np.max(np.abs(res.f_hat))

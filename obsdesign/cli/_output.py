@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..export import CONTROLLER_FORMATS, CONTROLLER_ONLY
+from ..export import CONTROLLER_FORMATS
 from ..export import FORMATS as EXPORT_FORMATS
 from ..export import WHAT as EXPORT_WHAT
 from ..params import PARAMETERS, VARIANTS
@@ -25,9 +25,6 @@ def _cmd_export(args: argparse.Namespace) -> int:
     if args.what == "controller" and args.format == "latex":
         raise UsageError("obsdesign export: argument --format: the controller is exported as one of "
                          f"{', '.join(CONTROLLER_FORMATS)}, found 'latex'")
-    if args.format in CONTROLLER_ONLY and args.what != "controller":
-        raise UsageError(f"obsdesign export: argument --format: {args.format} exports the whole controller; "
-                         f"expected --what controller, found --what {args.what}")
     for flag, value in (("--controller", args.controller), ("--stiffness", args.stiffness),
                         ("--estimator", args.estimator)):
         if value is not None and args.what != "controller":
@@ -84,7 +81,7 @@ def add_commands(sub) -> None:
     p.add_argument("--format", required=True, choices=EXPORT_FORMATS)
     p.add_argument("--what", choices=EXPORT_WHAT, default="observer",
                    help="observer (default), controller: observer, low-pass, PID and compensation of the "
-                        "simulator, step(x_ref, x_meas) -> command [V] (--format fmu and st: this only); friction-table: the feed-forward model as "
+                        "simulator, step(x_ref, x_meas) -> command [V]; friction-table: the feed-forward model as "
                         "a velocity -> force (current) table, CSV and C array (--format c)")
     p.add_argument("--controller", choices=[name for name in CONTROLLERS.names() if name != "open-loop"],
                    help="with --what controller: the simulator's controller to generate (default pid+observer)")

@@ -25,11 +25,12 @@ FORMATS = ("latex", "python", "c", "octave", "js", "fmu", "st")
 WHAT = ("observer", "controller", "friction-table")
 #: The formats of the whole sampled controller: the code formats (not the derivation's LaTeX).
 CONTROLLER_FORMATS = tuple(fmt for fmt in FORMATS if fmt != "latex")
-#: The formats of the controller only: an FMI 2.0 co-simulation FMU and the IEC 61131-3 function block.
-# choice subset: the exports built around the whole controller, not the derivation or the observer alone
-CONTROLLER_ONLY = ("fmu", "st")
+#: The formats packaged for a tool, of the controller or the observer: an FMI 2.0 co-simulation FMU
+#: and an IEC 61131-3 function block (not source languages of :func:`~obsdesign.export.controller.controller_files`).
+# choice subset: the exports packaged for an importer or a PLC
+TOOL_FORMATS = ("fmu", "st")
 
-__all__ = ["export", "FORMATS", "WHAT", "CONTROLLER_FORMATS", "CONTROLLER_ONLY"]
+__all__ = ["export", "FORMATS", "WHAT", "CONTROLLER_FORMATS", "TOOL_FORMATS"]
 
 
 def __getattr__(name: str):

@@ -15,10 +15,6 @@ Examples
 Traceback (most recent call last):
 ...
 ValueError: format: the controller is exported as one of python, c, octave, js, fmu, st, found 'latex'
->>> export(od.load_preset("vcm"), "fmu", ".")
-Traceback (most recent call last):
-...
-ValueError: format: 'fmu' exports the whole controller; expected what='controller', found what='observer'
 >>> export(od.load_preset("vcm"), "c", ".", estimator="eso")
 Traceback (most recent call last):
 ...
@@ -32,7 +28,7 @@ from pathlib import Path
 
 from .._io import atomic_write
 from ..params import Config
-from . import CONTROLLER_FORMATS, CONTROLLER_ONLY, FORMATS, WHAT
+from . import CONTROLLER_FORMATS, FORMATS, WHAT
 from .codegen import c_files, export_spec, js_module, latex_document, octave_files, python_module
 
 __all__ = ["export"]
@@ -58,8 +54,9 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
         ``[compensation]`` section, saturation): ``obsdesign_controller.h/.c``, ``obsdesign_controller.py``,
         ``obsdesign_controller*.m``, ``obsdesign_controller.mjs``, ``obsdesign_controller.fmu``
         (:mod:`~obsdesign.export.fmu`: compiled for this platform when a C compiler is found),
-        ``obsdesign_controller.st`` and ``.xml`` (:mod:`~obsdesign.export.st`). ``fmu`` and ``st``
-        are controller formats only, and need ``[pid] delay_samples = 0``.
+        ``obsdesign_controller.st`` and ``.xml`` (:mod:`~obsdesign.export.st`; the controller's
+        ``fmu`` and ``st`` need ``[pid] delay_samples = 0``). The observer's ``fmu`` and ``st`` are
+        ``obsdesign_observer.fmu``, ``obsdesign_observer.st`` and ``.xml``.
     controller : str, optional
         With ``what='controller'``: the controller of :func:`obsdesign.simulate` to generate
         (:data:`obsdesign.export.controller.EXPORTED_CONTROLLERS`, default ``pid+observer``).
@@ -112,12 +109,17 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
         else:
             out = dict(controller_files(cfg, fmt, controller=controller, schedule=schedule, estimator=estimator))
         return _write(out, out_dir)
-    if fmt in CONTROLLER_ONLY:
-        raise ValueError(f"format: {fmt!r} exports the whole controller; expected what='controller', "
-                         f"found what={what!r}")
     for name, value in (("controller", controller), ("schedule", schedule), ("estimator", estimator)):
         if value is not None:
             raise ValueError(f"{name}: applies to what='controller' only, found {value!r} with what='observer'")
+    if fmt == "fmu":
+        from .fmu import OBSERVER_FMU_NAME, fmu_archive
+
+        return _write({OBSERVER_FMU_NAME: fmu_archive(cfg, what="observer")}, out_dir)
+    if fmt == "st":
+        from .st import st_files
+
+        return _write(st_files(cfg, what="observer"), out_dir)
     spec = export_spec(cfg)
     if fmt == "latex":
         files = {f"obsdesign_{spec.variant}.tex": latex_document(spec)}

@@ -37,19 +37,28 @@ import sys
 import tempfile
 import uuid
 import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
+from .._validate import check_choice
 from .._version import __version__
+from ..params import Config
+from . import WHAT
+from .codegen import c_files, export_spec
 from .controller import _environment, _literal, controller_constants, controller_files, exported_controller
 from .literals import comment_text
 
-__all__ = ["FMU_NAME", "MODEL_IDENTIFIER", "fmu_archive", "fmu_platform", "check_no_delay"]
+__all__ = ["FMU_NAME", "OBSERVER_FMU_NAME", "MODEL_IDENTIFIER", "fmu_archive", "fmu_platform", "check_no_delay"]
 
 #: The archive's file name.
 FMU_NAME = "obsdesign_controller.fmu"
 #: The FMI model identifier: the shared library's base name and the prefix-free FMI 2.0 functions.
 MODEL_IDENTIFIER = "obsdesign_controller"
+
+#: The observer FMU's archive name.
+OBSERVER_FMU_NAME = "obsdesign_observer.fmu"
+_WHAT = tuple(w for w in WHAT if w != "friction-table")
 
 #: Constants shown in the FMU: name -> (unit for a linear axis driven in V, description).
 _CONSTANTS = {
@@ -76,6 +85,10 @@ _OUTPUTS = (("command", "V", "actuator command: saturated, with the load feed-fo
             ("v_hat", "m/s", "velocity estimate", "v_hat"),
             ("f_hat", "N", "friction estimate", "f_hat"),
             ("f_hat_filtered", "N", "friction estimate that compensates", "f_hat_filtered"))
+_OBSERVER_INPUTS = (("u_prev", "N", "net force K u - G held over the interval that ended at this sample"),
+                    ("x_meas", "m", "measured position (encoder)"))
+_OBSERVER_OUTPUTS = (("v_hat", "m/s", "velocity estimate", "obsdesign_observer_velocity(&m->c)"),
+                     ("f_hat", "N", "friction estimate", "obsdesign_observer_friction(&m->c)"))
 
 
 def check_no_delay(ctrl, fmt: str) -> None:
@@ -131,39 +144,78 @@ def _compiler() -> list[str] | None:
     return argv if argv and shutil.which(argv[0]) else None
 
 
-def _variables(ctrl, units) -> tuple[list[dict], list[dict], list[dict]]:
-    ffmode = ctrl.controller == "pid+observer" and ctrl.compensation.mode != "observer"
-    inputs = [{"name": n, "unit": units.unit(u), "description": d, "vr": i + 1}
-              for i, (n, u, d) in enumerate(_INPUTS + (_FF_INPUTS if ffmode else ()))]
-    outputs = [{"name": n, "unit": units.unit(u), "description": d, "field": f, "vr": 11 + i}
-               for i, (n, u, d, f) in enumerate(_OUTPUTS)]
-    consts = controller_constants(ctrl)
+@dataclass(frozen=True)
+class _Model:
+    """What one FMU wraps: the C files, the variables, the words of its descriptions."""
+
+    identifier: str            # modelIdentifier: obsdesign_controller or obsdesign_observer
+    module: str                # controller or observer
+    cfg: Config
+    sources: dict[str, str]
+    inputs: list[dict]
+    outputs: list[dict]        # each with "field": the C expression of its value
+    constants: list[dict]
+    choices: dict[str, str]    # provenance: the export's choices
+
+
+def _variables(units, inputs, outputs, consts) -> tuple[list[dict], list[dict], list[dict]]:
+    ins = [{"name": n, "unit": units.unit(u), "description": d, "vr": i + 1} for i, (n, u, d) in enumerate(inputs)]
+    outs = [{"name": n, "unit": units.unit(u), "description": d, "field": f, "vr": 11 + i}
+            for i, (n, u, d, f) in enumerate(outputs)]
     constants = [{"name": n, "unit": units.unit(u), "description": d, "vr": 101 + i, "value": _literal(consts[n])}
                  for i, (n, (u, d)) in enumerate(_CONSTANTS.items()) if n in consts]
-    return inputs, outputs, constants
+    return ins, outs, constants
 
 
-def _model_description(ctrl, guid: str, inputs, outputs, constants) -> str:
-    cfg = ctrl.config
+def _controller_model(cfg, choices) -> _Model:
+    ctrl = exported_controller(cfg, **choices)
+    check_no_delay(ctrl, "fmu")
+    ffmode = ctrl.controller == "pid+observer" and ctrl.compensation.mode != "observer"
+    outputs = [(n, u, d, "m->c." + f) for n, u, d, f in _OUTPUTS]
+    variables = _variables(ctrl.config.units, _INPUTS + (_FF_INPUTS if ffmode else ()), outputs,
+                           controller_constants(ctrl))
+    return _Model("obsdesign_controller", "controller", ctrl.config, dict(controller_files(ctrl, "c")), *variables,
+                  {"controller": ctrl.controller, "estimator": ctrl.estimator, "schedule": ctrl.schedule,
+                   "compensation": ctrl.compensation.mode})
+
+
+def _observer_model(cfg, choices) -> _Model:
+    given = {k: v for k, v in choices.items() if v is not None}
+    if given:
+        name = next(iter(given))
+        raise ValueError(f"{name}: applies to what='controller' only, found {given[name]!r} with what='observer'")
+    if not isinstance(cfg, Config):
+        raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
+    spec = export_spec(cfg)
+    fr = cfg.friction
+    consts = {"DT": spec.dt, "CF": fr.Cf, "S": fr.s, "KAPPA": fr.kappa}
+    variables = _variables(cfg.units, _OBSERVER_INPUTS, _OBSERVER_OUTPUTS, consts)
+    return _Model("obsdesign_observer", "observer", cfg, dict(c_files(spec)), *variables,
+                  {"schedule": "estimated-raw"})
+
+
+def _model_description(model: _Model, guid: str) -> str:
+    cfg, inputs, outputs, constants = model.cfg, model.inputs, model.outputs, model.constants
+    identifier = model.identifier
     dt = _literal(cfg.observer.dt)
-    desc = (f"obsdesign sampled controller {ctrl.controller}, estimator {ctrl.estimator}, schedule {ctrl.schedule}, "
-            f"config {comment_text(cfg.name)}")
+    words = ", ".join(f"{k} {v}" for k, v in model.choices.items())
+    desc = f"obsdesign {'sampled controller' if model.module == 'controller' else 'observer'}, {words}, " \
+           f"config {comment_text(cfg.name)}"
     units = sorted({v["unit"] for v in inputs + outputs + constants})
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
-             f'<fmiModelDescription fmiVersion="2.0" modelName="{MODEL_IDENTIFIER}" guid="{guid}"',
+             f'<fmiModelDescription fmiVersion="2.0" modelName="{identifier}" guid="{guid}"',
              f'  description={quoteattr(desc)}',
              f'  generationTool={quoteattr("obsdesign " + __version__)}',
              '  variableNamingConvention="flat" numberOfEventIndicators="0">',
-             f'  <CoSimulation modelIdentifier="{MODEL_IDENTIFIER}" canHandleVariableCommunicationStepSize="false"',
+             f'  <CoSimulation modelIdentifier="{identifier}" canHandleVariableCommunicationStepSize="false"',
              '    canGetAndSetFMUstate="false" canSerializeFMUstate="false" providesDirectionalDerivative="false">',
-             '    <SourceFiles>', '      <File name="obsdesign_fmu.c"/>', '      <File name="obsdesign_controller.c"/>',
+             '    <SourceFiles>', '      <File name="obsdesign_fmu.c"/>', f'      <File name="obsdesign_{model.module}.c"/>',
              '    </SourceFiles>', '  </CoSimulation>', '  <UnitDefinitions>']
     lines += [f'    <Unit name={quoteattr(u)}/>' for u in units]
     lines += ['  </UnitDefinitions>', f'  <DefaultExperiment startTime="0.0" stepSize="{dt}"/>', '  <VendorAnnotations>', '    <Tool name="obsdesign">',
               f'      <Provenance version={quoteattr(__version__)} config={quoteattr(comment_text(cfg.name))}'
-              f' variant={quoteattr(cfg.observer.variant)}',
-              f'        controller={quoteattr(ctrl.controller)} estimator={quoteattr(ctrl.estimator)}'
-              f' schedule={quoteattr(ctrl.schedule)} compensation={quoteattr(ctrl.compensation.mode)}/>',
+              f' variant={quoteattr(cfg.observer.variant)} what="{model.module}"',
+              '        ' + " ".join(f"{k}={quoteattr(v)}" for k, v in model.choices.items()) + "/>",
               '    </Tool>', '  </VendorAnnotations>', '  <ModelVariables>']
 
     def var(v, causality, variability, real):
@@ -200,15 +252,15 @@ def _zip(entries: dict[str, bytes]) -> bytes:
     return buf.getvalue()
 
 
-def _build(sources: dict[str, str], cc: list[str]) -> bytes:
+def _build(sources: dict[str, str], cc: list[str], identifier: str, module: str) -> bytes:
     """The shared library of ``sources`` (compiled in a temporary folder: no path reaches the binary)."""
     suffix = ".dylib" if sys.platform == "darwin" else ".so"
     with tempfile.TemporaryDirectory(prefix="obsdesign-fmu-") as tmp:
         for name, text in sources.items():
             (Path(tmp) / name).write_text(text, encoding="utf-8")
-        out = MODEL_IDENTIFIER + suffix
+        out = identifier + suffix
         argv = [*cc, "-std=c99", "-O2", "-ffp-contract=off", "-fPIC", "-shared", "-o", out,
-                "obsdesign_fmu.c", "obsdesign_controller.c", "-lm"]
+                "obsdesign_fmu.c", f"obsdesign_{module}.c", "-lm"]
         try:
             subprocess.run(argv, cwd=tmp, check=True, capture_output=True, text=True)
         except subprocess.CalledProcessError as exc:
@@ -217,14 +269,19 @@ def _build(sources: dict[str, str], cc: list[str]) -> bytes:
         return (Path(tmp) / out).read_bytes()
 
 
-def fmu_archive(cfg, *, binary: bool | None = None, controller: str | None = None, schedule: str | None = None,
-                estimator: str | None = None) -> bytes:
-    """The FMU (FMI 2.0 co-simulation) of the exported controller, as the bytes of its zip archive.
+def fmu_archive(cfg, *, what: str = "controller", binary: bool | None = None, controller: str | None = None,
+                schedule: str | None = None, estimator: str | None = None) -> bytes:
+    """The FMU (FMI 2.0 co-simulation) of the exported controller or observer, as the bytes of its zip archive.
 
     Parameters
     ----------
     cfg : Config or SampledController
         The design (``[pid] delay_samples`` must be 0), or the controller itself.
+    what : {'controller', 'observer'}
+        ``controller`` (default): ``obsdesign_controller.fmu`` around the files of ``--format c --what
+        controller``; ``observer``: ``obsdesign_observer.fmu`` around those of ``--format c`` (the
+        observer alone, its ``estimated-raw`` schedule: inputs ``u_prev`` [N], the net force held over
+        the interval just ended, and ``x_meas``; outputs ``v_hat``, ``f_hat``).
     binary : bool, optional
         True: compile the shared library for this platform (``$CC`` or ``cc``; an error if there is
         none); False: a source FMU; None (default): compile when a compiler is found.
@@ -244,8 +301,9 @@ def fmu_archive(cfg, *, binary: bool | None = None, controller: str | None = Non
     OSError
         The compiler failed.
     """
-    ctrl = exported_controller(cfg, controller=controller, schedule=schedule, estimator=estimator)
-    check_no_delay(ctrl, "fmu")
+    choices = {"controller": controller, "schedule": schedule, "estimator": estimator}
+    model = _observer_model(cfg, choices) if check_choice("what", what, _WHAT) == "observer" \
+        else _controller_model(cfg, choices)
     if binary not in (None, True, False):
         raise TypeError(f"binary: expected True, False or None, found {binary!r}")
     cc, platform = _compiler(), fmu_platform()
@@ -253,14 +311,14 @@ def fmu_archive(cfg, *, binary: bool | None = None, controller: str | None = Non
         raise ValueError(f"binary: no C compiler ($CC or cc) or no FMI platform folder for {sys.platform!r}; "
                          "expected binary=False (a source FMU) or None")
     build = binary if binary is not None else (cc is not None and platform is not None)
-    sources = dict(controller_files(ctrl, "c"))
-    inputs, outputs, constants = _variables(ctrl, ctrl.config.units)
+    sources = dict(model.sources)
 
     def render(guid):
-        wrapper = _environment(ctrl.config.units).get_template("obsdesign_fmu.c.j2").render(
-            name=comment_text(ctrl.config.name), controller=ctrl.controller, estimator=ctrl.estimator,
-            dt=_literal(ctrl.config.observer.dt), guid=guid, inputs=inputs, outputs=outputs, constants=constants)
-        return wrapper, _model_description(ctrl, guid, inputs, outputs, constants)
+        wrapper = _environment(model.cfg.units).get_template("obsdesign_fmu.c.j2").render(
+            name=comment_text(model.cfg.name), module=model.module,
+            choices=", ".join(f"{k} {v}" for k, v in model.choices.items()), dt=_literal(model.cfg.observer.dt),
+            guid=guid, inputs=model.inputs, outputs=model.outputs, constants=model.constants)
+        return wrapper, _model_description(model, guid)
 
     digest = hashlib.sha256("\0".join((*render("{}"), *sources.values())).encode()).hexdigest()
     guid = "{" + str(uuid.UUID(digest[:32])) + "}"
@@ -269,6 +327,6 @@ def fmu_archive(cfg, *, binary: bool | None = None, controller: str | None = Non
     entries = {"modelDescription.xml": xml.encode()}
     entries.update({f"sources/{name}": text.encode() for name, text in sources.items()})
     if build and cc is not None and platform is not None:
-        lib = _build(sources, cc)
-        entries[f"binaries/{platform}/{MODEL_IDENTIFIER}{'.dylib' if sys.platform == 'darwin' else '.so'}"] = lib
+        lib = _build(sources, cc, model.identifier, model.module)
+        entries[f"binaries/{platform}/{model.identifier}{'.dylib' if sys.platform == 'darwin' else '.so'}"] = lib
     return _zip(entries)

@@ -34,17 +34,22 @@ import re
 from dataclasses import dataclass
 from xml.sax.saxutils import escape, quoteattr
 
+from .._validate import check_choice
 from .._version import __version__
+from ..params import Config
 from ..sampled.choices import SCHEDULES
-from .codegen import axis_note
+from .codegen import axis_note, export_spec
+from . import WHAT
 from .controller import SCHEDULE_ZERO, _environment, _literal, controller_constants, exported_controller
 from .fmu import check_no_delay
 from .literals import comment_text
 
-__all__ = ["ST_KEYWORDS", "FB_NAME", "st_files", "st_literal", "check_st_identifier"]
+__all__ = ["ST_KEYWORDS", "FB_NAME", "OBSERVER_FB_NAME", "st_files", "st_literal", "check_st_identifier"]
 
-#: The function block's name.
+_WHAT = tuple(w for w in WHAT if w != "friction-table")
+#: The function blocks' names: the whole controller, the observer alone.
 FB_NAME = "FB_ObsdesignController"
+OBSERVER_FB_NAME = "FB_ObsdesignObserver"
 
 #: IEC 61131-3 (3rd edition) keywords, elementary type names and standard function names, with the common
 #: extensions of CODESYS/TwinCAT (POINTER, REFERENCE, ...): no generated identifier may be one (ST is case-insensitive).
@@ -209,6 +214,14 @@ END_IF;
 )
 
 
+#: The temporaries of the observer's step and of the exact discretization for a new stiffness.
+_SCHEDULE_TEMPS = (_lreal("t1", "t2", "ks", "fnew", "dx", "a11", "a12", "a21", "a22", "cb", "n1", "n2", "nrm", "pw",
+                          "hs", "fact", "hc", "ih", "b1", "b2", "g1", "g2", "m0", "m1", "m2", "m3",
+                          "q4", "q5", "q6", "q7", "q8", "q9", "q10", "q11")
+                   + _array(4, "mb", "mp", "mq", "me", "mg", "mj", "mi", "mn")
+                   + (_Var("sq", "DINT"), _Var("i", "DINT"), _Var("j", "DINT")))
+
+
 def _block(ctrl, units) -> _Pou:
     consts = controller_constants(ctrl)
     baseline = ctrl.baseline is not None
@@ -234,11 +247,7 @@ def _block(ctrl, units) -> _Pou:
         state += _lreal("y1", "y2", "x_prev", "dir", "x_r", "f_r", "x_ext")
         state += (_Var("k", "LREAL", "-1.0", f"stiffness of the coming interval [{u('N/m')}]"),)
         state += _array(4, "phi") + _array(2, "bu", "gx0", "gx1") + _lreal("zf1", "zf2", "f_hat_prev")
-        temps = _lreal("t1", "t2", "ks", "fnew", "dx", "a11", "a12", "a21", "a22", "cb", "n1", "n2", "nrm", "pw",
-                       "hs", "fact", "hc", "ih", "b1", "b2", "g1", "g2", "m0", "m1", "m2", "m3",
-                       "q4", "q5", "q6", "q7", "q8", "q9", "q10", "q11")
-        temps += _array(4, "mb", "mp", "mq", "me", "mg", "mj", "mi", "mn")
-        temps += (_Var("sq", "DINT"), _Var("i", "DINT"), _Var("j", "DINT"))
+        temps = _SCHEDULE_TEMPS
     state += _lreal("integ", "deriv", "e_prev", "u")
     if blend:
         state += _lreal("zb1", "zb2", "fb_prev")
@@ -253,12 +262,38 @@ def _block(ctrl, units) -> _Pou:
     kind = kinds.get(code, "constant") if code is not None else ""
     env = _environment(units)
     body = env.get_template("obsdesign_controller_body.st.j2").render(
-        baseline=baseline, nz=int(consts.get("E_NZ", 0)), controller=ctrl.controller, ffmode=ffmode, blend=blend,
+        observer_only=False, baseline=baseline, nz=int(consts.get("E_NZ", 0)), controller=ctrl.controller, ffmode=ffmode, blend=blend,
         blend_viscous=ctrl.config.observer.variant == "lag", compensation=ctrl.compensation, schedule_kind=kind,
         schedule_label=ctrl.schedule if ctrl.estimator == "paper" else "none: k = 0")
     sections = (("VAR_INPUT", inputs), ("VAR_OUTPUT", outputs), ("VAR", state), ("VAR_TEMP", temps),
                 ("VAR CONSTANT", constants))
     return _Pou(FB_NAME, "FUNCTION_BLOCK", sections, body)
+
+
+def _observer_block(cfg) -> _Pou:
+    """``FB_ObsdesignObserver``: the observer export's step (obsdesign_observer.c), its 'estimated-raw' schedule."""
+    spec = export_spec(cfg)
+    u = cfg.units.unit
+    fr = cfg.friction
+    consts = {"L1": spec.L1, "L2": spec.L2, "DT": spec.dt, "CF": fr.Cf, "S": fr.s, "KAPPA": fr.kappa}
+    arrays = spec.arrays
+    for name, values in (("A0", arrays.A0), ("A1", arrays.A1), ("B0", arrays.b0), ("B1", arrays.b1),
+                         ("G0", arrays.g0), ("G1", arrays.g1)):
+        consts.update({f"{name}_{i}": float(v) for i, v in enumerate(values.ravel())})
+    inputs = (_Var("u_prev", "LREAL", None, f"net force held over the interval just ended [{u('N')}]"),
+              _Var("x_meas", "LREAL", None, f"measured position [{u('m')}]"))
+    outputs = (_Var("v_hat", "LREAL", None, f"velocity estimate [{u('m/s')}]"),
+               _Var("f_hat", "LREAL", None, f"friction estimate [{u('N')}]"))
+    state = ((_Var("started", "BOOL", "FALSE", "FALSE until the first call"),)
+             + _lreal("y1", "y2", "x_prev", "dir", "x_r", "f_r")
+             + (_Var("k", "LREAL", "-1.0", f"stiffness of the coming interval [{u('N/m')}]"),)
+             + _array(4, "phi") + _array(2, "bu", "gx0", "gx1"))
+    constants = tuple(_Var("OD_" + k, "LREAL", st_literal(float(v))) for k, v in consts.items())
+    body = _environment(cfg.units).get_template("obsdesign_controller_body.st.j2").render(
+        observer_only=True, baseline=False, schedule_kind="estimated-raw", schedule_label="estimated-raw")
+    sections = (("VAR_INPUT", inputs), ("VAR_OUTPUT", outputs), ("VAR", state), ("VAR_TEMP", _SCHEDULE_TEMPS),
+                ("VAR CONSTANT", constants))
+    return _Pou(OBSERVER_FB_NAME, "FUNCTION_BLOCK", sections, body)
 
 
 def _check_names(pous: tuple[_Pou, ...]) -> None:
@@ -276,20 +311,17 @@ def _check_names(pous: tuple[_Pou, ...]) -> None:
         check_st_identifier(pou.name)
 
 
-def _header(ctrl) -> str:
-    cfg = ctrl.config
+def _header(cfg, module: str, choices: str, fb: str, wiring: str) -> str:
     axis = axis_note(cfg)
-    lines = [f"obsdesign_controller.st: the sampled controller of obsdesign's closed loop, generated by obsdesign "
-             f"{__version__}.",
-             f"Config {comment_text(cfg.name)}, variant {cfg.observer.variant}, controller {ctrl.controller}, "
-             f"estimator {ctrl.estimator}, schedule {ctrl.schedule}, compensation {ctrl.compensation.mode}.",
+    what = "the sampled controller of obsdesign's closed loop" if module == "controller" else "the friction observer"
+    lines = [f"obsdesign_{module}.st: {what}, generated by obsdesign {__version__}.",
+             f"Config {comment_text(cfg.name)}, variant {cfg.observer.variant}, {choices}.",
              *([axis + "."] if axis else []),
-             f"Cycle time: call {FB_NAME} exactly once per dt = {_literal(cfg.observer.dt)} s (the task's cycle; "
+             f"Cycle time: call {fb} exactly once per dt = {_literal(cfg.observer.dt)} s (the task's cycle; "
              "the constants are for that period).",
-             f"Inputs x_ref, x_meas [{cfg.units.unit('m')}]; output command [{cfg.units.unit('V')}] (saturated, with "
-             "the load feed-forward G/K), applied until the next call.",
+             wiring,
              "LREAL (IEEE 754 double): the operations of the C and Python exports in their order; obsdesign's tests "
-             "run this text on the simulator's recorded inputs and match the Python export within 1e-12 relative.",
+             "run this text on recorded inputs and match the Python export within 1e-12 relative.",
              "No dynamic memory: the state is the block's VAR section; a new instance starts at its first call."]
     if any("(*" in line or "*)" in line for line in lines):
         raise ValueError("comment: the header would open or close a comment; expected plain text")
@@ -366,14 +398,18 @@ def _plcopen(pous: tuple[_Pou, ...], header: str) -> str:
     return "\n".join(lines)
 
 
-def st_files(cfg, *, controller: str | None = None, schedule: str | None = None,
+def st_files(cfg, *, what: str = "controller", controller: str | None = None, schedule: str | None = None,
              estimator: str | None = None) -> dict[str, str]:
-    """``obsdesign_controller.st`` and its PLCopen XML ``obsdesign_controller.xml``.
+    """``obsdesign_controller.st`` and its PLCopen XML ``obsdesign_controller.xml`` (or ``obsdesign_observer.*``).
 
     Parameters
     ----------
     cfg : Config or SampledController
         The design (``[pid] delay_samples`` must be 0), or the controller itself.
+    what : {'controller', 'observer'}
+        ``controller`` (default): ``FB_ObsdesignController``, the whole sampled controller;
+        ``observer``: ``FB_ObsdesignObserver``, the observer export's step (inputs ``u_prev``,
+        ``x_meas``; outputs ``v_hat``, ``f_hat``; the ``estimated-raw`` schedule).
     controller, schedule, estimator : str, optional
         As in :func:`obsdesign.export.controller.controller_files`.
 
@@ -388,9 +424,28 @@ def st_files(cfg, *, controller: str | None = None, schedule: str | None = None,
         ``delay_samples`` > 0, a generated identifier that is an ST keyword or clashes, and the
         errors of :func:`~obsdesign.export.controller.controller_files`.
     """
-    ctrl = exported_controller(cfg, controller=controller, schedule=schedule, estimator=estimator)
-    check_no_delay(ctrl, "st")
-    pous = (*_FUNCTIONS, _block(ctrl, ctrl.config.units))
+    if check_choice("what", what, _WHAT) == "observer":
+        given = {k: v for k, v in (("controller", controller), ("schedule", schedule), ("estimator", estimator))
+                 if v is not None}
+        if given:
+            name = next(iter(given))
+            raise ValueError(f"{name}: applies to what='controller' only, found {given[name]!r} with what='observer'")
+        if not isinstance(cfg, Config):
+            raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
+        pous = (*_FUNCTIONS, _observer_block(cfg))
+        u = cfg.units.unit
+        header = _header(cfg, "observer", "schedule estimated-raw", OBSERVER_FB_NAME,
+                         f"Inputs u_prev [{u('N')}] (the net force K command - G held over the interval just ended), "
+                         f"x_meas [{u('m')}]; outputs v_hat [{u('m/s')}], f_hat [{u('N')}].")
+    else:
+        ctrl = exported_controller(cfg, controller=controller, schedule=schedule, estimator=estimator)
+        check_no_delay(ctrl, "st")
+        pous = (*_FUNCTIONS, _block(ctrl, ctrl.config.units))
+        cfg, u = ctrl.config, ctrl.config.units.unit
+        header = _header(cfg, "controller", f"controller {ctrl.controller}, estimator {ctrl.estimator}, schedule "
+                         f"{ctrl.schedule}, compensation {ctrl.compensation.mode}", FB_NAME,
+                         f"Inputs x_ref, x_meas [{u('m')}]; output command [{u('V')}] (saturated, with the load "
+                         "feed-forward G/K), applied until the next call.")
     _check_names(pous)
-    header = _header(ctrl)
-    return {"obsdesign_controller.st": _st_text(pous, header), "obsdesign_controller.xml": _plcopen(pous, header)}
+    module = pous[-1].name.removeprefix("FB_Obsdesign").lower()
+    return {f"obsdesign_{module}.st": _st_text(pous, header), f"obsdesign_{module}.xml": _plcopen(pous, header)}
