@@ -24,6 +24,7 @@ ValueError: estimator: applies to what='controller' only, found 'eso' with what=
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 from pathlib import Path
 
 from .._io import atomic_write
@@ -134,7 +135,7 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
     return _write(files, out_dir)
 
 
-def _write(files: dict[str, str] | dict[str, str | bytes], out_dir) -> list[Path]:
+def _write(files: Mapping[str, str | bytes], out_dir) -> list[Path]:
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ValueError(f"output: expected a directory, found the file {str(out)!r}")
