@@ -291,3 +291,23 @@ def test_cli_writes_the_fmu_and_the_st_and_refuses_in_one_line(tmp_path, capsys,
     monkeypatch.setenv("CC", "no-such-compiler-obsdesign")
     code, _, err = _cli(capsys, "export", "--format", "fmu", "--what", "controller", "-o", str(tmp_path / "s"))
     assert code == 0 and len(err) == 1 and "a source FMU" in err[0]
+
+
+@needs_cc
+@pytest.mark.slow  # CMake configures a project: about 9 s
+def test_the_source_fmu_builds_in_an_importer_and_runs_the_same(tmp_path, capfd):
+    """FMPy's own build of a source FMU (CMake, its flags): what an importer without our compiler does."""
+    build = pytest.importorskip("fmpy.build", reason="fmpy without its build module")
+    if shutil.which("cmake") is None:
+        pytest.skip("cmake (a dependency of fmpy) is not on PATH")
+    res, _ = _simulate(VCM, dict(scenario="tracking"), duration=0.3)
+    path = _write(tmp_path, fmu_archive(VCM, binary=False, schedule=res.stiffness_schedule))
+    unzipped = fmpy.extract(str(path), unzipdir=str(tmp_path / "unzipped"))
+    (tmp_path / "build").mkdir()
+    build.build_platform_binary(unzipped, build_dir=str(tmp_path / "build"))
+    capfd.readouterr()  # CMake's progress
+    n, dt = len(res.t), VCM.observer.dt
+    signals = np.rec.fromarrays([np.arange(n) * dt, res.x_ref, res.x_meas], names="time,x_ref,x_meas")
+    out = fmpy.simulate_fmu(str(unzipped), stop_time=n * dt, step_size=dt, output_interval=dt, input=signals,
+                            output=["command"])
+    assert np.array_equal(VCM.plant.K * out["command"][1:] - VCM.plant.G, res.u)
