@@ -88,4 +88,10 @@ if command -v cc > /dev/null; then
     for f in gen/*.c; do cc -std=c99 -Wall -Werror -c "$f" -o "${f%.c}.o"; done
 fi
 
+step "obsdesign export --what controller --format fmu, st -o tools/ (the FMU and PLC templates ship)"
+"$work/venv/bin/obsdesign" export --what controller --format fmu -o tools/
+"$work/venv/bin/obsdesign" export --what controller --format st -o tools/
+"$work/venv/bin/python" -c "import zipfile; assert 'modelDescription.xml' in zipfile.ZipFile('tools/obsdesign_controller.fmu').namelist()"
+grep -q "END_FUNCTION_BLOCK" tools/obsdesign_controller.st
+
 step "passed: sdist $(du -k "$sdist" | cut -f1) kB, wheel $(du -k "$wheel" | cut -f1) kB; total $((SECONDS - t0)) s"
