@@ -1,4 +1,4 @@
-"""The sampled controller as an FMI 2.0 co-simulation FMU, built from the generated C.
+"""The sampled controller (or the observer alone) as an FMI 2.0 co-simulation FMU, built from the generated C.
 
 The archive ``obsdesign_controller.fmu`` holds ``modelDescription.xml``, the sources
 ``obsdesign_controller.h/.c`` (the files of ``export --format c``, unchanged: one code path) and
@@ -11,6 +11,9 @@ The FMU's step runs the controller once per communication step, which must be ``
 ``x_ref``, ``x_meas`` (and ``v_ref``, ``w_ff`` for the compensation modes ``feedforward``/``blend``),
 outputs ``command``, ``v_hat``, ``f_hat``, ``f_hat_filtered``; the export's numbers are read-only
 constants with their units (they are compiled into the C: a new value is a new export).
+
+``fmu_archive(cfg, what="observer")`` wraps the observer's C export the same way
+(``obsdesign_observer.fmu``: inputs ``u_prev``, ``x_meas``; outputs ``v_hat``, ``f_hat``).
 
 The bytes depend on the inputs only: no path, no timestamp (the zip entries carry 1980-01-01),
 and the ``guid`` is a hash of the archive's text.

@@ -1,4 +1,4 @@
-"""The sampled controller as IEC 61131-3 Structured Text: a function block for a PLC or soft-motion runtime.
+"""The sampled controller (or the observer alone) as IEC 61131-3 Structured Text, for a PLC or soft-motion runtime.
 
 ``FB_ObsdesignController`` runs what ``obsdesign_controller_step`` of the C export runs, statement
 for statement (the C's helpers inlined, the schedule's branch chosen at export), in ``LREAL``
@@ -6,7 +6,8 @@ for statement (the C's helpers inlined, the schedule's branch chosen at export),
 allocated, the numbers are ``VAR CONSTANT``. Three helper functions (``OD_Shape``, ``OD_CoulombN``,
 ``OD_Stiffness``) carry the pre-sliding branch model. The same POUs are written as a plain
 ``obsdesign_controller.st`` (TwinCAT, Siemens SCL-type import, any text editor) and as PLCopen XML
-(TC6 2.01, ``obsdesign_controller.xml``) for CODESYS-type runtimes.
+(TC6 2.01, ``obsdesign_controller.xml``) for CODESYS-type runtimes. ``st_files(cfg, what="observer")``
+writes ``FB_ObsdesignObserver``, the observer export's step, as ``obsdesign_observer.st``/``.xml``.
 
 Every identifier the generator writes is checked against :data:`ST_KEYWORDS` and for a
 case-insensitive clash (ST does not tell ``K`` from ``k``); user text (the config's name) reaches
