@@ -2,8 +2,8 @@
 # Wheel smoke test: build the sdist and the wheel from a copy of the checkout (`python -m build`
 # builds the wheel from the sdist, so a file missing from the sdist fails here), check both with
 # `twine check --strict`, install the wheel into a fresh virtual environment in a temporary
-# directory outside the repository, and run the installed command there: `report` and a C export
-# (compiled when a C compiler is present). Any error fails the script; it prints the time of each step.
+# directory outside the repository, and run the installed command there: `report`, a C export
+# (compiled when a C compiler is present), an FMU and an ST block. Any error fails the script; it prints the time of each step.
 #
 #   .ci/wheel-smoke.sh                      # PYTHON=python3.11 by default
 #   WHEEL_SMOKE_TOOLS=/path/to/venv .ci/wheel-smoke.sh   # reuse a venv holding build and twine
@@ -87,5 +87,11 @@ if command -v cc > /dev/null; then
     step "cc -std=c99 -Wall -Werror -c gen/*.c"
     for f in gen/*.c; do cc -std=c99 -Wall -Werror -c "$f" -o "${f%.c}.o"; done
 fi
+
+step "obsdesign export --what controller --format fmu, st -o tools/ (the FMU and PLC templates ship)"
+"$work/venv/bin/obsdesign" export --what controller --format fmu -o tools/
+"$work/venv/bin/obsdesign" export --what controller --format st -o tools/
+"$work/venv/bin/python" -c "import zipfile; assert 'modelDescription.xml' in zipfile.ZipFile('tools/obsdesign_controller.fmu').namelist()"
+grep -q "END_FUNCTION_BLOCK" tools/obsdesign_controller.st
 
 step "passed: sdist $(du -k "$sdist" | cut -f1) kB, wheel $(du -k "$wheel" | cut -f1) kB; total $((SECONDS - t0)) s"

@@ -374,10 +374,12 @@ def test_the_export_and_the_simulator_share_the_choices_and_the_threshold():
 
     assert REVERSAL_NOISE_FACTOR == SIM_FACTOR
     assert SCHEDULE_NAMES == tuple(name for name in SCHEDULES.names() if name != "true")
-    from obsdesign.export import CONTROLLER_FORMATS
+    from obsdesign.export import CONTROLLER_FORMATS, TOOL_FORMATS
     from obsdesign.export.controller import LANGUAGES
 
-    assert set(LANGUAGES) == set(CONTROLLER_FORMATS)  # every controller format has its templates
+    # every controller format has its templates, or is built around them (fmu: the c files; st: its own)
+    assert set(LANGUAGES) | set(TOOL_FORMATS) == set(CONTROLLER_FORMATS)
+    assert not set(LANGUAGES) & set(TOOL_FORMATS)
     assert SCHEDULE_ZERO not in {SCHEDULES.code(name) for name in SCHEDULES.names()}
     table1 = od.load_preset("table1")
     c = controller_constants(table1)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..export import CONTROLLER_FORMATS
 from ..export import FORMATS as EXPORT_FORMATS
 from ..export import TARGETS as EXPORT_TARGETS
 from ..export import WHAT as EXPORT_WHAT
@@ -24,7 +25,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
     check_output_dir("export", "-o/--output", args.output)
     if args.what == "controller" and args.format == "latex":
         raise UsageError("obsdesign export: argument --format: the controller is exported as one of "
-                         "python, c, octave, js, found 'latex'")
+                         f"{', '.join(CONTROLLER_FORMATS)}, found 'latex'")
     for flag, value in (("--controller", args.controller), ("--stiffness", args.stiffness),
                         ("--estimator", args.estimator)):
         if value is not None and args.what != "controller":
@@ -39,6 +40,13 @@ def _cmd_export(args: argparse.Namespace) -> int:
                    schedule=args.stiffness, estimator=args.estimator, table=table_options(args),
                    target=args.target)
     warn_unstable(cfg, "the exported observer diverges")
+    if args.format == "fmu":
+        import zipfile
+
+        with zipfile.ZipFile(paths[0]) as archive:
+            if not any(name.startswith("binaries/") for name in archive.namelist()):
+                print_warnings(["no C compiler found ($CC or cc): the FMU holds the sources only (a source FMU, "
+                                "compiled by the importer)"])
     for path in paths:
         print(path)
     return 0

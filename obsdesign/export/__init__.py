@@ -1,4 +1,5 @@
-"""Export the derivation and a designed observer as LaTeX, Python, C, Octave or JavaScript.
+"""Export the derivation and a designed observer as LaTeX, Python, C, Octave or JavaScript, the controller
+also as an FMU (:mod:`~obsdesign.export.fmu`) and IEC 61131-3 Structured Text (:mod:`~obsdesign.export.st`).
 
 :func:`export` (in :mod:`~obsdesign.export.files`) writes one format's files;
 :mod:`~obsdesign.export.codegen` prints them from the symbolic derivation. The
@@ -18,7 +19,7 @@ Examples
 from __future__ import annotations
 
 #: The export formats, in the order the command line lists them.
-FORMATS = ("latex", "python", "c", "octave", "js")
+FORMATS = ("latex", "python", "c", "octave", "js", "fmu", "st")
 #: What can be exported: the observer (default), the whole sampled controller, or the feed-forward
 #: friction model as a drive's velocity table (:mod:`obsdesign.export.friction_table`).
 WHAT = ("observer", "controller", "friction-table")
@@ -28,7 +29,12 @@ CONTROLLER_FORMATS = tuple(fmt for fmt in FORMATS if fmt != "latex")
 #: (float32, encoder counts, fixed cost: :mod:`obsdesign.export.mcu`).
 TARGETS = ("host", "cortex-m4f")
 
-__all__ = ["export", "FORMATS", "WHAT", "CONTROLLER_FORMATS", "TARGETS"]
+#: The formats packaged for a tool, of the controller or the observer: an FMI 2.0 co-simulation FMU
+#: and an IEC 61131-3 function block (not source languages of :func:`~obsdesign.export.controller.controller_files`).
+# choice subset: the exports packaged for an importer or a PLC
+TOOL_FORMATS = ("fmu", "st")
+
+__all__ = ["export", "FORMATS", "WHAT", "CONTROLLER_FORMATS", "TOOL_FORMATS", "TARGETS"]
 
 
 def __getattr__(name: str):

@@ -14,7 +14,7 @@ Examples
 >>> export(od.load_preset("vcm"), "latex", ".", what="controller")
 Traceback (most recent call last):
 ...
-ValueError: format: the controller is exported as one of python, c, octave, js, found 'latex'
+ValueError: format: the controller is exported as one of python, c, octave, js, fmu, st, found 'latex'
 >>> export(od.load_preset("vcm"), "c", ".", estimator="eso")
 Traceback (most recent call last):
 ...
@@ -24,6 +24,7 @@ ValueError: estimator: applies to what='controller' only, found 'eso' with what=
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 from pathlib import Path
 
 from .._io import atomic_write
@@ -52,7 +53,11 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
         ``observer``: the derivation (LaTeX) or the discrete observer; ``controller``: the whole
         sampled controller of the simulator (observer, low-pass, PID, compensation of the config's
         ``[compensation]`` section, saturation): ``obsdesign_controller.h/.c``, ``obsdesign_controller.py``,
-        ``obsdesign_controller*.m``, ``obsdesign_controller.mjs``.
+        ``obsdesign_controller*.m``, ``obsdesign_controller.mjs``, ``obsdesign_controller.fmu``
+        (:mod:`~obsdesign.export.fmu`: compiled for this platform when a C compiler is found),
+        ``obsdesign_controller.st`` and ``.xml`` (:mod:`~obsdesign.export.st`; the controller's
+        ``fmu`` and ``st`` need ``[pid] delay_samples = 0``). The observer's ``fmu`` and ``st`` are
+        ``obsdesign_observer.fmu``, ``obsdesign_observer.st`` and ``.xml``.
     controller : str, optional
         With ``what='controller'``: the controller of :func:`obsdesign.simulate` to generate
         (:data:`obsdesign.export.controller.EXPORTED_CONTROLLERS`, default ``pid+observer``).
@@ -106,13 +111,30 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
         if target == "cortex-m4f":
             from .mcu import mcu_controller_files
 
-            files = mcu_controller_files(cfg, controller=controller, schedule=schedule, estimator=estimator)
+            out: dict[str, str | bytes] = dict(mcu_controller_files(cfg, controller=controller, schedule=schedule,
+                                                                    estimator=estimator))
+        elif fmt == "fmu":
+            from .fmu import FMU_NAME, fmu_archive
+
+            out = {FMU_NAME: fmu_archive(cfg, controller=controller, schedule=schedule, estimator=estimator)}
+        elif fmt == "st":
+            from .st import st_files
+
+            out = dict(st_files(cfg, controller=controller, schedule=schedule, estimator=estimator))
         else:
-            files = controller_files(cfg, fmt, controller=controller, schedule=schedule, estimator=estimator)
-        return _write(files, out_dir)
+            out = dict(controller_files(cfg, fmt, controller=controller, schedule=schedule, estimator=estimator))
+        return _write(out, out_dir)
     for name, value in (("controller", controller), ("schedule", schedule), ("estimator", estimator)):
         if value is not None:
             raise ValueError(f"{name}: applies to what='controller' only, found {value!r} with what='observer'")
+    if fmt == "fmu":
+        from .fmu import OBSERVER_FMU_NAME, fmu_archive
+
+        return _write({OBSERVER_FMU_NAME: fmu_archive(cfg, what="observer")}, out_dir)
+    if fmt == "st":
+        from .st import st_files
+
+        return _write(st_files(cfg, what="observer"), out_dir)
     spec = export_spec(cfg)
     if fmt == "latex":
         files = {f"obsdesign_{spec.variant}.tex": latex_document(spec)}
@@ -127,7 +149,7 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
     return _write(files, out_dir)
 
 
-def _write(files: dict[str, str], out_dir) -> list[Path]:
+def _write(files: Mapping[str, str | bytes], out_dir) -> list[Path]:
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ValueError(f"output: expected a directory, found the file {str(out)!r}")

@@ -1,0 +1,251 @@
+"""A small evaluator of the Structured Text subset the ST export emits, built on blark's parse tree.
+
+blark (GPL) parses the text; this module only reads its dataclasses (test-only: the package never
+imports blark). The subset: FUNCTION and FUNCTION_BLOCK with VAR_INPUT / VAR_OUTPUT / VAR / VAR_TEMP /
+VAR CONSTANT of LREAL, BOOL, DINT and one-dimensional arrays; assignments, IF/ELSIF/ELSE, FOR (BY),
+WHILE; arithmetic, comparisons, AND/OR/XOR/NOT; calls of the program's functions and of ABS, SQRT,
+LN, EXP, DINT_TO_LREAL. Anything else raises NotImplementedError, so the export cannot slip a
+construct past the test. Each node is compiled once into a Python closure; LREAL is Python's float
+(IEEE 754 double, the operations in the text's order), DINT a Python int.
+"""
+
+from __future__ import annotations
+
+import math
+import operator
+
+try:  # the test extra; the tests that use this module skip without it (pytest imports it for doctests too)
+    import blark
+    from blark import transform as tf
+except ImportError:  # pragma: no cover
+    blark = tf = None
+
+_BUILTINS = {"ABS": abs, "SQRT": math.sqrt, "LN": math.log, "EXP": math.exp, "DINT_TO_LREAL": float}
+
+
+def _div(a, b):
+    if isinstance(a, int) and isinstance(b, int):
+        return int(a / b)  # DINT division truncates toward zero
+    return a / b
+
+
+_BINARY = {"+": operator.add, "-": operator.sub, "*": operator.mul, "/": _div, "=": operator.eq, "<>": operator.ne,
+           "<": operator.lt, ">": operator.gt, "<=": operator.le, ">=": operator.ge,
+           "AND": lambda a, b: a and b, "OR": lambda a, b: a or b, "XOR": operator.xor}
+
+
+def _array_thunk(n):
+    def fresh():
+        return [0.0] * n
+    return fresh
+
+
+def _value_thunk(expr, default):
+    def fresh():
+        return expr({}) if expr is not None else default
+    return fresh
+
+
+class _Return(Exception):
+    pass
+
+
+class Program:
+    """The POUs of one ST source; ``Program(text).block(name)`` is a fresh function-block instance."""
+
+    def __init__(self, source: str):
+        result = blark.parse_source_code(source)
+        if result.exception is not None:
+            raise result.exception
+        self.pous = {str(item.name).upper(): item for item in result.transform().items}
+        self._compiled: dict[str, tuple] = {}
+
+    # --- declarations -------------------------------------------------------------------------
+    def _declarations(self, pou):
+        """[(section, name, initial value thunk)] in order; sections: input, output, var, temp, constant."""
+        out = []
+        for block in pou.declarations:
+            kind = {tf.InputDeclarations: "input", tf.OutputDeclarations: "output",
+                    tf.TemporaryVariableDeclarations: "temp", tf.FunctionVariableDeclarations: "var",
+                    tf.VariableDeclarations: "var"}.get(type(block))
+            if kind is None:
+                raise NotImplementedError(type(block).__name__)
+            if kind == "var" and getattr(block, "attrs", None) is not None and "CONSTANT" in str(block.attrs).upper():
+                kind = "constant"
+            for item in block.items:
+                init = item.init
+                if isinstance(init, tf.ArrayTypeInitialization):
+                    (rng,) = init.spec.subranges
+                    lo, hi = int(str(rng.start.value)), int(str(rng.stop.value))
+                    if lo != 0 or init.value is not None:
+                        raise NotImplementedError("array bounds other than 0..n or an array initializer")
+                    thunk = _array_thunk(hi + 1)
+                else:
+                    type_name = str(init.spec.type).upper()
+                    default = {"LREAL": 0.0, "REAL": 0.0, "BOOL": False, "DINT": 0, "INT": 0}[type_name]
+                    thunk = _value_thunk(self._expr(init.value) if init.value is not None else None, default)
+                for var in item.variables:
+                    out.append((kind, str(var.variable.name).upper(), thunk))
+        return out
+
+    def _pou(self, name):
+        key = name.upper()
+        if key not in self._compiled:
+            pou = self.pous[key]
+            decls = self._declarations(pou)
+            self._compiled[key] = (decls, self._statements(pou.body))
+        return self._compiled[key]
+
+    def block(self, name: str) -> Block:
+        return Block(self, name)
+
+    def call_function(self, name: str, args: list):
+        decls, body = self._pou(name)
+        env = {}
+        inputs = [n for kind, n, _ in decls if kind == "input"]
+        if len(args) != len(inputs):
+            raise TypeError(f"{name}: expected {len(inputs)} arguments, found {len(args)}")
+        for kind, n, thunk in decls:
+            env[n] = thunk()
+        env.update(zip(inputs, args))
+        env[name.upper()] = 0.0
+        try:
+            body(env)
+        except _Return:
+            pass
+        return env[name.upper()]
+
+    # --- statements ---------------------------------------------------------------------------
+    def _statements(self, node):
+        if node is None:
+            return lambda env: None
+        stmts = [self._statement(s) for s in node.statements]
+
+        def run(env):
+            for s in stmts:
+                s(env)
+        return run
+
+    def _statement(self, s):
+        if isinstance(s, tf.AssignmentStatement):
+            (target,) = s.variables
+            value = self._expr(s.expression)
+            return self._store(target, value)
+        if isinstance(s, tf.IfStatement):
+            branches = [(self._expr(s.if_expression), self._statements(s.statements))]
+            branches += [(self._expr(b.if_expression), self._statements(b.statements)) for b in s.else_ifs]
+            other = self._statements(s.else_clause.statements) if s.else_clause else (lambda env: None)
+
+            def run_if(env):
+                for cond, body in branches:
+                    if cond(env):
+                        body(env)
+                        return
+                other(env)
+            return run_if
+        if isinstance(s, tf.ForStatement):
+            name = str(s.control.name).upper()
+            lo, hi = self._expr(s.from_), self._expr(s.to)
+            step = self._expr(s.step) if s.step is not None else (lambda env: 1)
+            body = self._statements(s.statements)
+
+            def run_for(env):
+                i, end, by = lo(env), hi(env), step(env)
+                env[name] = i
+                while (by > 0 and env[name] <= end) or (by < 0 and env[name] >= end):
+                    body(env)
+                    env[name] += by
+            return run_for
+        if isinstance(s, tf.WhileStatement):
+            cond, body = self._expr(s.expression), self._statements(s.statements)
+
+            def run_while(env):
+                while cond(env):
+                    body(env)
+            return run_while
+        if isinstance(s, tf.ReturnStatement):
+            def run_return(env):
+                raise _Return
+            return run_return
+        raise NotImplementedError(type(s).__name__)
+
+    def _store(self, target, value):
+        if isinstance(target, tf.SimpleVariable):
+            name = str(target.name).upper()
+
+            def store(env):
+                env[name] = value(env)
+            return store
+        if isinstance(target, tf.MultiElementVariable):
+            array, index = self._element(target)
+
+            def store_element(env):
+                env[array][index(env)] = value(env)
+            return store_element
+        raise NotImplementedError(type(target).__name__)
+
+    def _element(self, node):
+        (sub,) = node.elements
+        (index,) = sub.subscripts
+        return str(node.name.name).upper(), self._expr(index)
+
+    # --- expressions --------------------------------------------------------------------------
+    def _expr(self, e):
+        if isinstance(e, tf.Real):
+            value = float(str(e.value))
+            return lambda env: value
+        if isinstance(e, tf.Integer):
+            ivalue = int(str(e.value))
+            return lambda env: ivalue
+        if isinstance(e, tf.Boolean):
+            bvalue = str(e.value).upper() == "TRUE"
+            return lambda env: bvalue
+        if isinstance(e, tf.SimpleVariable):
+            name = str(e.name).upper()
+            return lambda env: env[name]
+        if isinstance(e, tf.MultiElementVariable):
+            array, index = self._element(e)
+            return lambda env: env[array][index(env)]
+        if isinstance(e, tf.ParenthesizedExpression):
+            return self._expr(e.expr)
+        if isinstance(e, tf.UnaryOperation):
+            inner, op = self._expr(e.expr), str(e.op).upper()
+            if op == "-":
+                return lambda env: -inner(env)
+            if op == "NOT":
+                return lambda env: not inner(env)
+            raise NotImplementedError(op)
+        if isinstance(e, tf.BinaryOperation):
+            left, right, fn = self._expr(e.left), self._expr(e.right), _BINARY[str(e.op).upper()]
+            return lambda env: fn(left(env), right(env))
+        if isinstance(e, tf.FunctionCall):
+            name = str(e.name.name).upper()
+            if any(p.name is not None for p in e.parameters):
+                raise NotImplementedError("formal (named) arguments")
+            args = [self._expr(p.value) for p in e.parameters]
+            if name in _BUILTINS:
+                fn = _BUILTINS[name]
+                return lambda env: fn(*(a(env) for a in args))
+            if name not in self.pous:
+                raise NotImplementedError(f"function {name}")
+            return lambda env: self.call_function(name, [a(env) for a in args])
+        raise NotImplementedError(type(e).__name__)
+
+
+class Block:
+    """One instance of a FUNCTION_BLOCK: its VAR state kept between calls, VAR_TEMP fresh at each."""
+
+    def __init__(self, program: Program, name: str):
+        self.decls, self.body = program._pou(name)
+        self.env = {n: thunk() for kind, n, thunk in self.decls if kind != "temp"}
+        self.inputs = [n for kind, n, _ in self.decls if kind == "input"]
+        self.outputs = [n for kind, n, _ in self.decls if kind == "output"]
+        self.temps = [(n, thunk) for kind, n, thunk in self.decls if kind == "temp"]
+
+    def __call__(self, *args):
+        """Call with the inputs in declaration order; returns the outputs as a dict (upper-case names)."""
+        self.env.update(zip(self.inputs, args, strict=True))
+        for n, thunk in self.temps:
+            self.env[n] = thunk()
+        self.body(self.env)
+        return {n: self.env[n] for n in self.outputs}
