@@ -194,7 +194,7 @@ def _observer_model(cfg, choices) -> _Model:
     consts = {"DT": spec.dt, "CF": fr.Cf, "S": fr.s, "KAPPA": fr.kappa}
     variables = _variables(cfg.units, _OBSERVER_INPUTS, _OBSERVER_OUTPUTS, consts)
     return _Model("obsdesign_observer", "observer", cfg, dict(c_files(spec)), *variables,
-                  {"schedule": "estimated-raw"})
+                  {"schedule": "estimated"})
 
 
 def _model_description(model: _Model, guid: str) -> str:
@@ -283,7 +283,7 @@ def fmu_archive(cfg, *, what: str = "controller", binary: bool | None = None, co
     what : {'controller', 'observer'}
         ``controller`` (default): ``obsdesign_controller.fmu`` around the files of ``--format c --what
         controller``; ``observer``: ``obsdesign_observer.fmu`` around those of ``--format c`` (the
-        observer alone, its ``estimated-raw`` schedule: inputs ``u_prev`` [N], the net force held over
+        observer alone, the simulator's default ``estimated`` schedule: inputs ``u_prev`` [N], the net force held over
         the interval just ended, and ``x_meas``; outputs ``v_hat``, ``f_hat``).
     binary : bool, optional
         True: compile the shared library for this platform (``$CC`` or ``cc``; an error if there is

@@ -272,11 +272,15 @@ def _block(ctrl, units) -> _Pou:
 
 
 def _observer_block(cfg) -> _Pou:
-    """``FB_ObsdesignObserver``: the observer export's step (obsdesign_observer.c), its 'estimated-raw' schedule."""
+    """``FB_ObsdesignObserver``: the observer export's step (obsdesign_observer.c), the simulator's default
+    schedule ``estimated`` (its reversal hysteresis; at sign changes of ``v_hat`` where that is 0)."""
     spec = export_spec(cfg)
     u = cfg.units.unit
     fr = cfg.friction
-    consts = {"L1": spec.L1, "L2": spec.L2, "DT": spec.dt, "CF": fr.Cf, "S": fr.s, "KAPPA": fr.kappa}
+    threshold = spec.reversal_threshold
+    kind = "estimated" if threshold > 0.0 else "estimated-raw"
+    consts = {"L1": spec.L1, "L2": spec.L2, "DT": spec.dt, "CF": fr.Cf, "S": fr.s, "KAPPA": fr.kappa,
+              "REVERSAL_THRESHOLD": threshold}
     arrays = spec.arrays
     for name, values in (("A0", arrays.A0), ("A1", arrays.A1), ("B0", arrays.b0), ("B1", arrays.b1),
                          ("G0", arrays.g0), ("G1", arrays.g1)):
@@ -286,12 +290,12 @@ def _observer_block(cfg) -> _Pou:
     outputs = (_Var("v_hat", "LREAL", None, f"velocity estimate [{u('m/s')}]"),
                _Var("f_hat", "LREAL", None, f"friction estimate [{u('N')}]"))
     state = ((_Var("started", "BOOL", "FALSE", "FALSE until the first call"),)
-             + _lreal("y1", "y2", "x_prev", "dir", "x_r", "f_r")
+             + _lreal("y1", "y2", "x_prev", "dir", "x_r", "f_r", "x_ext")
              + (_Var("k", "LREAL", "-1.0", f"stiffness of the coming interval [{u('N/m')}]"),)
              + _array(4, "phi") + _array(2, "bu", "gx0", "gx1"))
     constants = tuple(_Var("OD_" + k, "LREAL", st_literal(float(v))) for k, v in consts.items())
     body = _environment(cfg.units).get_template("obsdesign_controller_body.st.j2").render(
-        observer_only=True, baseline=False, schedule_kind="estimated-raw", schedule_label="estimated-raw")
+        observer_only=True, baseline=False, schedule_kind=kind, schedule_label=f"estimated, reversal threshold {threshold:g}")
     sections = (("VAR_INPUT", inputs), ("VAR_OUTPUT", outputs), ("VAR", state), ("VAR_TEMP", _SCHEDULE_TEMPS),
                 ("VAR CONSTANT", constants))
     return _Pou(OBSERVER_FB_NAME, "FUNCTION_BLOCK", sections, body)
@@ -410,7 +414,7 @@ def st_files(cfg, *, what: str = "controller", controller: str | None = None, sc
     what : {'controller', 'observer'}
         ``controller`` (default): ``FB_ObsdesignController``, the whole sampled controller;
         ``observer``: ``FB_ObsdesignObserver``, the observer export's step (inputs ``u_prev``,
-        ``x_meas``; outputs ``v_hat``, ``f_hat``; the ``estimated-raw`` schedule).
+        ``x_meas``; outputs ``v_hat``, ``f_hat``; the simulator's default ``estimated`` schedule).
     controller, schedule, estimator : str, optional
         As in :func:`obsdesign.export.controller.controller_files`.
 
@@ -435,7 +439,7 @@ def st_files(cfg, *, what: str = "controller", controller: str | None = None, sc
             raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
         pous = (*_FUNCTIONS, _observer_block(cfg))
         u = cfg.units.unit
-        header = _header(cfg, "observer", "schedule estimated-raw", OBSERVER_FB_NAME,
+        header = _header(cfg, "observer", "schedule estimated", OBSERVER_FB_NAME,
                          f"Inputs u_prev [{u('N')}] (the net force K command - G held over the interval just ended), "
                          f"x_meas [{u('m')}]; outputs v_hat [{u('m/s')}], f_hat [{u('N')}].")
     else:
