@@ -109,9 +109,9 @@ html_theme_options = {
     "navbar_align": "left",
     "header_links_before_dropdown": 8,  # every section in the top bar at 1400 px, no "More" menu
     "show_nav_level": 2,  # a section's task groups open in the left sidebar
-    "navigation_depth": 3,
+    "navigation_depth": 6,  # the API reference's module pages are five levels deep
     "show_toc_level": 2,
-    "secondary_sidebar_items": ["page-toc"],
+    "secondary_sidebar_items": {"**": ["page-toc"], "index": []},
     "footer_start": ["copyright"],
     "footer_end": ["sphinx-version"],
     "navigation_with_keys": False,
@@ -119,7 +119,8 @@ html_theme_options = {
     "pygments_light_style": "default",
     "pygments_dark_style": "monokai",
 }
-html_sidebars = {"index": []}  # the landing page: full width, no section sidebar
+# The landing page and the tutorial: full width, no section sidebar (neither has pages below it).
+html_sidebars = {"index": [], "getting-started": []}
 html_show_sourcelink = False
 html_copy_source = False
 
@@ -131,3 +132,14 @@ copybutton_prompt_text = r">>> |\.\.\. |\$ "
 copybutton_prompt_is_regexp = True
 copybutton_only_copy_prompt_lines = True
 copybutton_exclude = ".linenos, .gp, .go"
+
+
+def _inline_figures_in_notebooks(app):
+    """The notebooks' kernels show their figures inline: the build runs with ``MPLBACKEND=agg``
+    (the gallery's scripts, in this process, need it), which the kernels would inherit and then show
+    no figure. Set after the gallery has run (``builder-inited``, late), before the notebooks run."""
+    os.environ["MPLBACKEND"] = "module://matplotlib_inline.backend_inline"
+
+
+def setup(app):
+    app.connect("builder-inited", _inline_figures_in_notebooks, priority=900)
