@@ -133,13 +133,3 @@ copybutton_prompt_is_regexp = True
 copybutton_only_copy_prompt_lines = True
 copybutton_exclude = ".linenos, .gp, .go"
 
-
-def _inline_figures_in_notebooks(app):
-    """The notebooks' kernels show their figures inline: the build runs with ``MPLBACKEND=agg``
-    (the gallery's scripts, in this process, need it), which the kernels would inherit and then show
-    no figure. Set after the gallery has run (``builder-inited``, late), before the notebooks run."""
-    os.environ["MPLBACKEND"] = "module://matplotlib_inline.backend_inline"
-
-
-def setup(app):
-    app.connect("builder-inited", _inline_figures_in_notebooks, priority=900)

@@ -203,18 +203,22 @@ def test_landing_page_shows_install_and_first_example_above_the_fold(driver):
         const blocks = Array.from(document.querySelectorAll('article pre'));
         const install = blocks.find(p => p.textContent.includes('pip install'));
         const example = document.querySelector('article div.cell div.cell_input');
+        const figure = document.querySelector('article figure img');
         const box = e => e ? e.getBoundingClientRect().bottom : null;
         return {install: box(install), example: box(example), fold: window.innerHeight,
-                width: window.innerWidth, text: example ? example.textContent : ''};""")
+                width: window.innerWidth, text: example ? example.textContent : '',
+                figure: figure ? figure.naturalWidth : 0, figure_bottom: box(figure)};""")
     assert found["width"] == WIDTH and found["fold"] == HEIGHT, found
     assert found["install"] is not None and found["install"] <= HEIGHT, found
     assert "od.identify" in found["text"] and found["example"] <= HEIGHT, found
+    assert found["figure"] > 300 and found["figure_bottom"] <= HEIGHT, found  # the figure, drawn
 
 
 #: Blocks that must fit the column: signatures and synopses (``text`` blocks and blocks without a
-#: language on the pages, the API reference's signatures).
+#: language on the pages, the API reference's signatures), shell commands and executed cells' output.
 WRAPPED = ("div.highlight-text pre, div.highlight-default pre, div.highlight-none pre, "
-           "div.highlight-console pre, dt.sig")
+           "div.highlight-console pre, div.highlight-sh pre, div.highlight-shell pre, "
+           "div.highlight-bash pre, div.cell_output pre, dt.sig")
 
 
 @built_site
@@ -222,7 +226,8 @@ WRAPPED = ("div.highlight-text pre, div.highlight-default pre, div.highlight-non
 def test_no_signature_block_scrolls_sideways(driver):
     pages = sorted(p for p in site_pages(SITE)
                    if any(k in (SITE / p).read_text(encoding="utf-8", errors="replace")
-                          for k in ("highlight-text", "highlight-default", "highlight-none", 'class="sig ')))
+                          for k in ("highlight-text", "highlight-default", "highlight-none", "highlight-sh",
+                                    "highlight-shell", "highlight-bash", "cell_output", 'class="sig ')))
     assert pages
     wide = {}
     for page in pages:
