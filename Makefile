@@ -56,7 +56,10 @@ wheel-smoke:
 
 # The documentation site: Sphinx into docs/_build/html, warnings as errors; the gallery and the
 # notebooks run at build time, and the build fails when a page loads anything from another host
-# (docs/_ext/check_local.py). From the same .venv with the `docs` extra.
+# (docs/_ext/check_local.py). From the same .venv with the `docs` extra. Then the built site is
+# checked (tests/test_docs_site.py, headless Chromium where installed): every page reachable from
+# the navigation, the landing page's install line and first example above the fold at 1400 x 900,
+# no signature block wider than its column.
 .PHONY: docs
 DOCS_STAMP := $(VENV)/.installed-docs
 
@@ -68,4 +71,5 @@ $(DOCS_STAMP): pyproject.toml | $(PY)
 docs: $(DOCS_STAMP)
 	rm -rf docs/_build/html docs/_build/doctrees docs/_build/gallery-out docs/gallery docs/api
 	MPLBACKEND=agg $(PY) -m sphinx -b html -W --keep-going -q docs docs/_build/html
+	OBSDESIGN_DOCS_SITE=docs/_build/html $(PY) -m pytest -q -p no:randomly -p no:cacheprovider tests/test_docs_site.py
 	@echo "docs: docs/_build/html/index.html"

@@ -36,6 +36,8 @@ extensions = [
     "sphinxarg.ext",
     "sphinx_gallery.gen_gallery",
     "sphinx-mathjax-offline",  # MathJax 3 copied into _static: no CDN
+    "sphinx_design",  # cards and grids of the landing page and the section pages
+    "sphinx_copybutton",  # a copy button on every code block (prompts and outputs left out)
     "gallery_scraper",
     "api_docstrings",
     "check_local",
@@ -96,9 +98,38 @@ sphinx_gallery_conf = {
     "promote_jupyter_magic": False,
 }
 
-html_theme = "alabaster"
+# The PyData theme (NumPy, SciPy, pandas): top navigation by section (the root toctree of index.md),
+# the section's pages on the left, the page's outline on the right, a dark mode. It serves its
+# fonts and icons from the site (docs/_ext/check_local.py checks every page and style sheet).
+html_theme = "pydata_sphinx_theme"
 html_title = f"obsdesign {release}"
-html_static_path: list[str] = []
-html_theme_options = {"description": "Reduced-order friction observers for precision motion control",
-                      "fixed_sidebar": False, "show_relbars": True}
+html_static_path = ["_static"]
+html_css_files = ["obsdesign.css"]  # code and signature blocks wrap to the column
+html_theme_options = {
+    "navbar_align": "left",
+    "header_links_before_dropdown": 8,  # every section in the top bar at 1400 px, no "More" menu
+    "show_nav_level": 2,  # a section's task groups open in the left sidebar
+    "navigation_depth": 6,  # the API reference's module pages are five levels deep
+    "show_toc_level": 2,
+    "secondary_sidebar_items": {"**": ["page-toc"], "index": []},
+    "footer_start": ["copyright"],
+    "footer_end": ["sphinx-version"],
+    "navigation_with_keys": False,
+    "use_edit_page_button": False,
+    "pygments_light_style": "default",
+    "pygments_dark_style": "monokai",
+}
+# The landing page and the tutorial: full width, no section sidebar (neither has pages below it).
+html_sidebars = {"index": [], "getting-started": []}
 html_show_sourcelink = False
+html_copy_source = False
+
+# API signatures longer than this are written one parameter per line (no sideways scrolling).
+maximum_signature_line_length = 88
+
+# sphinx-copybutton: copy the commands and the code, not the prompts and the printed output.
+copybutton_prompt_text = r">>> |\.\.\. |\$ "
+copybutton_prompt_is_regexp = True
+copybutton_only_copy_prompt_lines = True
+copybutton_exclude = ".linenos, .gp, .go"
+
