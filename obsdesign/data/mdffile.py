@@ -23,7 +23,9 @@ Examples
 
 from __future__ import annotations
 
+import gc
 import logging
+import sys
 from collections import Counter
 from pathlib import Path
 
@@ -32,6 +34,22 @@ import numpy as np
 from .logfile import Channel, FileRefused, LogFile
 
 __all__ = ["read_mdf"]
+
+
+def _open(MDF, path: Path):
+    """``MDF(path)``; a file asammdf cannot read is refused in one line (its half-built object's ``__del__``
+    fails too: that is silenced, it would print a second message)."""
+    hook = sys.unraisablehook
+    sys.unraisablehook = lambda unraisable: None
+    try:
+        try:
+            return MDF(str(path))
+        except Exception as e:  # noqa: BLE001 (asammdf raises many types for a file that is not MDF)
+            error = f"{type(e).__name__}: {e}"
+        gc.collect()
+    finally:
+        sys.unraisablehook = hook
+    raise FileRefused(f"path: expected an MDF4 file, found one asammdf cannot read: {path.name!r} ({error})")
 
 
 def read_mdf(path: Path) -> LogFile:
@@ -52,7 +70,7 @@ def read_mdf(path: Path) -> LogFile:
     level = quiet.level
     quiet.setLevel(logging.CRITICAL)  # asammdf logs what it finds odd; the errors come here as exceptions
     try:
-        mdf = MDF(str(path))
+        mdf = _open(MDF, path)
         try:
             found = []
             for g, group in enumerate(mdf.groups):
