@@ -67,6 +67,13 @@ def parse_delimiter(value: object) -> str | None:
 def parse_decimal(value: object) -> str | None:
     """The decimal mark ``'.'`` or ``','`` (``None``: detect it).
 
+    Parameters
+    ----------
+    value : str or None
+        ``'.'`` or ``','``.
+
+    Examples
+    --------
     >>> parse_decimal(",")
     ','
     """

@@ -36,7 +36,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Channel", "LogFile", "FORMATS", "Format", "read_log", "MissingExtra", "FileRefused", "extensions_text"]
+__all__ = ["Channel", "LogFile", "FORMATS", "Format", "read_log", "MissingExtra", "FileRefused", "extensions_text",
+           "common_time"]
 
 
 class MissingExtra(ImportError):
@@ -134,7 +135,21 @@ class LogFile:
 
 @dataclass(frozen=True)
 class Format:
-    """A file format: its name, extensions, reader (``module:function``) and the extra holding its library."""
+    """A file format.
+
+    Attributes
+    ----------
+    name : str
+        Its name (``'TDMS'``).
+    extensions : tuple of str
+        The file extensions, lower case with the dot.
+    reader : str
+        ``module:function`` reading a file into a :class:`LogFile`.
+    extra : str or None
+        The package's optional extra that installs its library (``None``: a core dependency).
+    library : str or None
+        The module the reader imports (checked before reading, to name the extra when it is missing).
+    """
 
     name: str
     extensions: tuple[str, ...]
@@ -228,3 +243,30 @@ def read_log(path: str | os.PathLike, *, delimiter: str | None = None, decimal: 
         raise ValueError(f"path: expected a {fmt.name} file, found one {fmt.library or fmt.name} cannot read: "
                          f"{p.name!r} ({type(e).__name__}: {e})") from e
     return log
+
+
+def common_time(log: LogFile, x: Channel, u: Channel, x_label: str, u_label: str) -> np.ndarray | None:
+    """The file's own time base [s] of the position and input channels (the same for both), or ``None``.
+
+    Parameters
+    ----------
+    log : LogFile
+        The file (named in the message).
+    x, u : Channel
+        The position and input channels.
+    x_label, u_label : str
+        How messages name them.
+
+    Examples
+    --------
+    >>> ch = Channel(name="x", values=np.zeros(3), time=np.arange(3.0))
+    >>> common_time(LogFile(name="a", format="TDMS", channels={}), ch, ch, "x", "u").tolist()
+    [0.0, 1.0, 2.0]
+    """
+    if x.time is None:
+        return None
+    if u.time is None or not np.array_equal(x.time, u.time):
+        raise ValueError(f"input: expected samples at the times of the {x_label}, found {u_label} "
+                         f"{'without a time base' if u.time is None else 'sampled at other times'} in "
+                         f"{log.name!r} (give --time NAME or resample both to one time base)")
+    return x.time

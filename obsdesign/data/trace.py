@@ -30,8 +30,8 @@ import numpy as np
 from .._io import atomic_write
 from .._validate import SAMPLE_TIME
 from .csvfile import parse_decimal, parse_delimiter
-from .logfile import Channel, LogFile, format_of, read_log
-from .units import Units, check_plausible, parse_unit, unit_kind
+from .logfile import common_time, format_of, read_log
+from .units import DEFAULT_UNITS, Units, check_plausible, column_unit, parse_unit
 
 __all__ = ["Trace", "load_trace", "MIN_SAMPLES", "JITTER_TOLERANCE", "MAX_MAGNITUDE", "SAMPLE_TIME_RANGE",
            "check_sample_time", "zero_phase_velocity"]
@@ -310,53 +310,6 @@ class Trace:
 # -- loading -------------------------------------------------------------------------------------
 
 
-#: The column of each unit parameter and the word its messages use.
-_UNIT_PARAMS = {"time": "time_unit", "position": "position_unit", "input": "input_unit"}
-_DEFAULT_UNITS = {"time": "s", "position": "m", "input": None}
-
-
-def _unit_of(role: str, given: str | None, channel: Channel, label: str) -> tuple[str | None, str | None]:
-    """The unit of the ``role`` column: the one given, else the file's, else the SI default; and a warning."""
-    param = _UNIT_PARAMS[role]
-    written, where = channel.unit, channel.unit_from
-    if written is not None and where == "name" and unit_kind(written, role) is None:
-        written = None  # a name's suffix that is no unit of this column (x_ref, u_max): not a unit
-    if given is not None:
-        if written is None:
-            return given, None
-        try:
-            same = parse_unit(param, written, role) == parse_unit(param, given, role)
-        except ValueError:
-            same = False
-        note = None if same else (f"{param}: {given!r} given overrides the unit {written!r} that the file writes "
-                                  f"for {label} (from its {where})")
-        return given, note
-    if written is None:
-        return _DEFAULT_UNITS[role], None
-    try:
-        parse_unit(param, written, role)
-    except ValueError as e:
-        found = str(e).split(", found ", 1)[-1]
-        raise ValueError(f"{role}: expected {_ROLE_EXPECTED[role]} for {label}, found the unit {found} in the "
-                         f"file's {where}; give {param} (--{param.replace('_', '-')})") from None
-    return written, None
-
-
-_ROLE_EXPECTED = {"time": "a time unit", "position": "a length, an angle or counts",
-                  "input": "a current, a voltage, a force, a torque or a fraction (%)"}
-
-
-def _time_of(log: LogFile, x: Channel, u: Channel, x_label: str, u_label: str) -> np.ndarray | None:
-    """The file's own time base of the position and input channels (equal), or ``None``."""
-    if x.time is None:
-        return None
-    if u.time is None or not np.array_equal(x.time, u.time):
-        raise ValueError(f"input: expected samples at the times of the {x_label}, found {u_label} "
-                         f"{'without a time base' if u.time is None else 'sampled at other times'} in "
-                         f"{log.name!r} (give --time NAME or resample both to one time base)")
-    return x.time
-
-
 def load_trace(path: str | os.PathLike, *, position: str, input: str, time: str | None = None,
                sample_time: float | None = None, input_gain: float = 1.0, time_unit: str | None = None,
                position_unit: str | None = None, input_unit: str | None = None, resolution: float | None = None,
@@ -478,9 +431,9 @@ def load_trace(path: str | os.PathLike, *, position: str, input: str, time: str 
     for role, given, ch, label in (("time", time_unit, ch_t, t_label), ("position", position_unit, ch_x, x_label),
                                    ("input", input_unit, ch_u, u_label)):
         if ch is None:
-            chosen[role] = given or _DEFAULT_UNITS[role]
+            chosen[role] = given or DEFAULT_UNITS[role]
             continue
-        chosen[role], note = _unit_of(role, given, ch, label)
+        chosen[role], note = column_unit(role, given, ch.unit, ch.unit_from, label)
         if note:
             notes.append(note)
     units = Units(time=chosen["time"], position=chosen["position"], input=chosen["input"], resolution=resolution,
@@ -497,7 +450,7 @@ def load_trace(path: str | os.PathLike, *, position: str, input: str, time: str 
         raise ValueError(f"input_gain: expected |input_gain x input| <= {MAX_MAGNITUDE:g} N, found "
                          f"{float(np.max(np.abs(u))) * abs(gain):g} N (input_gain = {gain:g}, {u_label})")
     metadata = dict(log.metadata)
-    own = _time_of(log, ch_x, ch_u, x_label, u_label) if ch_t is None else None
+    own = common_time(log, ch_x, ch_u, x_label, u_label) if ch_t is None else None
     if ch_t is not None or own is not None:
         if ch_t is not None:
             t_logged = _check_column("time", t_label, ch_t.values)

@@ -35,7 +35,8 @@ from functools import cache
 
 from ..axis import INPUT_UNITS, AxisSpec, AxisWords
 
-__all__ = ["Units", "INPUT_UNITS", "check_plausible", "PLAUSIBLE", "parse_unit", "unit_kind", "UNIT_KINDS"]
+__all__ = ["Units", "INPUT_UNITS", "check_plausible", "PLAUSIBLE", "parse_unit", "unit_kind", "UNIT_KINDS",
+           "column_unit", "DEFAULT_UNITS"]
 
 # INPUT_UNITS (the SI unit of each kind of logged input; ``N`` and ``N m`` are force and torque themselves,
 # gain 1 by default) is the config's one list, :data:`obsdesign.axis.INPUT_UNITS`.
@@ -148,11 +149,85 @@ def _dims_text(dims) -> str:
 def unit_kind(text: str, role: str) -> str | None:
     """The kind of ``text`` if it is a unit of the column ``role`` (else ``None``; no error).
 
+    Parameters
+    ----------
+    text : str
+        A unit expression.
+    role : {'time', 'position', 'input', 'rated'}
+        The column.
+
+    Examples
+    --------
     >>> unit_kind("ms", "time"), unit_kind("ms", "position"), unit_kind("ref", "input")
     ('time', None, None)
     """
     kind = _classify(_normalize(text))[0]
     return kind if kind in _ROLE_KINDS[role] else None
+
+
+#: The unit parameter of each column (``load_trace``'s keyword; the CLI flag is the same with dashes).
+_UNIT_PARAMS = {"time": "time_unit", "position": "position_unit", "input": "input_unit"}
+#: The unit of a column whose unit is neither given nor written in the file.
+DEFAULT_UNITS = {"time": "s", "position": "m", "input": None}
+_ROLE_EXPECTED = {"time": "a time unit", "position": "a length, an angle or counts",
+                  "input": "a current, a voltage, a force, a torque or a fraction (%)"}
+
+
+def column_unit(role: str, given: str | None, written: str | None, where: str,
+                label: str) -> tuple[str | None, str | None]:
+    """The unit of a column: the one given, else the one the file writes, else :data:`DEFAULT_UNITS`.
+
+    Parameters
+    ----------
+    role : {'time', 'position', 'input'}
+        The column.
+    given : str or None
+        The unit given (``load_trace``'s ``time_unit``, ...).
+    written, where : str or None, str
+        The unit the file writes for the column and where (:attr:`obsdesign.data.logfile.Channel.unit_from`);
+        a name's suffix (``where='name'``) that is no unit of this column is no unit (``x_ref``).
+    label : str
+        The column as messages name it (``"column 'pos'"``).
+
+    Returns
+    -------
+    unit : str or None
+    warning : str or None
+        Where a unit given overrides a different one the file writes.
+
+    Examples
+    --------
+    >>> column_unit("position", None, "deg", "header", "column 'pos'")
+    ('deg', None)
+    >>> column_unit("input", None, "max", "name", "column 'u_max'")
+    (None, None)
+    >>> column_unit("time", None, "kg", "units row", "column 't'")
+    Traceback (most recent call last):
+    ...
+    ValueError: time: expected a time unit for column 't', found the unit 'kg' (dimension [mass]) in the file's units row; give time_unit (--time-unit)
+    """
+    param = _UNIT_PARAMS[role]
+    if written is not None and where == "name" and unit_kind(written, role) is None:
+        written = None
+    if given is not None:
+        if written is None:
+            return given, None
+        try:
+            same = parse_unit(param, written, role) == parse_unit(param, given, role)
+        except ValueError:
+            same = False
+        note = None if same else (f"{param}: {given!r} given overrides the unit {written!r} that the file writes "
+                                  f"for {label} (from its {where})")
+        return given, note
+    if written is None:
+        return DEFAULT_UNITS[role], None
+    try:
+        parse_unit(param, written, role)
+    except ValueError as e:
+        found = str(e).split(", found ", 1)[-1]
+        raise ValueError(f"{role}: expected {_ROLE_EXPECTED[role]} for {label}, found the unit {found} in the "
+                         f"file's {where}; give {param} (--{param.replace('_', '-')})") from None
+    return written, None
 
 
 @dataclass(frozen=True, kw_only=True)
