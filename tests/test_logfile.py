@@ -335,3 +335,20 @@ def test_bad_files_are_one_line_exit_2(samples, tmp_path, name):
     assert code == 2 and "position: expected the name of a channel, found 'nope'; available: " in err.replace(
         "column", "channel")
     assert flags[3] in err and not out_file.exists()
+
+
+@pytest.mark.slow
+def test_the_report_shows_the_file_its_format_units_and_metadata(samples, tmp_path):
+    """``report --data`` reads through the same loader; the header block is shown, escaped."""
+    _, log = samples
+    head = ["Scope;<b>Achse 2</b>", "Zeit [s];Position [mm];Strom [mA]"]
+    rows = [";".join(r) for r in zip(german(log["t"]), german(log["x"] * 1e3), german(log["i"] * 1e3))]
+    path = tmp_path / "scope.csv"
+    path.write_text("\n".join(head + rows) + "\n", encoding="utf-8")
+    out = tmp_path / "r.html"
+    code, _, err = run("report", "--preset", "vcm", "--no-circle", "--quiet", "--data", path, "--position", "Position",
+                       "--input", "Strom", "--time", "Zeit", "--input-gain", GAIN, "-o", out)
+    assert code == 0, err
+    html = out.read_text()
+    assert "<code>scope.csv</code> (CSV)" in html and "position mm, input mA" in html
+    assert "&lt;b&gt;Achse 2&lt;/b&gt;" in html and "<b>Achse 2</b>" not in html
