@@ -146,8 +146,17 @@ WRITERS = {
 }
 
 
-def test_every_format_is_tested():
+def test_every_format_is_tested_and_documented_with_its_install_line():
     assert set(WRITERS) | {"CSV", "MATLAB"} == set(FORMATS)
+    page = (Path(__file__).resolve().parents[1] / "docs" / "measured-data.md").read_text(encoding="utf-8")
+    for fmt in FORMATS.values():
+        assert all(f"`{ext}`" in page for ext in fmt.extensions), fmt.name
+        assert fmt.extra is None or f'`pip install "obsdesign[{fmt.extra}]"`' in page, fmt.name
+    extras = __import__("tomllib").loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text())
+    extras = extras["project"]["optional-dependencies"]
+    for fmt in FORMATS.values():
+        if fmt.extra is not None:  # each extra is in the test extra (CI reads every format) and in 'formats'
+            assert set(extras[fmt.extra]) <= set(extras["test"]) and set(extras[fmt.extra]) <= set(extras["formats"])
 
 
 @pytest.mark.parametrize("name", sorted(WRITERS))
