@@ -242,7 +242,7 @@ def _bad_cases(record, tmp_path):
         (["observe", str(tmp_path / "x.txt"), *good, *FLAGS], "expected a log file (.csv, .mat, .tdms"),
         (["observe", r, *good, "--position", "x", "--input", "u", "--time", "t"], "available: t, u_volt, x"),
         (["observe", r, *good, "--position", "x", "--input", "u_volt"], "--time NAME or --sample-time"),
-        (["observe", r, *good, *FLAGS[:-1], "0"], "--input-gain: expected a finite nonzero number, found 0.0"),
+        (["observe", r, *good, *FLAGS[:-1], "0"], "input_gain: expected a finite nonzero number, found 0.0"),
         (["observe", r, *good, *FLAGS[:-1], "nan"], "--input-gain: expected a finite number"),
         (["observe", r, *cfg, *FLAGS], "the trace's sample time wins"),
         (["observe", r, *good, *FLAGS, "--out", str(tmp_path / "o.txt")], ".csv or .npz"),

@@ -39,7 +39,7 @@ def _delimiter(text: str) -> str:
 #: load_trace's parameters and the flags that set them: its messages name the flag on the command line.
 _FLAGS = {"time_unit": "--time-unit", "position_unit": "--position-unit", "input_unit": "--input-unit",
           "rated": "--rated", "resolution": "--resolution", "rotary": "--rotary", "delimiter": "--delimiter",
-          "decimal": "--decimal", "input_gain": "--input-gain", "sample_time": "--sample-time"}
+          "decimal": "--decimal"}
 
 
 def add_trace_flags(p: argparse.ArgumentParser, *, required: bool = True) -> None:
