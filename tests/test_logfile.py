@@ -10,6 +10,7 @@ import contextlib
 import io
 import json
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -361,3 +362,43 @@ def test_the_report_shows_the_file_its_format_units_and_metadata(samples, tmp_pa
     html = out.read_text()
     assert "<code>scope.csv</code> (CSV)" in html and "position mm, input mA" in html
     assert "&lt;b&gt;Achse 2&lt;/b&gt;" in html and "<b>Achse 2</b>" not in html
+
+
+CSV_BAD = [
+    # digit grouping: a German thousands point, an English thousands comma in a ';' file
+    ("t;x;u\n" + "\n".join(f"{k};1.234,5;{k % 7}" for k in range(150)), {}, "digit grouping (thousands separators) "
+     "is not read"),
+    ("t;x;u\n" + "\n".join(f"{k};1,234.5;{k % 7}" for k in range(150)), {}, "digit grouping"),
+    # a decimal comma read with --decimal .
+    ("t;x;u\n" + "\n".join(f"{k};0,5;{k % 7}" for k in range(150)), {"decimal": "."}, "a decimal comma: read it "
+     "with decimal=','"),
+    # a unit of the wrong dimension in the header: the column, the unit, the dimension expected
+    ("t;x [A];u\n" + "\n".join(f"{k};{k % 5};{k % 7}" for k in range(150)), {},
+     "position: expected a length, an angle or counts for column 'x', found the unit 'A' (a current) in the file's "
+     "header; give position_unit (--position-unit)"),
+    ("t;x;u\ns;m;kg\n" + "\n".join(f"{k};{k % 5};{k % 7}" for k in range(150)), {},
+     "input: expected a current, a voltage, a force, a torque or a fraction (%) for column 'u', found the unit 'kg' "
+     "(dimension [mass]) in the file's units row"),
+    # a header row of numbers above the first numeric row
+    ("1;2;3\n" + "\n".join(f"{k};{k % 5};{k % 7}" for k in range(150)), {}, "expected a header row of column "
+     "names above the numeric rows, found numbers on line 1"),
+    ("x;u\n" + "\n".join(f"{k};{k % 5};{k % 7}" for k in range(150)), {}, "expected 2 values per row"),
+]
+
+
+@pytest.mark.parametrize("text, kwargs, match", CSV_BAD)
+def test_csv_refusals_name_the_cause(tmp_path, text, kwargs, match):
+    path = tmp_path / "bad.csv"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(ValueError, match=re.escape(match)):
+        load_trace(path, position="x", input="u", time="t", time_unit="ms", **kwargs)
+
+
+def test_decimal_comma_given_and_detected_read_the_same(tmp_path):
+    rows = "\n".join(f"{k * 0.001:.3f};{math.sin(k / 10):.6f};{math.cos(k / 10):.6f}".replace(".", ",")
+                     for k in range(150))
+    path = tmp_path / "c.csv"
+    path.write_text("t;x;u\n" + rows, encoding="utf-8")
+    a = load_trace(path, position="x", input="u", time="t")
+    b = load_trace(path, position="x", input="u", time="t", decimal=",", delimiter=";")
+    assert np.array_equal(a.position, b.position) and a.position[10] == pytest.approx(math.sin(1.0), abs=1e-6)

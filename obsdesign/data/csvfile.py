@@ -155,19 +155,10 @@ def _name_and_unit(text: str) -> tuple[str, str | None, str]:
 
 
 def _is_units_row(fields: list[str]) -> bool:
-    from .units import parse_unit
+    from .units import is_unit
 
     units = [f.strip().strip("[]()").strip() for f in fields]
-    known = 0
-    for unit in units:
-        if not unit:
-            continue
-        try:
-            parse_unit("unit", unit)
-        except (ValueError, TypeError):
-            return False
-        known += 1
-    return known > 0
+    return any(units) and all(is_unit(u) for u in units if u)
 
 
 def _table_start(lines: list[tuple[int, str]], delimiter: str | None) -> tuple[str, int, int]:
@@ -226,10 +217,19 @@ def read_csv(path: Path, delimiter: str | None = None, decimal: str | None = Non
     if k < 0:  # no numeric row below a line of as many fields: name the first row that is not numeric
         delim = delimiter or detect_delimiter(lines[0][1], lines[1][1] if len(lines) > 1 else lines[0][1])
         how = f"the delimiter {_name(delim)}" + (" (detected; set it with --delimiter)" if found else "")
+        if all(_number(f, ".") is not None or _number(f, ",") is not None for f in _split(lines[0][1], delim)):
+            raise FileRefused(f"path: expected a header row of column names above the numeric rows, found numbers on "
+                              f"line {lines[0][0]} of {path.name!r}")
         if len(lines) < 2:
             raise FileRefused(f"path: expected numeric CSV rows below the header (line {lines[0][0]}), found none in "
                               f"{path.name!r}")
         no, line = lines[1]
+        for other in (delimiter,) if delimiter is not None else (",", ";", "\t", "|", " "):
+            fields = _split(line, other)
+            if len(fields) > 1 and all(_number(f, ".") is not None or _number(f, ",") is not None for f in fields):
+                n_head = len(_split(lines[0][1], other))
+                raise FileRefused(f"path: expected {n_head} values per row (one per header name, split by the "
+                                  f"delimiter {_name(other)}), found {len(fields)} on line {no} of {path.name!r}")
         fields = _split(line, delim)
         dec = decimal or "."
         shown = _bad_field(fields, dec) if any(_number(f, dec) is None for f in fields) else repr(line)

@@ -36,7 +36,7 @@ from functools import cache
 from ..axis import INPUT_UNITS, AxisSpec, AxisWords
 
 __all__ = ["Units", "INPUT_UNITS", "check_plausible", "PLAUSIBLE", "parse_unit", "unit_kind", "UNIT_KINDS",
-           "column_unit", "DEFAULT_UNITS"]
+           "column_unit", "DEFAULT_UNITS", "is_unit"]
 
 # INPUT_UNITS (the SI unit of each kind of logged input; ``N`` and ``N m`` are force and torque themselves,
 # gain 1 by default) is the config's one list, :data:`obsdesign.axis.INPUT_UNITS`.
@@ -120,13 +120,16 @@ def parse_unit(param: str, text: object, role: str | None = None) -> tuple[str, 
     return kind, factor
 
 
+_UNKNOWN = "not a unit pint knows"
+
+
 @cache
 def _classify(text: str) -> tuple[str | None, float, str]:
     reg = _registry()
     try:
         unit = reg.parse_units(text)
     except Exception:  # noqa: BLE001 (pint raises several types for text that is not a unit)
-        return None, math.nan, "not a unit pint knows"
+        return None, math.nan, _UNKNOWN
     dims = unit.dimensionality
     if not dims:
         root = str(reg.get_root_units(unit)[1])
@@ -139,6 +142,15 @@ def _classify(text: str) -> tuple[str | None, float, str]:
         return None, math.nan, "dimensionless, but no angle, count or fraction" if not dims else _dims_text(dims)
     factor = float(reg.Quantity(1.0, unit).to(UNIT_KINDS[kind][0]).magnitude)
     return kind, factor, _dims_text(dims)
+
+
+def is_unit(text: str) -> bool:
+    """Whether pint parses ``text`` as a unit (of any dimension).
+
+    >>> is_unit("kg"), is_unit("Position")
+    (True, False)
+    """
+    return _classify(_normalize(text))[2] != _UNKNOWN
 
 
 def _dims_text(dims) -> str:
