@@ -96,8 +96,8 @@ def read_mcap(path: Path) -> LogFile:
                 if len(column) == n:
                     column.append(_MISSING)
     channels = {}
-    for topic, columns in series.items():
-        ns = np.asarray(times[topic], dtype=np.int64)
+    for name, columns in series.items():
+        ns = np.asarray(times[name], dtype=np.int64)
         time = (ns - ns[0]) / 1e9
         for key, column in columns.items():
             channels[key] = Channel(name=key, values=np.asarray(column, dtype=float), time=time)
