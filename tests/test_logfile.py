@@ -147,6 +147,10 @@ WRITERS = {
 }
 
 
+#: MCAP's decoder is pure Python: 24000 messages take 5 to 10 s to write and as long to read.
+FORMAT_PARAMS = [pytest.param(n, marks=pytest.mark.slow) if n == "MCAP" else n for n in sorted(WRITERS)]
+
+
 def test_every_format_is_tested_and_documented_with_its_install_line():
     assert set(WRITERS) | {"CSV", "MATLAB"} == set(FORMATS)
     page = (Path(__file__).resolve().parents[1] / "docs" / "measured-data.md").read_text(encoding="utf-8")
@@ -160,7 +164,7 @@ def test_every_format_is_tested_and_documented_with_its_install_line():
             assert set(extras[fmt.extra]) <= set(extras["test"]) and set(extras[fmt.extra]) <= set(extras["formats"])
 
 
-@pytest.mark.parametrize("name", sorted(WRITERS))
+@pytest.mark.parametrize("name", FORMAT_PARAMS)
 def test_every_format_identifies_like_the_csv_bit_for_bit(samples, reference, tmp_path, name):
     d, log = samples
     write, file, with_time, own_time = WRITERS[name]
@@ -322,7 +326,7 @@ def test_missing_extra_names_the_install_line(samples, tmp_path, monkeypatch):
     assert not (tmp_path / "never.toml").exists()
 
 
-@pytest.mark.parametrize("name", sorted(WRITERS))
+@pytest.mark.parametrize("name", FORMAT_PARAMS)
 def test_bad_files_are_one_line_exit_2(samples, tmp_path, name):
     _, log = samples
     write, file, with_time, own_time = WRITERS[name]

@@ -5,7 +5,7 @@ lists of as many numbers beside it (``sensor_msgs/msg/JointState``: ``position``
 ``effort``) gives a channel per joint and list: ``/joint_states/position/joint1``. Any other
 numeric field, nested ones too, gives ``/topic/field/subfield`` (``/cmd/data`` of a
 ``std_msgs/msg/Float64``). The time base of a topic's channels is the message's
-``header.stamp`` where it has one, else the log time, in seconds since the topic's first message.
+``header.stamp`` where it has one, else the log time, in seconds since the topic's first message (messages in the order of their stamps).
 ROS uses SI units (REP 103) but does not write them: a revolute joint's position is in rad and
 its effort in N m, give them (``--position-unit rad --input-unit "N m"``). Needs the extra
 ``mcap`` (``pip install "obsdesign[mcap]"``).
@@ -79,7 +79,7 @@ def read_mcap(path: Path) -> LogFile:
     times: dict[str, list[int]] = {}
     with open(path, "rb") as fh:
         reader = make_reader(fh, decoder_factories=[DecoderFactory()])
-        for _schema, channel, message, decoded in reader.iter_decoded_messages():
+        for _schema, channel, message, decoded in reader.iter_decoded_messages(log_time_order=False):
             if channel.message_encoding != "cdr":
                 raise FileRefused(f"path: expected ROS 2 (cdr) messages, found the encoding "
                                   f"{channel.message_encoding!r} on {channel.topic!r} of {path.name!r}")
@@ -90,16 +90,18 @@ def read_mcap(path: Path) -> LogFile:
             n = len(times.setdefault(channel.topic, []))
             times[channel.topic].append(message.log_time if stamp is None else stamp)
             for key, value in values.items():
-                column = topic.setdefault(key, [_MISSING] * n)
-                column.append(value)
+                if key not in topic:
+                    topic[key] = [_MISSING] * n
+                topic[key].append(value)
             for key, column in topic.items():
                 if len(column) == n:
                     column.append(_MISSING)
     channels = {}
     for name, columns in series.items():
         ns = np.asarray(times[name], dtype=np.int64)
-        time = (ns - ns[0]) / 1e9
+        order = np.argsort(ns, kind="stable")  # the file's order is the writer's; the time base is the stamps'
+        time = (ns[order] - ns[order[0]]) / 1e9
         for key, column in columns.items():
-            channels[key] = Channel(name=key, values=np.asarray(column, dtype=float), time=time)
+            channels[key] = Channel(name=key, values=np.asarray(column, dtype=float)[order], time=time)
     return LogFile(name=path.name, format="MCAP", channels=channels, metadata={})
 
