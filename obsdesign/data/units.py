@@ -1,6 +1,6 @@
 """Units of a logged record: each column's unit by pint, its scale to SI, the axis kind, plausibility.
 
-A log names its units per column, in any unit expression that `pint <https://pint.readthedocs.io>`_
+A log names its units per column, in any unit expression that `pint <https://pint.readthedocs.io>`__
 (the units library of scientific Python) parses and whose dimension fits the column: time (``s``,
 ``ms``, ``us``, ``min``), position as a length (``m``, ``mm``, ``µm``, ``inch``), an angle (``rad``,
 ``deg``, ``rev``: a rotary axis) or encoder ``counts`` (with a resolution per count), the input
