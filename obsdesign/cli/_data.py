@@ -243,7 +243,7 @@ def add_commands(sub) -> None:
     """Add ``channels``, ``identify`` and ``observe`` to the subparsers ``sub``."""
     from ..data.choices import INPUT_TIMINGS, STRIBECK_CHOICES
 
-    from ..data.logfile import extensions_text
+    from ..data.formats import extensions_text
 
     files = f"measured record ({extensions_text()})"
     p = sub.add_parser("channels", help="list the channels of a log file: name, unit, length, rate")

@@ -147,6 +147,13 @@ def _classify(text: str) -> tuple[str | None, float, str]:
 def is_unit(text: str) -> bool:
     """Whether pint parses ``text`` as a unit (of any dimension).
 
+    Parameters
+    ----------
+    text : str
+        A unit expression, or any text.
+
+    Examples
+    --------
     >>> is_unit("kg"), is_unit("Position")
     (True, False)
     """
