@@ -46,6 +46,7 @@ def files(tmp_path_factory):
     csv("jitter.csv", tt=t_jit)
     csv("short.csv", tt=t[:50], xx=x[:50], uu=u[:50])
     (d / "latin1.csv").write_bytes("time,x,u\n0,1,2\n".encode() + b"\xe9\xff,1,2\n")
+    (d / "binary.csv").write_bytes(b"time,x,u\n\x00\x01\x02")
     (d / "text.csv").write_text("time,x,u\n0,1,2\n1,abc,3\n", encoding="utf-8")
     (d / "garbage.mat").write_bytes(b"not a matlab file at all" * 10)
     (d / "run.txt").write_text("x", encoding="utf-8")
@@ -128,10 +129,13 @@ BAD = [
      r"time, sample_time: expected agreement within 1 %, found a mean step of 0.001 s .*sample_time = 0.002 s"),
     ("ok.mat", dict(position="qm", input="vir", sample_time=0.0), ValueError, r"sample_time: expected a finite number > 0"),
     ("ok.mat", dict(position=3, input="vir", time="t"), TypeError, r"position: expected a column name"),
-    ("latin1.csv", dict(position="x", input="u", time="time"), ValueError, r"path: expected a UTF-8 text CSV file"),
+    # Latin-1 is read (what Windows tools in a European locale write): the bad row is named as decoded
+    ("latin1.csv", dict(position="x", input="u", time="time"), ValueError, r"found '\xe9\xff' on line 3"),
+    ("binary.csv", dict(position="x", input="u", time="time"), ValueError, r"path: expected a text CSV file, found a "
+     r"NUL byte at byte 9"),
     ("text.csv", dict(position="x", input="u", time="time"), ValueError, r"path: expected numeric CSV rows"),
     ("garbage.mat", dict(position="x", input="u", time="t"), ValueError, r"path: expected a MATLAB .mat file"),
-    ("run.txt", dict(position="x", input="u", time="t"), ValueError, r"path: expected a .csv or .mat file, found extension '.txt'"),
+    ("run.txt", dict(position="x", input="u", time="t"), ValueError, r"path: expected a log file \(.csv, .mat, .tdms.*found extension '.txt'"),
     ("missing.csv", dict(position="x", input="u", time="t"), ValueError, r"path: expected an existing file"),
 ]
 

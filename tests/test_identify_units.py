@@ -157,8 +157,14 @@ def test_plausibility_names_the_unit_error(logs):
     tr = load_trace(si, position="x", input="i", time="t", time_unit="ms", input_gain=GAIN)  # seconds read as ms
     assert any("sample time" in w and "short" in w for w in tr.warnings)
     mm, _ = logs["slow"]
-    tr = load_trace(mm, position="pos_mm", input="i_A", time="time_ms", input_gain=GAIN)  # mm and ms read as SI
+    # mm and ms read as SI: the units given override the names' (pos_mm, time_ms), said in a warning
+    tr = load_trace(mm, position="pos_mm", input="i_A", time="time_ms", input_gain=GAIN, time_unit="s",
+                    position_unit="m")
     assert any("sample time 0.5 s" in w and "--time-unit ms" in w for w in tr.warnings)
+    assert any(w.startswith("position_unit: 'm' given overrides the unit 'mm'") for w in tr.warnings)
+    named = load_trace(mm, position="pos_mm", input="i_A", time="time_ms", input_gain=GAIN)  # the names' units
+    assert (named.units.time, named.units.position, named.units.input) == ("ms", "mm", "A") and not named.warnings
+    np.testing.assert_allclose(named.position, tr.position * 1e-3, rtol=1e-15)
     ident = identify(tr, n_boot=0)
     assert any("identified mass" in w and "1000 x too large" in w for w in ident.notices), ident.m
     assert check_plausible(Units(), speed=50.0)[0].startswith("peak speed 50 m/s")
@@ -271,11 +277,17 @@ def test_u_max_given_and_every_rule_shown(logs, tmp_path):
 # -- bad input on the command line: one line, exit 2, nothing written -----------------------------
 
 BAD = [
-    (["--time-unit", "h"], "--time-unit"), (["--position-unit", "ft"], "--position-unit"),
-    (["--resolution", "1e-6"], "--resolution: expected only with --position-unit counts"),
-    (["--position-unit", "counts"], "expected --resolution"),
-    (["--rotary"], "--rotary: expected --position-unit rad or counts"),
+    (["--time-unit", "kg"], "--time-unit: expected a time (s, ms, us, min), found 'kg' (dimension [mass])"),
+    (["--position-unit", "N"], "--position-unit: expected a length (m, mm, um, inch), an angle"),
+    (["--position-unit", "bananas"], "--position-unit: expected a length"),
+    (["--resolution", "1e-6"], "--resolution: expected None unless the position is in counts"),
+    (["--position-unit", "counts"], "--resolution: expected the size of one count > 0 [m]"),
+    (["--rotary"], "--rotary: expected a rotary position unit (an angle or counts), found position_unit 'mm'"),
     (["--input-unit", "W"], "--input-unit"), (["--delimiter", "x"], "--delimiter"),
+    (["--input-unit", "%"], "--rated: expected the rated value"), (["--rated", "2", "A"], "--rated: expected only"),
+    (["--input-unit", "%", "--rated", "-2", "A"], "--rated: expected a value > 0"),
+    (["--input-unit", "%", "--rated", "2", "kg"], "--rated: expected a current"),
+    (["--decimal", ","], "a decimal point in a file read with decimal ','"),
     (["--fix", "sigma"], "--fix: expected NAME=VALUE"), (["--fix", "mass=1"], "--fix: expected NAME=VALUE"),
     (["--fix", "sigma=abc"], "--fix: expected NAME=VALUE"), (["--fix", "sigma=-1"], "fix sigma: expected a value >= 0"),
     (["--bounds", "sigma=1"], "--bounds: expected NAME=LO:HI"), (["--bounds", "sigma=5:1"], "--bounds"),

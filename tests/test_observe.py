@@ -239,7 +239,7 @@ def _bad_cases(record, tmp_path):
     good = ["--config", str(toml)]
     return [
         (["observe", str(tmp_path / "none.csv"), *good, *FLAGS], "path"),
-        (["observe", str(tmp_path / "x.txt"), *good, *FLAGS], ".csv or .mat"),
+        (["observe", str(tmp_path / "x.txt"), *good, *FLAGS], "expected a log file (.csv, .mat, .tdms"),
         (["observe", r, *good, "--position", "x", "--input", "u", "--time", "t"], "available: t, u_volt, x"),
         (["observe", r, *good, "--position", "x", "--input", "u_volt"], "--time NAME or --sample-time"),
         (["observe", r, *good, *FLAGS[:-1], "0"], "input_gain: expected a finite nonzero number, found 0.0"),

@@ -25,7 +25,8 @@ import sys
 
 import pytest
 
-HEAVY = ("sympy", "control", "scipy", "numba", "matplotlib", "dask")
+# pint and the log formats' libraries: only a command that reads a log imports them (issue 40)
+HEAVY = ("sympy", "control", "scipy", "numba", "matplotlib", "dask", "pint", "pyarrow", "nptdms", "asammdf", "h5py")
 
 CONTROL = {"control", "scipy", "matplotlib"}  # python-control imports SciPy and matplotlib itself
 #: name -> (arguments, modules of the first run, of the second run when they differ).

@@ -1,4 +1,4 @@
-"""Commands on measured data: ``identify`` and ``observe`` (and the trace flags of ``report --data``)."""
+"""Commands on measured data: ``channels``, ``identify`` and ``observe`` (and the trace flags of ``report --data``)."""
 
 from __future__ import annotations
 
@@ -14,13 +14,18 @@ from ._common import (FINITE_ARG, INPUT_FILE, POSITIVE_ARG, UsageError, check_ou
 __all__ = ["add_commands", "add_trace_flags", "load_trace_args"]
 
 
-def _input_unit(text: str) -> str:
-    from ..data.units import INPUT_UNITS
+def _unit(role: str):
+    """An argparse type: a unit pint parses whose dimension fits the ``role`` column."""
+    def parse(text: str) -> str:
+        from ..data.units import parse_unit
 
-    unit = {"Nm": "N m", "N.m": "N m"}.get(text, text)
-    if unit not in INPUT_UNITS:
-        raise argparse.ArgumentTypeError(f"expected one of {', '.join(INPUT_UNITS)} (or Nm), found {text!r}")
-    return unit
+        try:
+            parse_unit("unit", text, role)
+        except ValueError as e:
+            raise argparse.ArgumentTypeError(str(e).partition(": ")[2]) from None
+        return text
+
+    return parse
 
 
 def _delimiter(text: str) -> str:
@@ -31,57 +36,90 @@ def _delimiter(text: str) -> str:
     return text
 
 
+#: load_trace's parameters and the flags that set them: its messages name the flag on the command line.
+_FLAGS = {"time_unit": "--time-unit", "position_unit": "--position-unit", "input_unit": "--input-unit",
+          "rated": "--rated", "resolution": "--resolution", "rotary": "--rotary", "delimiter": "--delimiter",
+          "decimal": "--decimal"}
+
+
 def add_trace_flags(p: argparse.ArgumentParser, *, required: bool = True) -> None:
     """``--position NAME --input NAME [--time NAME] [--sample-time DT] [--input-gain G]`` and the unit flags."""
-    from ..data.units import POSITION_UNITS, TIME_UNITS
-
     p.add_argument("--position", required=required, metavar="NAME",
-                   help="column or variable of the displacement (in --position-unit)")
+                   help="column, variable or channel of the displacement (group/channel where the format has groups)")
     p.add_argument("--input", required=required, metavar="NAME",
-                   help="column or variable of the actuator input (in --input-unit; times --input-gain gives N)")
-    p.add_argument("--time", metavar="NAME", help="column or variable of the time (in --time-unit)")
+                   help="column, variable or channel of the actuator input (times --input-gain gives N or N m)")
+    p.add_argument("--time", metavar="NAME",
+                   help="column or channel of the time (default: the file's own time base, where it has one)")
     p.add_argument("--sample-time", type=POSITIVE_ARG, metavar="DT", help="sample time [s] (without a time column)")
     p.add_argument("--input-gain", type=FINITE_ARG, default=1.0, metavar="G",
-                   help="force (torque) per unit of the logged input [N/unit, N m/unit], nonzero (default 1)")
-    p.add_argument("--time-unit", choices=tuple(TIME_UNITS), default="s", help="unit of the time column (default s)")
-    p.add_argument("--position-unit", choices=tuple(POSITION_UNITS), default="m",
-                   help="unit of the position column (default m; rad: a rotary axis; counts: give --resolution)")
+                   help="force (torque) per SI unit of the input [N/A, N/V, N m/A], nonzero (default 1)")
+    p.add_argument("--time-unit", type=_unit("time"), metavar="UNIT",
+                   help="unit of the time column: s, ms, us, ... (default: the file's, else s)")
+    p.add_argument("--position-unit", type=_unit("position"), metavar="UNIT",
+                   help="unit of the position: a length (m, mm, um, inch), an angle (rad, deg, rev: a rotary axis) "
+                        "or counts with --resolution (default: the file's, else m)")
+    p.add_argument("--input-unit", type=_unit("input"), metavar="UNIT",
+                   help="unit of the input: a current (A, mA), voltage (V), force (N) or torque ('N m', Nm: a rotary "
+                        "axis), or %% of --rated (default: the file's, else N with gain 1, else V)")
+    p.add_argument("--rated", nargs=2, metavar=("VALUE", "UNIT"),
+                   help="the rated current or torque an input in %% is a fraction of (e.g. --rated 2.5 A)")
     p.add_argument("--resolution", type=POSITIVE_ARG, metavar="R",
-                   help="size of one encoder count [m, or rad with --rotary] (with --position-unit counts)")
+                   help="size of one encoder count [m, or rad with --rotary] (with a position in counts)")
     p.add_argument("--rotary", action="store_true",
-                   help="a rotary axis (position in rad or counts; inertia kg m^2, torque N m)")
-    p.add_argument("--input-unit", type=_input_unit, metavar="UNIT",
-                   help="unit of the logged input: V, A, N or 'N m' (default N with gain 1, else V)")
+                   help="a rotary axis with the position in counts (an angle or a torque implies it)")
     p.add_argument("--delimiter", type=_delimiter, metavar="D",
                    help="CSV delimiter: ',', ';', tab, space or '|' (default: detected)")
+    p.add_argument("--decimal", choices=(".", ","), help="CSV decimal mark (default: detected)")
 
 
 def load_trace_args(args: argparse.Namespace, path: str):
     """The trace of ``path`` with the column flags of :func:`add_trace_flags`."""
     from ..data import load_trace
+    from ..data.logfile import MissingExtra
     from ..data.trace import check_sample_time
 
-    if args.time is None and args.sample_time is None:
-        raise UsageError(f"obsdesign {args.command}: expected --time NAME or --sample-time DT for the time base "
-                         f"of {path!r}, found neither")
     if args.sample_time is not None:
         try:
             check_sample_time("--sample-time", args.sample_time, "the flag")
         except ValueError as e:
             raise UsageError(f"obsdesign {args.command}: argument {e}") from None
-    if args.resolution is not None and args.position_unit != "counts":
-        raise UsageError(f"obsdesign {args.command}: argument --resolution: expected only with --position-unit "
-                         f"counts, found --position-unit {args.position_unit}")
-    if args.position_unit == "counts" and args.resolution is None:
-        raise UsageError(f"obsdesign {args.command}: argument --position-unit counts: expected --resolution R "
-                         "(the size of one count), found none")
-    if args.rotary and args.position_unit in ("m", "mm", "um"):
-        raise UsageError(f"obsdesign {args.command}: argument --rotary: expected --position-unit rad or counts, "
-                         f"found {args.position_unit}")
-    return load_trace(path, position=args.position, input=args.input, time=args.time,
-                      sample_time=args.sample_time, input_gain=args.input_gain, time_unit=args.time_unit,
-                      position_unit=args.position_unit, input_unit=args.input_unit, resolution=args.resolution,
-                      rotary=args.rotary, delimiter=args.delimiter)
+    try:
+        return load_trace(path, position=args.position, input=args.input, time=args.time,
+                          sample_time=args.sample_time, input_gain=args.input_gain, time_unit=args.time_unit,
+                          position_unit=args.position_unit, input_unit=args.input_unit, resolution=args.resolution,
+                          rotary=args.rotary, rated=None if args.rated is None else " ".join(args.rated),
+                          delimiter=args.delimiter, decimal=args.decimal)
+    except MissingExtra as e:
+        raise UsageError(f"obsdesign {args.command}: {e}") from None
+    except ValueError as e:
+        param, _, rest = str(e).partition(": ")
+        if param in _FLAGS:
+            raise UsageError(f"obsdesign {args.command}: argument {_FLAGS[param]}: {rest}") from None
+        if param == "time, sample_time" and args.time is None and args.sample_time is None:
+            raise UsageError(f"obsdesign {args.command}: expected --time NAME or --sample-time DT for the time base "
+                             f"of {path!r}, found neither (the file gives none of its own)") from None
+        raise
+
+
+def _cmd_channels(args: argparse.Namespace) -> int:
+    from ..data.logfile import MissingExtra, read_log
+
+    try:
+        log = read_log(args.data, delimiter=args.delimiter, decimal=args.decimal)
+    except MissingExtra as e:
+        raise UsageError(f"obsdesign channels: {e}") from None
+    rows = log.rows()
+    payload = {"file": log.name, "format": log.format, "metadata": dict(log.metadata),
+               "channels": [{"name": n, "unit": u, "length": k, "rate": r} for n, u, k, r in rows]}
+    head = ("name", "unit", "length", "rate")
+    table = [head] + [(n, u, str(k), r) for n, u, k, r in rows]
+    widths = [max(len(row[i]) for row in table) for i in range(4)]
+    lines = [f"{log.name}: {log.format}, {len(rows)} {log.kind}s"]
+    lines += [f"  {key}: {value}" for key, value in log.metadata.items()]
+    lines += ["  " + "  ".join(cell.ljust(w) if i < 2 else cell.rjust(w) for i, (cell, w) in
+                                enumerate(zip(row, widths))).rstrip() for row in table]
+    emit(args, "\n".join(lines), payload)
+    return 0
 
 
 def _pairs(args: argparse.Namespace, flag: str, items, parse) -> dict:
@@ -202,11 +240,22 @@ def _cmd_observe(args: argparse.Namespace) -> int:
 
 
 def add_commands(sub) -> None:
-    """Add ``identify`` and ``observe`` to the subparsers ``sub``."""
+    """Add ``channels``, ``identify`` and ``observe`` to the subparsers ``sub``."""
     from ..data.choices import INPUT_TIMINGS, STRIBECK_CHOICES
 
+    from ..data.formats import extensions_text
+
+    files = f"measured record ({extensions_text()})"
+    p = sub.add_parser("channels", help="list the channels of a log file: name, unit, length, rate")
+    p.add_argument("data", metavar="FILE", type=INPUT_FILE, help=f"a log file ({extensions_text()})")
+    p.add_argument("--delimiter", type=_delimiter, metavar="D",
+                   help="CSV delimiter: ',', ';', tab, space or '|' (default: detected)")
+    p.add_argument("--decimal", choices=(".", ","), help="CSV decimal mark (default: detected)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(run=_cmd_channels)
+
     p = sub.add_parser("identify", help="identify mass, viscous and Coulomb friction and offset from a record")
-    p.add_argument("data", metavar="DATA", type=INPUT_FILE, help="measured record (.csv with a header row, or .mat)")
+    p.add_argument("data", metavar="DATA", type=INPUT_FILE, help=files)
     add_trace_flags(p)
     p.add_argument("--asymmetric", action="store_true", help="separate viscous and Coulomb terms per direction")
     p.add_argument("--stribeck", choices=STRIBECK_CHOICES, default="auto",
@@ -236,7 +285,7 @@ def add_commands(sub) -> None:
     p.set_defaults(run=_cmd_identify)
 
     p = sub.add_parser("observe", help="run the designed observer over a measured record")
-    p.add_argument("data", metavar="DATA", type=INPUT_FILE, help="measured record (.csv with a header row, or .mat)")
+    p.add_argument("data", metavar="DATA", type=INPUT_FILE, help=files)
     group = p.add_mutually_exclusive_group(required=True)
     group.add_argument("--preset", choices=preset_names(), help="shipped preset")
     group.add_argument("--config", metavar="FILE", help="TOML config file (e.g. from 'obsdesign identify -o')")

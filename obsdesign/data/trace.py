@@ -3,8 +3,8 @@
 A :class:`Trace` is what the package needs from a measurement: the encoder
 displacement ``x`` [m] (the paper's only measured state, eq:2:1) and the
 actuator force ``u`` [N] on a uniformly sampled time base. :func:`load_trace`
-reads one from a CSV file (header row, columns by name) or a MATLAB ``.mat``
-file (variables by name) and refuses anything it cannot use with one clear
+reads one from any log file :func:`obsdesign.data.logfile.read_log` reads (CSV, MATLAB,
+TDMS, MDF4, HDF5, MCAP, Parquet; channels by name, units from the file or given) and refuses anything it cannot use with one clear
 error naming the parameter, what was expected and what was found.
 
 Examples
@@ -29,8 +29,9 @@ import numpy as np
 
 from .._io import atomic_write
 from .._validate import SAMPLE_TIME
-from .csvfile import parse_delimiter, read_csv
-from .units import Units, check_plausible
+from .csvfile import parse_decimal, parse_delimiter
+from .logfile import common_time, format_of, read_log
+from .units import DEFAULT_UNITS, Units, check_plausible, column_unit, parse_unit
 
 __all__ = ["Trace", "load_trace", "MIN_SAMPLES", "JITTER_TOLERANCE", "MAX_MAGNITUDE", "SAMPLE_TIME_RANGE",
            "check_sample_time", "zero_phase_velocity"]
@@ -46,7 +47,6 @@ MAX_MAGNITUDE = 1e150
 #: Usable sample times [s], the rule of a controller's dt (:data:`obsdesign._validate.SAMPLE_TIME`):
 #: outside, the time column is in the wrong unit (or not a time).
 SAMPLE_TIME_RANGE = (SAMPLE_TIME.low, SAMPLE_TIME.high)
-_EXTENSIONS = (".csv", ".mat")
 
 
 # -- validation helpers (one per concept) ------------------------------------------------------
@@ -176,6 +176,11 @@ def zero_phase_velocity(position: np.ndarray, sample_time: float, cutoff_hz: flo
     return np.gradient(signal.sosfiltfilt(sos, position), sample_time)
 
 
+def _plausibility(units: Units, position: np.ndarray, step: float) -> tuple[str, ...]:
+    speed = float(np.max(np.abs(np.diff(position)))) / step
+    return check_plausible(units, sample_time=step, position_range=float(np.ptp(position)), speed=speed)
+
+
 # -- the trace -----------------------------------------------------------------------------------
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -204,7 +209,13 @@ class Trace:
         (m or rad, s, N or N m).
     warnings : tuple of str
         Plausibility warnings (:func:`obsdesign.data.units.check_plausible`): a sample time,
-        position range or speed that does not fit a servo axis, naming the likely unit error.
+        position range or speed that does not fit a servo axis, naming the likely unit error; and
+        a unit given that overrides another one written in the file.
+    format : str
+        The file's format (``'CSV'``, ``'TDMS'``, ...; ``'memory'`` for a trace built in Python).
+    metadata : dict
+        The file's metadata (a CSV's header block, the format's properties) and how the time
+        base was found (``time base``).
 
     Notes
     -----
@@ -221,6 +232,8 @@ class Trace:
     input_gain: float = 1.0
     units: Units = field(default_factory=Units)
     warnings: tuple[str, ...] = field(default=(), repr=False)
+    format: str = "memory"
+    metadata: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         cols = {name: _check_column(name, name, getattr(self, name)) for name in ("t", "position", "force")}
@@ -239,9 +252,7 @@ class Trace:
         if not isinstance(self.units, Units):
             raise TypeError(f"units: expected a Units, found {type(self.units).__name__}")
         if not self.warnings:
-            speed = float(np.max(np.abs(np.diff(self.position)))) / step
-            object.__setattr__(self, "warnings", check_plausible(
-                self.units, sample_time=step, position_range=float(np.ptp(self.position)), speed=speed))
+            object.__setattr__(self, "warnings", _plausibility(self.units, self.position, step))
 
     @property
     def samples(self) -> int:
@@ -298,66 +309,59 @@ class Trace:
 
 # -- loading -------------------------------------------------------------------------------------
 
-def _read_mat(path: Path) -> dict[str, np.ndarray]:
-    from scipy import io as sio
-
-    try:
-        raw = sio.loadmat(str(path))
-    except MemoryError:
-        raise ValueError(f"path: not enough memory to read {path.name!r} (a MATLAB file whose variables "
-                         "decompress to more than the memory available)") from None
-    except Exception as e:  # scipy raises several types for a file that is not MATLAB
-        raise ValueError(f"path: expected a MATLAB .mat file (v5 or older), found one scipy cannot read: "
-                         f"{path.name!r} ({e})") from e
-    return {k: v for k, v in raw.items() if not k.startswith("__")}
-
-
-def _pick(param: str, name: str, table: dict[str, np.ndarray], kind: str) -> tuple[np.ndarray, str]:
-    if name not in table:
-        raise ValueError(f"{param}: expected the name of a {kind}, found {name!r}; available: "
-                         f"{', '.join(sorted(table)) or 'none'}")
-    return table[name], f"{kind} {name!r}"
-
 
 def load_trace(path: str | os.PathLike, *, position: str, input: str, time: str | None = None,
-               sample_time: float | None = None, input_gain: float = 1.0, time_unit: str = "s",
-               position_unit: str = "m", input_unit: str | None = None, resolution: float | None = None,
-               rotary: bool = False, delimiter: str | None = None) -> Trace:
-    """Load a measured trace from a CSV or MATLAB ``.mat`` file.
+               sample_time: float | None = None, input_gain: float = 1.0, time_unit: str | None = None,
+               position_unit: str | None = None, input_unit: str | None = None, resolution: float | None = None,
+               rotary: bool = False, rated: str | None = None, delimiter: str | None = None,
+               decimal: str | None = None) -> Trace:
+    """Load a measured trace from a log file (CSV, MATLAB, TDMS, MDF4, HDF5, MCAP, Parquet).
+
+    The file is read by :func:`obsdesign.data.logfile.read_log` (the format by its extension);
+    the channels are picked by name and converted to SI by :class:`obsdesign.data.units.Units`.
 
     Parameters
     ----------
     path : str or path-like
-        A ``.csv`` file (UTF-8; ``#`` comment lines anywhere; a header row of column names, then
-        numeric rows, split by ``delimiter``) or a ``.mat`` file (read with ``scipy.io.loadmat``;
-        variables are columns).
+        A log file: ``.csv`` (a header row of column names, then numeric rows; a header block above
+        and a units row below the names are read, the delimiter and decimal mark detected), ``.mat``
+        (variables), ``.tdms``, ``.mf4``, ``.h5``, ``.mcap``, ``.parquet`` (channels by name,
+        ``group/channel`` where the format has groups; the optional extra of the format installed).
     position : str
-        Column or variable holding the displacement, in ``position_unit``.
+        Column, variable or channel holding the displacement, in ``position_unit``.
     input : str
-        Column or variable holding the actuator input, in ``input_unit``; times ``input_gain``
-        gives the force [N] (the torque [N m] of a rotary axis).
+        Column, variable or channel holding the actuator input, in ``input_unit``; taken to the SI unit
+        of its kind (A, V, N, N m), times ``input_gain`` gives the force [N] (the torque [N m] of a
+        rotary axis).
     time : str, optional
-        Column or variable holding the time, in ``time_unit``.
+        Column, variable or channel holding the time, in ``time_unit``. Without it (and without
+        ``sample_time``) the time base is the file's own where it has one (TDMS ``wf_increment``, the
+        MDF master channel, MCAP message stamps).
     sample_time : float, optional
-        Sample time [s] (always seconds). At least one of ``time`` and ``sample_time`` is required;
-        with both, the time column is used if its mean step agrees within 1 %.
+        Sample time [s] (always seconds). With a time column (or the file's own time base), that is
+        used if its mean step agrees within 1 %.
     input_gain : float
-        Conversion of the logged input to force [N/unit], e.g. the actuator gain
-        35.15065188 N/V of the EMPS benchmark whose input is a voltage. Negative values
+        Conversion of the input's SI unit to force [N/A, N/V; N m/A for a rotary axis], e.g. the
+        actuator gain 35.15065188 N/V of the EMPS benchmark whose input is a voltage. Negative values
         (a sign convention) are allowed (an identification that comes out with a negative
         mass then warns to check the sign); 0, NaN and infinity are refused.
-    time_unit : {'s', 'ms', 'us'}
-    position_unit : {'m', 'mm', 'um', 'counts', 'rad'}
-        ``rad``: a rotary axis (inertia kg m^2, torque N m); ``counts`` needs ``resolution``.
-    input_unit : {'V', 'A', 'N', 'N m'}, optional
-        The logged input's unit, named in the identification and the config (default: the force
-        unit when ``input_gain`` is 1, else ``V``).
+    time_unit, position_unit, input_unit : str, optional
+        Units of the columns (any unit pint parses whose dimension fits, see
+        :class:`obsdesign.data.units.Units`: ``'ms'``, ``'mm'``, ``'deg'``, ``'counts'``, ``'mA'``,
+        ``'mN m'``, ``'%'``). Default: the unit the file writes for the column (``pos [mm]``, a units
+        row, ``pos_mm``, the format's metadata), else ``s``, ``m`` and (input) ``N`` with a gain of 1,
+        else ``V``. A unit given that differs from the file's is used, with a warning.
     resolution : float, optional
-        Size of one encoder count [m, or rad with ``rotary``], with ``position_unit='counts'``.
+        Size of one encoder count [m, or rad with ``rotary``], with a position in counts.
     rotary : bool
-        A rotary axis with the position in counts (``rad`` implies it).
+        A rotary axis with the position in counts (an angle or a torque implies it).
+    rated : str, optional
+        The rated current or torque (``'2.5 A'``) that an input in ``%`` is a fraction of.
     delimiter : {',', ';', 'tab', 'space', '|'}, optional
-        The CSV delimiter; default: detected from the header and the first row.
+        The CSV delimiter; default: detected.
+    decimal : {'.', ','}, optional
+        The CSV decimal mark; default: detected (a comma where the delimiter is not one and the
+        rows hold commas but no points).
 
     Returns
     -------
@@ -366,16 +370,20 @@ def load_trace(path: str | os.PathLike, *, position: str, input: str, time: str 
     Raises
     ------
     ValueError
-        Wrong extension, missing file, unreadable or non-UTF-8 CSV, a missing column
-        (the message lists the available names), two columns of the same name (after stripping
-        spaces and quotes), the same column (or the same data) for two of position, input and time,
-        a scalar where a column is expected, non-finite values (column and first bad index),
-        |values| above :data:`MAX_MAGNITUDE`, a sample time outside :data:`SAMPLE_TIME_RANGE`,
-        not enough memory to read a ``.mat`` file, fewer than 100 samples, time not
-        strictly increasing, non-uniform sampling (jitter over 1 % of the step), a time
-        column inconsistent with ``sample_time``, an input gain of 0 or non-finite.
+        Unknown extension, missing file, a file that is not what its extension says (truncated, empty,
+        another format), a CSV whose rows are not numbers (digit grouping named as such), a missing
+        column (the message lists the available names), two columns of the same name (after stripping
+        spaces, quotes and a unit in brackets), a unit of the wrong dimension (naming the column, the
+        unit and the dimension expected), the same column (or the same data) for two of position,
+        input and time, a scalar where a column is expected, non-finite values (column and first bad
+        index), |values| above :data:`MAX_MAGNITUDE`, a sample time outside :data:`SAMPLE_TIME_RANGE`,
+        not enough memory to read a ``.mat`` file, fewer than 100 samples, time not strictly
+        increasing, non-uniform sampling (jitter over 1 % of the step), a time column inconsistent
+        with ``sample_time``, an input gain of 0 or non-finite.
     TypeError
         Names that are not strings, gains or sample times that are not numbers.
+    obsdesign.data.logfile.MissingExtra
+        The format's library is not installed (an ``ImportError`` naming the ``pip install`` line).
 
     Examples
     --------
@@ -387,19 +395,17 @@ def load_trace(path: str | os.PathLike, *, position: str, input: str, time: str 
     ...     rows = np.column_stack([t, np.sin(t), 0.1 * np.cos(t)])
     ...     np.savetxt(p, rows, delimiter=",", header="time,x,u_volt", comments="")
     ...     tr = load_trace(p, position="x", input="u_volt", time="time", input_gain=10.0)
-    >>> tr.samples, tr.sample_time, float(tr.force[0])
-    (500, 0.001, 1.0)
+    >>> tr.samples, tr.sample_time, float(tr.force[0]), tr.units.input
+    (500, 0.001, 1.0, 'volt')
     >>> load_trace("run.txt", position="x", input="u")
     Traceback (most recent call last):
     ...
-    ValueError: path: expected a .csv or .mat file, found extension '.txt'
+    ValueError: path: expected a log file (.csv, .mat, .tdms, .mf4, .mdf, .h5, .hdf5, .hdf, .mcap, .parquet, .pq), found extension '.txt'
     """
     if not isinstance(path, (str, os.PathLike)):
         raise TypeError(f"path: expected a file path, found {type(path).__name__} {path!r}")
     p = Path(path)
-    ext = p.suffix.lower()
-    if ext not in _EXTENSIONS:
-        raise ValueError(f"path: expected a .csv or .mat file, found extension {p.suffix or '(none)'!r}")
+    format_of(p)
     position = _check_name("position", position)
     input = _check_name("input", input)
     time = _check_name("time", time, optional=True)
@@ -407,46 +413,70 @@ def load_trace(path: str | os.PathLike, *, position: str, input: str, time: str 
         if name is not None and name == {"position": position, "input": input}[other]:
             raise ValueError(f"{param}: expected a column other than the {other} column, found {name!r} for both")
     gain = _check_gain(input_gain)
-    units = Units(time=time_unit, position=position_unit, input=input_unit, resolution=resolution, rotary=rotary)
+    for param, value in (("time_unit", time_unit), ("position_unit", position_unit), ("input_unit", input_unit)):
+        if value is not None:
+            parse_unit(param, value, param.split("_")[0])
     delimiter = parse_delimiter(delimiter)
-    if ext == ".mat" and delimiter is not None:
-        raise ValueError(f"delimiter: expected None for a .mat file (it has no delimiter), found {delimiter!r}")
+    decimal = parse_decimal(decimal)
     step = None if sample_time is None else check_sample_time(
         "sample_time", _check_positive("sample_time", sample_time), "sample_time")
-    if time is None and step is None:
-        raise ValueError("time, sample_time: expected a time column name or a sample time [s], found neither")
-    if not p.is_file():
-        raise ValueError(f"path: expected an existing file, found {str(p)!r}")
-    table = read_csv(p, delimiter) if ext == ".csv" else _read_mat(p)
-    kind = "column" if ext == ".csv" else "variable"
-
-    x_raw, x_label = _pick("position", position, table, kind)
-    u_raw, u_label = _pick("input", input, table, kind)
-    x_logged = _check_column("position", x_label, x_raw)
+    log = read_log(p, delimiter=delimiter, decimal=decimal)
+    kind = log.kind
+    ch_x, ch_u = log.pick("position", position), log.pick("input", input)
+    ch_t = None if time is None else log.pick("time", time)
+    x_label, u_label = f"{kind} {position!r}", f"{kind} {input!r}"
+    t_label = None if time is None else f"{kind} {time!r}"
+    notes = []
+    chosen = {}
+    for role, given, ch, label in (("time", time_unit, ch_t, t_label), ("position", position_unit, ch_x, x_label),
+                                   ("input", input_unit, ch_u, u_label)):
+        if ch is None:
+            chosen[role] = given or DEFAULT_UNITS[role]
+            continue
+        chosen[role], note = column_unit(role, given, ch.unit, ch.unit_from, label)
+        if note:
+            notes.append(note)
+    units = Units(time=chosen["time"], position=chosen["position"], input=chosen["input"], resolution=resolution,
+                  rotary=rotary, rated=rated)
+    x_logged = _check_column("position", x_label, ch_x.values)
     x = x_logged * units.position_scale
-    u = _check_column("input", u_label, u_raw)
+    u_logged = _check_column("input", u_label, ch_u.values)
+    u = u_logged * units.input_scale
     if u.size != x.size:
         raise ValueError(f"input: expected {x.size} samples like {x_label}, found {u.size} in {u_label}")
-    if np.array_equal(x_logged, u):
+    if np.array_equal(x_logged, u_logged):
         raise ValueError(f"input: expected the actuator input, found in {u_label} the same data as in {x_label}")
     if float(np.max(np.abs(u))) * abs(gain) > MAX_MAGNITUDE:
         raise ValueError(f"input_gain: expected |input_gain x input| <= {MAX_MAGNITUDE:g} N, found "
                          f"{float(np.max(np.abs(u))) * abs(gain):g} N (input_gain = {gain:g}, {u_label})")
-    if time is not None:
-        t_raw, t_label = _pick("time", time, table, kind)
-        t_logged = _check_column("time", t_label, t_raw)
-        t = t_logged * units.time_scale
+    metadata = dict(log.metadata)
+    own = common_time(log, ch_x, ch_u, x_label, u_label) if ch_t is None else None
+    if ch_t is not None or own is not None:
+        if ch_t is not None:
+            t_logged = _check_column("time", t_label, ch_t.values)
+            t = t_logged * units.time_scale
+            for other, label in ((x_logged, x_label), (u_logged, u_label)):
+                if np.array_equal(t_logged, other):
+                    raise ValueError(f"time: expected the time base, found in {t_label} the same data as in {label}")
+            metadata["time base"] = t_label
+        else:
+            t_label = f"the file's time base of {x_label}"
+            t = _check_column("time", t_label, own)
+            metadata["time base"] = t_label
         if t.size != x.size:
             raise ValueError(f"time: expected {x.size} samples like {x_label}, found {t.size} in {t_label}")
-        for other, label in ((x_logged, x_label), (u, u_label)):
-            if np.array_equal(t_logged, other):
-                raise ValueError(f"time: expected the time base, found in {t_label} the same data as in {label}")
         t_step = _check_time(t, t_label)
         if step is not None and abs(t_step - step) > JITTER_TOLERANCE * step:
             raise ValueError(f"time, sample_time: expected agreement within {100 * JITTER_TOLERANCE:g} %, found "
                              f"a mean step of {t_step:.6g} s in {t_label} and sample_time = {step:.6g} s")
         step = t_step
-    else:
+    elif step is not None:
         t = np.arange(x.size) * step
+        metadata["time base"] = f"sample_time {step:.6g} s"
+    else:
+        raise ValueError(f"time, sample_time: expected a time column name or a sample time [s], found neither "
+                         f"(and {log.name!r} gives {x_label} no time base of its own)")
+    warnings = tuple(notes) + _plausibility(units, x, step) if notes else ()
     return Trace(t=t, position=x, force=gain * u, sample_time=step, source=p.name,
-                 names={"position": position, "input": input, "time": time}, input_gain=gain, units=units)
+                 names={"position": position, "input": input, "time": time}, input_gain=gain, units=units,
+                 warnings=warnings, format=log.format, metadata=metadata)

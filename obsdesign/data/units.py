@@ -1,11 +1,16 @@
-"""Units of a logged record: the scale of each column to SI, the axis kind, plausibility checks.
+"""Units of a logged record: each column's unit by pint, its scale to SI, the axis kind, plausibility.
 
-A log names its units per column: time in ``s``, ``ms`` or ``us``; position in ``m``, ``mm``,
-``um``, encoder ``counts`` (with a resolution per count) or ``rad`` (a rotary axis); the input
-in ``V``, ``A``, ``N`` or ``N m`` with a gain to force (or torque). Inside, everything is SI:
-a linear axis in m, kg, N; a rotary one in rad, kg m^2, N m (the same equations, with inertia
-for mass and torque for force). :class:`Units` holds the choice, :func:`check_plausible`
-names the likely unit error of a record whose numbers do not fit a servo axis.
+A log names its units per column, in any unit expression that `pint <https://pint.readthedocs.io>`__
+(the units library of scientific Python) parses and whose dimension fits the column: time (``s``,
+``ms``, ``us``, ``min``), position as a length (``m``, ``mm``, ``µm``, ``inch``), an angle (``rad``,
+``deg``, ``rev``: a rotary axis) or encoder ``counts`` (with a resolution per count), the input
+as a current (``A``, ``mA``), a voltage (``V``), a force (``N``, ``kN``, ``lbf``), a torque (``N m``,
+``mN m``; a rotary axis) or a fraction (``%``, ``permille``) of a rated current or torque given
+with ``rated``. Inside, everything is SI: a linear axis in m, kg, N; a rotary one in rad,
+kg m^2, N m (the same equations, with inertia for mass and torque for force); the logged input is
+taken to the SI unit of its kind (A, V, N or N m), which the input gain multiplies.
+:class:`Units` holds the choice, :func:`check_plausible` names the likely unit error of a record
+whose numbers do not fit a servo axis.
 
 Examples
 --------
@@ -14,32 +19,234 @@ Examples
 (0.001, 0.001, 'linear', 'N')
 >>> Units(position="counts", resolution=2 * 3.141592653589793 / 4096, rotary=True).describe()
 'time s, position counts (0.00153398 rad/count), input N m; rotary axis (inertia kg m^2, torque N m)'
+>>> deg = Units(position="deg", input="mA")
+>>> deg.axis, round(deg.position_scale, 12), deg.input_scale, deg.input_unit(0.2)
+('rotary', 0.01745329252, 0.001, 'A')
+>>> Units(input="%", rated="2.5 A").input_scale
+0.025
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import re
+from dataclasses import dataclass, field
+from functools import cache
 
 from ..axis import INPUT_UNITS, AxisSpec, AxisWords
 
-__all__ = ["Units", "TIME_UNITS", "POSITION_UNITS", "INPUT_UNITS", "check_plausible", "PLAUSIBLE"]
+__all__ = ["Units", "INPUT_UNITS", "check_plausible", "PLAUSIBLE", "parse_unit", "unit_kind", "UNIT_KINDS",
+           "column_unit", "DEFAULT_UNITS", "is_unit"]
 
-#: Time units and their factor to seconds.
-TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
-#: Position units and their factor to m (rad for ``rad``); ``counts`` takes the resolution.
-POSITION_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "rad": 1.0, "counts": None}
-# INPUT_UNITS (the logged input's units; ``N`` and ``N m`` are force and torque themselves, gain 1 by
-# default) is the config's one list, :data:`obsdesign.axis.INPUT_UNITS`.
+# INPUT_UNITS (the SI unit of each kind of logged input; ``N`` and ``N m`` are force and torque themselves,
+# gain 1 by default) is the config's one list, :data:`obsdesign.axis.INPUT_UNITS`.
 #: Plausible ranges (SI) of a servo axis record; outside, :func:`check_plausible` warns.
 PLAUSIBLE = {"sample_time": (1e-6, 0.02), "position_range": (1e-7, 5.0), "speed": (0.0, 10.0),
              "mass": (1e-4, 1000.0)}
+#: Kind of a unit -> its SI unit (pint's spelling) and how the messages name it. ``angle``, ``count`` and
+#: ``fraction`` are dimensionless to pint; they are told apart by the root unit (radian, count, none).
+UNIT_KINDS = {"time": ("s", "a time"), "length": ("m", "a length"), "angle": ("rad", "an angle"),
+              "count": ("count", "a count"), "fraction": ("dimensionless", "a fraction (%)"),
+              "current": ("A", "a current"), "voltage": ("V", "a voltage"), "force": ("N", "a force"),
+              "torque": ("N * m", "a torque")}
+#: The kinds each column accepts, in the words of the messages.
+_ROLE_KINDS = {"time": ("time",), "position": ("length", "angle", "count"),
+               "input": ("current", "voltage", "force", "torque", "fraction"),
+               "rated": ("current", "voltage", "force", "torque")}
+_ROLE_WORDS = {"time": "a time (s, ms, us, min)", "position": "a length (m, mm, um, inch), an angle (rad, deg, "
+               "rev) or counts", "input": "a current (A, mA), a voltage (V), a force (N) or a torque (N m), or % "
+               "of a rated value", "rated": "a current (A), a voltage (V), a force (N) or a torque (N m)"}
+#: SI unit (the config's [axis] input) of each input kind.
+_INPUT_SI = {"current": "A", "voltage": "V", "force": "N", "torque": "N m"}
+#: ``Nm``, ``mNm``, ``kNm`` (a newton metre as drives write it; pint reads ``Nm`` as a "number metre").
+_NEWTON_METRE = re.compile(r"(?<![A-Za-z])([kmuµμ]?)Nm(?![A-Za-z])")
 
 
-def _choice(param: str, value: object, choices) -> str:
-    if not isinstance(value, str) or value not in choices:
-        raise ValueError(f"{param}: expected one of {', '.join(repr(c) for c in choices)}, found {value!r}")
-    return value
+@cache
+def _registry():
+    """The one pint registry of the package (built on first use: pint is imported only to read a log)."""
+    import pint
+
+    reg = pint.UnitRegistry()
+    reg.define("rev = turn")  # a revolution, as drives write it
+    return reg
+
+
+def _normalize(text: str) -> str:
+    return _NEWTON_METRE.sub(r"\1N m", text.strip().replace("\u03bc", "\u00b5"))
+
+
+def parse_unit(param: str, text: object, role: str | None = None) -> tuple[str, float]:
+    """The kind of the unit expression ``text`` and its factor to the kind's SI unit.
+
+    Parameters
+    ----------
+    param : str
+        The parameter named in an error (``'position_unit'``, ``"column 'pos'"``).
+    text : str
+        A unit expression pint parses (``'mm'``, ``'deg'``, ``'mN m'``, ``'%'``; ``Nm`` is a newton metre).
+    role : {'time', 'position', 'input', 'rated'}, optional
+        The column the unit is for: a unit of another dimension is refused naming the one expected.
+
+    Returns
+    -------
+    kind : str
+        A key of :data:`UNIT_KINDS`.
+    factor : float
+        SI units per ``text`` (``count`` and ``fraction`` are per count and per 1).
+
+    Raises
+    ------
+    ValueError
+        A unit pint does not know, or of a dimension the column does not take.
+
+    Examples
+    --------
+    >>> parse_unit("position_unit", "µm", "position")
+    ('length', 1e-06)
+    >>> parse_unit("input_unit", "W", "input")
+    Traceback (most recent call last):
+    ...
+    ValueError: input_unit: expected a current (A, mA), a voltage (V), a force (N) or a torque (N m), or % of a rated value, found 'W' (dimension [length]^2 [mass] [time]^-3)
+    """
+    if not isinstance(text, str):
+        raise TypeError(f"{param}: expected a unit (a string such as 'mm'), found {type(text).__name__} {text!r}")
+    kind, factor, dims = _classify(_normalize(text))
+    if kind is None:
+        expected = _ROLE_WORDS[role] if role else "a unit pint knows"
+        raise ValueError(f"{param}: expected {expected}, found {text!r} ({dims})")
+    if role is not None and kind not in _ROLE_KINDS[role]:
+        raise ValueError(f"{param}: expected {_ROLE_WORDS[role]}, found {text!r} ({UNIT_KINDS[kind][1]})")
+    return kind, factor
+
+
+_UNKNOWN = "not a unit pint knows"
+
+
+@cache
+def _classify(text: str) -> tuple[str | None, float, str]:
+    reg = _registry()
+    try:
+        unit = reg.parse_units(text)
+    except Exception:  # noqa: BLE001 (pint raises several types for text that is not a unit)
+        return None, math.nan, _UNKNOWN
+    dims = unit.dimensionality
+    if not dims:
+        root = str(reg.get_root_units(unit)[1])
+        kind = {"radian": "angle", "count": "count", "dimensionless": "fraction"}.get(root)
+    else:
+        kind = next((k for k, (si, _) in UNIT_KINDS.items()
+                     if k not in ("angle", "count", "fraction") and dims == reg.parse_units(si).dimensionality),
+                    None)
+    if kind is None:
+        return None, math.nan, "dimensionless, but no angle, count or fraction" if not dims else _dims_text(dims)
+    factor = float(reg.Quantity(1.0, unit).to(UNIT_KINDS[kind][0]).magnitude)
+    return kind, factor, _dims_text(dims)
+
+
+def is_unit(text: str) -> bool:
+    """Whether pint parses ``text`` as a unit (of any dimension).
+
+    Parameters
+    ----------
+    text : str
+        A unit expression, or any text.
+
+    Examples
+    --------
+    >>> is_unit("kg"), is_unit("Position")
+    (True, False)
+    """
+    return _classify(_normalize(text))[2] != _UNKNOWN
+
+
+def _dims_text(dims) -> str:
+    """``[length]^2 [mass] [time]^-3``: pint's dimensionality, sorted (its own text follows dict order)."""
+    return "dimension " + " ".join(k if v == 1 else f"{k}^{v:g}" for k, v in sorted(dims.items()))
+
+
+def unit_kind(text: str, role: str) -> str | None:
+    """The kind of ``text`` if it is a unit of the column ``role`` (else ``None``; no error).
+
+    Parameters
+    ----------
+    text : str
+        A unit expression.
+    role : {'time', 'position', 'input', 'rated'}
+        The column.
+
+    Examples
+    --------
+    >>> unit_kind("ms", "time"), unit_kind("ms", "position"), unit_kind("ref", "input")
+    ('time', None, None)
+    """
+    kind = _classify(_normalize(text))[0]
+    return kind if kind in _ROLE_KINDS[role] else None
+
+
+#: The unit parameter of each column (``load_trace``'s keyword; the CLI flag is the same with dashes).
+_UNIT_PARAMS = {"time": "time_unit", "position": "position_unit", "input": "input_unit"}
+#: The unit of a column whose unit is neither given nor written in the file.
+DEFAULT_UNITS = {"time": "s", "position": "m", "input": None}
+_ROLE_EXPECTED = {"time": "a time unit", "position": "a length, an angle or counts",
+                  "input": "a current, a voltage, a force, a torque or a fraction (%)"}
+
+
+def column_unit(role: str, given: str | None, written: str | None, where: str,
+                label: str) -> tuple[str | None, str | None]:
+    """The unit of a column: the one given, else the one the file writes, else :data:`DEFAULT_UNITS`.
+
+    Parameters
+    ----------
+    role : {'time', 'position', 'input'}
+        The column.
+    given : str or None
+        The unit given (``load_trace``'s ``time_unit``, ...).
+    written, where : str or None, str
+        The unit the file writes for the column and where (:attr:`obsdesign.data.logfile.Channel.unit_from`);
+        a name's suffix (``where='name'``) that is no unit of this column is no unit (``x_ref``).
+    label : str
+        The column as messages name it (``"column 'pos'"``).
+
+    Returns
+    -------
+    unit : str or None
+    warning : str or None
+        Where a unit given overrides a different one the file writes.
+
+    Examples
+    --------
+    >>> column_unit("position", None, "deg", "header", "column 'pos'")
+    ('deg', None)
+    >>> column_unit("input", None, "max", "name", "column 'u_max'")
+    (None, None)
+    >>> column_unit("time", None, "kg", "units row", "column 't'")
+    Traceback (most recent call last):
+    ...
+    ValueError: time: expected a time unit for column 't', found the unit 'kg' (dimension [mass]) in the file's units row; give time_unit (--time-unit)
+    """
+    param = _UNIT_PARAMS[role]
+    if written is not None and where == "name" and unit_kind(written, role) is None:
+        written = None
+    if given is not None:
+        if written is None:
+            return given, None
+        try:
+            same = parse_unit(param, written, role) == parse_unit(param, given, role)
+        except ValueError:
+            same = False
+        note = None if same else (f"{param}: {given!r} given overrides the unit {written!r} that the file writes "
+                                  f"for {label} (from its {where})")
+        return given, note
+    if written is None:
+        return DEFAULT_UNITS[role], None
+    try:
+        parse_unit(param, written, role)
+    except ValueError as e:
+        found = str(e).split(", found ", 1)[-1]
+        raise ValueError(f"{role}: expected {_ROLE_EXPECTED[role]} for {label}, found the unit {found} in the "
+                         f"file's {where}; give {param} (--{param.replace('_', '-')})") from None
+    return written, None
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -48,16 +255,26 @@ class Units(AxisWords):
 
     Attributes
     ----------
-    time : {'s', 'ms', 'us'}
-    position : {'m', 'mm', 'um', 'counts', 'rad'}
-        ``rad`` makes the axis rotary; ``counts`` needs ``resolution``.
-    input : {'V', 'A', 'N', 'N m'} or None
-        The logged input's unit; ``None``: ``N`` (``N m`` rotary) when the gain is 1, else ``V``
-        (the package's former convention, reported as assumed).
+    time : str
+        A time unit (``'s'``, ``'ms'``, ``'us'``, ``'min'``, ...).
+    position : str
+        A length (``'m'``, ``'mm'``, ``'µm'``, ``'inch'``), an angle (``'rad'``, ``'deg'``, ``'rev'``: the
+        axis is rotary) or ``'counts'`` (needs ``resolution``).
+    input : str or None
+        The logged input's unit: a current, voltage, force or torque (``'mA'``, ``'V'``, ``'N'``,
+        ``'mN m'``), or a fraction (``'%'``) of ``rated``. ``None``: ``N`` (``N m`` rotary) when the
+        gain is 1, else ``V`` (the package's former convention, reported as assumed).
     resolution : float or None
-        Size of one encoder count [m, or rad with ``rotary``]; only with ``position='counts'``.
+        Size of one encoder count [m, or rad with ``rotary``]; only with a position in counts.
     rotary : bool
-        A rotary axis (position in rad, inertia in kg m^2, torque in N m). Implied by ``rad``.
+        A rotary axis (position in rad, inertia in kg m^2, torque in N m). Implied by an angle or a
+        torque.
+    rated : str or None
+        The rated value that a fractional input (``%``) is a fraction of: a current or torque
+        (``'2.5 A'``, ``'1.2 N m'``); only with such an input.
+    time_scale, position_scale, input_scale : float
+        Seconds per time unit, m (rad) per position unit, SI input units (A, V, N, N m) per
+        logged input unit (derived).
     """
 
     time: str = "s"
@@ -65,51 +282,75 @@ class Units(AxisWords):
     input: str | None = None
     resolution: float | None = None
     rotary: bool = False
+    rated: str | None = None
+    time_scale: float = field(init=False, repr=False)
+    position_scale: float = field(init=False, repr=False)
+    input_scale: float = field(init=False, repr=False)
+    _input_si: str | None = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        _choice("time_unit", self.time, TIME_UNITS)
-        _choice("position_unit", self.position, POSITION_UNITS)
-        if self.input is not None:
-            _choice("input_unit", self.input, INPUT_UNITS)
         if not isinstance(self.rotary, bool):
             raise TypeError(f"rotary: expected True or False, found {type(self.rotary).__name__} {self.rotary!r}")
-        if self.position == "rad":
-            object.__setattr__(self, "rotary", True)
-        if self.position in ("m", "mm", "um") and self.rotary:
-            raise ValueError(f"rotary: expected a rotary position unit ('rad' or 'counts'), found position_unit "
-                             f"{self.position!r} with rotary=True")
-        if self.position == "counts":
+        _, time_scale = parse_unit("time_unit", self.time, "time")
+        pos_kind, pos_scale = parse_unit("position_unit", self.position, "position")
+        in_kind, in_scale = (None, 1.0) if self.input is None else parse_unit("input_unit", self.input, "input")
+        rated_kind = None
+        if self.rated is not None:
+            rated_kind, rated_scale = self._rated()
+            if in_kind != "fraction":
+                raise ValueError(f"rated: expected only with an input in % (or another fraction) of it, found "
+                                 f"rated {self.rated!r} with input_unit {self.input!r}")
+            in_kind, in_scale = rated_kind, in_scale * rated_scale
+        elif in_kind == "fraction":
+            raise ValueError(f"rated: expected the rated value that the input in {self.input!r} is a fraction of "
+                             f"(rated='2.5 A', --rated 2.5 A), found none")
+        rotary = self.rotary or pos_kind == "angle" or in_kind == "torque"
+        object.__setattr__(self, "rotary", rotary)
+        if pos_kind == "length" and rotary:
+            why = "rotary=True" if self.rotary else f"a torque input ({self.input!r})"
+            raise ValueError(f"rotary: expected a rotary position unit (an angle or counts), found position_unit "
+                             f"{self.position!r} (a length) with {why}")
+        if pos_kind == "count":
             res = self.resolution
             if isinstance(res, bool) or not isinstance(res, (int, float)) or not (math.isfinite(res) and res > 0):
                 raise ValueError(f"resolution: expected the size of one count > 0 [{self.length_unit}] with "
-                                 f"position_unit 'counts', found {res!r}")
+                                 f"position_unit {self.position!r}, found {res!r}")
             object.__setattr__(self, "resolution", float(res))
+            pos_scale *= float(res)
         elif self.resolution is not None:
-            raise ValueError(f"resolution: expected None unless position_unit is 'counts', found {self.resolution!r} "
+            raise ValueError(f"resolution: expected None unless the position is in counts, found {self.resolution!r} "
                              f"with position_unit {self.position!r}")
-        if self.input is not None and self.input in ("N", "N m") and self.input != self.force_unit:
+        si = None if in_kind is None else _INPUT_SI[in_kind]
+        if si in ("N", "N m") and si != self.force_unit:
             raise ValueError(f"input_unit: expected {self.force_unit!r} (or V, A) for a {self.axis} axis, found "
-                             f"{self.input!r}")
+                             f"{self.input!r} ({UNIT_KINDS[in_kind][1]})")
+        for name, value in (("time_scale", time_scale), ("position_scale", pos_scale), ("input_scale", in_scale),
+                            ("_input_si", si)):
+            object.__setattr__(self, name, value)
+
+    def _rated(self) -> tuple[str, float]:
+        text = self.rated
+        if not isinstance(text, str):
+            raise TypeError(f"rated: expected a value and its unit ('2.5 A'), found {type(text).__name__} {text!r}")
+        number, _, unit = text.strip().partition(" ")
+        try:
+            value = float(number)
+        except ValueError:
+            value = math.nan
+        if not (math.isfinite(value) and value > 0) or not unit.strip():
+            raise ValueError(f"rated: expected a value > 0 and its unit ('2.5 A', '1.2 N m'), found {text!r}")
+        kind, factor = parse_unit("rated", unit, "rated")
+        return kind, value * factor
 
     @property
     def axis(self) -> str:
         """``'rotary'`` or ``'linear'``."""
         return "rotary" if self.rotary else "linear"
 
-    @property
-    def time_scale(self) -> float:
-        """Seconds per logged time unit."""
-        return TIME_UNITS[self.time]
-
-    @property
-    def position_scale(self) -> float:
-        """SI length (m or rad) per logged position unit."""
-        return self.resolution if self.position == "counts" else POSITION_UNITS[self.position]
-
     def input_unit(self, gain: float) -> str:
-        """The logged input's unit, with the default of :attr:`input` for ``gain``."""
-        if self.input is not None:
-            return self.input
+        """The SI unit of the logged input's kind (A, V, N, N m), with the default of :attr:`input` for ``gain``."""
+        if self._input_si is not None:
+            return self._input_si
         return self.force_unit if gain == 1.0 else "V"
 
     def axis_spec(self, gain: float) -> AxisSpec:
@@ -121,12 +362,20 @@ class Units(AxisWords):
         return AxisSpec(kind=self.axis, input=self.input_unit(gain))
 
     def describe(self, gain: float = 1.0) -> str:
-        """One line: the unit of each column and the axis kind."""
+        """One line: the unit of each column (and its conversion where it is not SI) and the axis kind.
+
+        >>> Units(time="ms", position="deg", input="%", rated="2.5 A").describe(0.3)
+        'time ms, position deg, input % of 2.5 A (0.025 A per %); rotary axis (inertia kg m^2, torque N m)'
+        """
         pos = self.position
-        if pos == "counts":
+        if self.resolution is not None:
             pos += f" ({self.resolution:.6g} {self.length_unit}/count)"
+        unit_in = self.input_unit(gain)
+        text_in = unit_in if self.input is None else self.input
+        if self.rated is not None:
+            text_in += f" of {self.rated} ({self.input_scale:.6g} {unit_in} per {self.input})"
         kind = ("rotary axis (inertia kg m^2, torque N m)" if self.rotary else "linear axis (mass kg, force N)")
-        return f"time {self.time}, position {pos}, input {self.input_unit(gain)}; {kind}"
+        return f"time {self.time}, position {pos}, input {text_in}; {kind}"
 
     def si(self, name: str) -> str:
         """SI unit of an identified quantity ``m, sigma, Cf, offset, Fs, vs, speed, length``."""

@@ -207,7 +207,10 @@ def data_section(trace, cfg=None, *, moving_speed: float | None = None, label: s
     u = units.unit  # the record's axis (linear or rotary, from its units)
     params = [("m", ident.m, ident.m_std, u("kg")), ("sigma", ident.sigma, ident.sigma_std, u("N s/m")),
               ("Cf", ident.Cf, ident.Cf_std, u("N")), ("offset", ident.offset, ident.offset_std, u("N"))]
-    return {"source": trace.source, "names": dict(trace.names), "samples": trace.samples,
+    shown = {k: v for k, v in trace.metadata.items() if k not in ("time base", "encoding", "delimiter", "decimal")}
+    return {"source": trace.source, "names": dict(trace.names), "samples": trace.samples, "format": trace.format,
+            "units_read": trace.units.describe(trace.input_gain), "time_base": trace.metadata.get("time base"),
+            "metadata": [(str(k)[:80], str(v)[:200]) for k, v in list(shown.items())[:20]],
             "sample_time": trace.sample_time, "parameters": params, "nrmse_percent": ident.nrmse_percent,
             "condition_number": ident.condition_number, "s_note": ident.s_note,
             "rms_error": _rms(error), "rms_error_moving": _rms(error[moving]),
