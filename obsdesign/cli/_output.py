@@ -12,7 +12,7 @@ from ..export import WHAT as EXPORT_WHAT
 from ..params import PARAMETERS, VARIANTS
 from ..sampled.choices import CONTROLLERS, ESTIMATORS, SCHEDULES
 from ._common import (DESIGN_FLAGS, INPUT_DIR, INPUT_FILE, POSITIVE_ARG, UsageError, add_config_flags,
-                      add_design_flags, check_output_dir, check_output_file, load, warn_unstable,
+                      add_design_flags, check_output_dir, check_output_file, load, print_warnings, warn_unstable,
                       workers_arg)
 from ._data import add_trace_flags, load_trace_args
 

@@ -38,10 +38,10 @@ class ExportSpec:
     @property
     def reversal_threshold(self) -> float:
         """Hysteresis [m] of the simulator's default schedule ``estimated`` (0: reversals at sign changes of
-        ``v_hat``), as :func:`obsdesign.sampled.sampled_controller` sets it."""
-        from ..sampled.controller import sampled_controller
+        ``v_hat``): :func:`obsdesign.sampled.controller.reversal_threshold`."""
+        from ..sampled.controller import reversal_threshold
 
-        return sampled_controller(self.cfg, controller="open-loop").reversal_threshold
+        return reversal_threshold(self.cfg)
 
     variant = property(lambda self: self.arrays.design.variant)
     rho = property(lambda self: self.arrays.design.rho)

@@ -44,10 +44,35 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..estimators.base import DiscreteEstimator
 
 __all__ = ["SampledController", "sampled_controller", "ObserverArgs", "EstimatorArgs", "ControllerArgs",
-           "REVERSAL_NOISE_FACTOR"]
+           "REVERSAL_NOISE_FACTOR", "reversal_threshold"]
 
 #: Hysteresis of the ``estimated`` schedule in units of the sensor's noise RMS (docs/comparison.md).
 REVERSAL_NOISE_FACTOR = 4.0
+
+
+def reversal_threshold(cfg: Config) -> float:
+    """Hysteresis [m] of the ``estimated`` schedule: :data:`REVERSAL_NOISE_FACTOR` x ``sensor.noise_rms``.
+
+    The one definition, read by :func:`sampled_controller` and by the observer export (which must not
+    build the controller: it imports nothing heavy).
+
+    Parameters
+    ----------
+    cfg : Config
+        The design; its ``sensor.noise_rms`` [m].
+
+    Returns
+    -------
+    float
+        The threshold [m]; 0 where the sensor has no noise (reversals at sign changes of ``v_hat``).
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> reversal_threshold(od.load_preset("table1"))  # 4 x 1 um
+    4e-06
+    """
+    return REVERSAL_NOISE_FACTOR * cfg.sensor.noise_rms
 
 
 class ObserverArgs(NamedTuple):
@@ -348,6 +373,6 @@ def sampled_controller(cfg: Config, *, controller: str = "pid+observer", schedul
     return SampledController(config=cfg, controller=controller, schedule=schedule, estimator=estimator,
                              observer=observer, lowpass=lowpass, kp=kp, ki=ki, kd=kd, tau_d=tau_d,
                              compensation=compensation,
-                             reversal_threshold=REVERSAL_NOISE_FACTOR * cfg.sensor.noise_rms,
+                             reversal_threshold=reversal_threshold(cfg),
                              baseline=baseline, initial_estimate=initial_estimate)
 
