@@ -43,6 +43,7 @@ Examples
 from __future__ import annotations
 
 import hashlib
+import hmac
 import json
 import math
 import os
@@ -190,7 +191,6 @@ _SCHEMA_DEPTH = 64
 MAX_ENTRY_BYTES = 4 * 2**20
 _FORMAT = 2
 _NONFINITE = {"inf": math.inf, "-inf": -math.inf, "nan": math.nan}
-_warned_folders: set[str] = set()
 
 
 class MemoWarning(UserWarning):
@@ -205,8 +205,50 @@ def _canonical(encoded: Any) -> str:
     return json.dumps(encoded, sort_keys=True, separators=(",", ":"), allow_nan=False, ensure_ascii=True)
 
 
-def _digest(key: str, canonical: str) -> str:
-    return hashlib.sha256(f"{_FORMAT}\n{key}\n{canonical}".encode()).hexdigest()
+def _digest(key: str, canonical: str, secret: bytes) -> str:
+    """The entry's signature: HMAC-SHA-256 of the format, key and value under the folder's secret."""
+    return hmac.new(secret, f"{_FORMAT}\n{key}\n{canonical}".encode(), hashlib.sha256).hexdigest()
+
+
+_SECRET = "secret"  # the file beside the namespaces' folders
+
+
+def _secret(root: Path, *, create: bool) -> bytes | None:
+    """The folder's signing secret (32 random bytes, hex, in a 0600 file only the user can read).
+
+    An entry is used only if it is signed with it: an entry written by another user, copied from another
+    machine or edited by hand is a miss. ``None`` when there is none yet and ``create`` is false.
+    """
+    path = root / _SECRET
+    if create and not os.path.lexists(path):
+        import tempfile
+
+        fd, tmp = tempfile.mkstemp(dir=root, prefix=".secret.")  # 0600
+        try:
+            os.write(fd, os.urandom(32).hex().encode("ascii"))
+            os.close(fd)
+            os.link(tmp, path)  # never replaces a secret another process wrote meanwhile
+        except FileExistsError:
+            pass
+        finally:
+            os.unlink(tmp)
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return None
+    if not stat.S_ISREG(st.st_mode) or st.st_size != 64:
+        raise _Refused(f"its secret {path} is not a 64-byte regular file")
+    if (hasattr(os, "getuid") and st.st_uid != os.getuid()) or st.st_mode & 0o077:
+        raise _Refused(f"its secret {path} is readable by other users (mode {stat.S_IMODE(st.st_mode):o})")
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0))
+    try:
+        text = os.read(fd, 65)
+    finally:
+        os.close(fd)
+    try:
+        return bytes.fromhex(text.decode("ascii"))
+    except ValueError as e:
+        raise _Refused(f"its secret {path} is not hexadecimal") from e
 
 
 def _trusted_folder(path: Path, *, root: bool) -> None:
@@ -269,7 +311,7 @@ def _no_constant(name: str) -> Any:
     raise _Refused(f"holds the JSON extension {name}")
 
 
-def _read(path: Path, key: str) -> Any:
+def _read(path: Path, key: str, secret: bytes) -> Any:
     """The value of the entry at ``path``, or :class:`_Refused` (FileNotFoundError when there is none)."""
     st = os.lstat(path)
     if not stat.S_ISREG(st.st_mode):
@@ -300,12 +342,14 @@ def _read(path: Path, key: str) -> Any:
         canonical = _canonical(entry["value"])
     except (TypeError, ValueError) as e:
         raise _Refused("holds a value JSON cannot write back") from e
-    if entry["digest"] != _digest(key, canonical):
-        raise _Refused("does not match its digest (edited or damaged)")
+    if not (isinstance(entry["digest"], str) and hmac.compare_digest(entry["digest"], _digest(key, canonical, secret))):
+        raise _Refused("does not match its signature (edited, damaged or not written here)")
     return _strict_decode(entry["value"])
 
 
 def _warn(text: str) -> None:
+    # the text names the folder, not the entry: a lost secret fails every entry of a namespace, and the
+    # command line prints each distinct warning once
     warnings.warn(f"result memo: {text}; computed instead", MemoWarning, stacklevel=3)
 
 
@@ -347,16 +391,17 @@ def memo(namespace: str, inputs: Any, compute: Callable[[], Any], valid: Callabl
     key = hashlib.sha256(f"{namespace}\n{_key_text(inputs)}\n{fingerprint()}".encode()).hexdigest()
     try:
         folder = _folder(namespace, create=False)
+        secret = _secret(cache_dir(), create=False) if folder is not None else None
     except OSError:
         folder = None  # an unreadable folder: computed, and the write below says nothing
     except _Refused as e:
         _warn_folder(e)
         return compute()
-    if folder is not None:
+    if folder is not None and secret is not None:
         path = folder / f"{key}.json"
         why: str | None = None
         try:
-            value = _read(path, key)
+            value = _read(path, key, secret)
             why = None if valid is None or valid(value) else "does not have the shape of the result"
             if why is None and verify is not None:
                 why = verify(value)
@@ -369,13 +414,16 @@ def memo(namespace: str, inputs: Any, compute: Callable[[], Any], valid: Callabl
         except Exception as e:  # noqa: BLE001 (an entry `valid` or `verify` chokes on, an unreadable file)
             why = f"cannot be read ({type(e).__name__})"
         if why is not None:
-            _warn(f"entry {path} {why}")
+            _warn(f"an entry in {folder} {why}")
     value = compute()
     try:
         encoded = _encode(value)
         canonical = _canonical(encoded)
         folder = _folder(namespace, create=True)
-        text = json.dumps({"format": _FORMAT, "key": key, "digest": _digest(key, canonical), "value": encoded},
+        secret = _secret(cache_dir(), create=True)
+        if secret is None:
+            raise OSError("the memo's secret cannot be created")
+        text = json.dumps({"format": _FORMAT, "key": key, "digest": _digest(key, canonical, secret), "value": encoded},
                           allow_nan=False)
         from ._io import atomic_write
 
@@ -388,7 +436,5 @@ def memo(namespace: str, inputs: Any, compute: Callable[[], Any], valid: Callabl
 
 
 def _warn_folder(e: _Refused) -> None:
-    if str(e) not in _warned_folders:  # once per process: every entry would say the same
-        _warned_folders.add(str(e))
-        warnings.warn(f"result memo: not used, {e} (delete it or set OBSDESIGN_CACHE_DIR)", MemoWarning,
-                      stacklevel=3)
+    warnings.warn(f"result memo: not used, {e} (delete it or set OBSDESIGN_CACHE_DIR)", MemoWarning,
+                  stacklevel=3)

@@ -141,7 +141,8 @@ def _forge(entry, value) -> None:
     schema and the re-verification stand between it and the result."""
     data = json.loads(entry.read_text())
     data["value"] = _memo._encode(value)
-    data["digest"] = _memo._digest(data["key"], _memo._canonical(data["value"]))
+    secret = bytes.fromhex((entry.parent.parent / "secret").read_text())
+    data["digest"] = _memo._digest(data["key"], _memo._canonical(data["value"]), secret)
     entry.write_text(json.dumps(data))
 
 

@@ -19,7 +19,12 @@ def _feeds(text: str) -> tuple[float, ...]:
 
 
 def _modes(text: str) -> tuple[str, ...]:
-    return tuple(p.strip() for p in text.split(",") if p.strip())
+    """``--modes pid,observer``: at least one mode, each once."""
+    modes = tuple(p.strip() for p in text.split(",") if p.strip())
+    if not modes or len(set(modes)) != len(modes):
+        raise argparse.ArgumentTypeError(f"expected a comma list of distinct modes (pid and the compensation modes), "
+                                         f"found {text!r}")
+    return modes
 
 
 def add_circle_flags(p) -> None:
@@ -43,6 +48,9 @@ def cmd_circle(args: argparse.Namespace) -> int:
     """Run the circle test and print one row per mode, feed and direction (``--json``: the rows)."""
     from ..sim.circle import circle_modes
 
+    if args.out is not None:  # the circle has no single trace to write
+        raise UsageError("obsdesign simulate circle: argument --out: not with circle (its rows: --json; its "
+                         "picture: --plot)")
     if args.config is None and args.preset is None:
         args.preset = "vcm"
     cfg = load(args).override(noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,

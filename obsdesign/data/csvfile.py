@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .._validate import MAX_CSV_BYTES, MAX_CSV_LINE
+
 __all__ = ["read_csv", "detect_delimiter", "DELIMITERS", "parse_delimiter"]
 
 #: Delimiter names accepted by ``--delimiter`` and ``load_trace(delimiter=...)``; ``space``: any whitespace.
@@ -84,6 +86,8 @@ def read_csv(path: Path, delimiter: str | None = None) -> dict[str, np.ndarray]:
     delimiter : str, optional
         The delimiter character (``' '``: any whitespace); default :func:`detect_delimiter`.
     """
+    if path.stat().st_size > MAX_CSV_BYTES:  # issue 36: sizes with a ceiling (and the next check)
+        raise ValueError(f"path: expected a CSV file of at most {MAX_CSV_BYTES} bytes, found {path.stat().st_size}")
     try:
         text = path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as e:
@@ -91,6 +95,10 @@ def read_csv(path: Path, delimiter: str | None = None) -> dict[str, np.ndarray]:
                          f"of {path.name!r}") from e
     lines = [(i + 1, line) for i, line in enumerate(text.splitlines())
              if line.strip() and not line.lstrip().startswith("#")]
+    no, line = max(lines, key=lambda item: len(item[1]), default=(0, ""))
+    if len(line) > MAX_CSV_LINE:
+        raise ValueError(f"path: expected CSV lines of at most {MAX_CSV_LINE} characters, found {len(line)} on line "
+                         f"{no} of {path.name!r}")
     if not lines:
         raise ValueError(f"path: expected a CSV file with a header row of column names, found no line that is "
                          f"neither empty nor a '#' comment in {path.name!r}")
