@@ -276,6 +276,8 @@ def check_margins(num_L, den_L, *, pm: float, wgc: float, gm: float, wpc: float 
     elif not (gm > 0):
         return f"a gain margin of {gm!r}"
     elif wpc is not None:
+        if not (math.isfinite(wpc) and wpc > 0):
+            return f"a gain margin of {gm:.6g} without a phase crossover"
         at = complex(L(wpc))
         if not (_close(abs(at), 1.0 / gm, 1e-5) and abs(at.imag) <= 1e-5 * abs(at) and at.real < 0):
             return f"its gain margin {gm:.6g} is not the loop's at {wpc:.6g} rad/s"

@@ -17,7 +17,7 @@ import numpy as np
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
 
 from .. import __version__, studies
-from .._memo import memo
+from .._memo import MemoWarning, memo
 from ..design import check_stability, noise_analysis, pid_from_config
 from ..design.pid import kept_response
 from ..params import Config
@@ -163,6 +163,7 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     bar.set_postfix_str(steps[1])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
+        warnings.simplefilter("default", MemoWarning)  # a refused memo entry is still said
         rep = check_stability(cfg)
     ctx["stability"] = rep
     ctx["eigen_svg"] = svg(_eigen_figure(rep.design))
