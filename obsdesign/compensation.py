@@ -133,7 +133,7 @@ class CompensationSpec:
     mode: str = param_field(Choice(COMPENSATION_MODES.names()), "-",
                             "what compensates: observer estimate, reference feed-forward or their blend", "observer")
     ff_stribeck: float = param_field(NONNEGATIVE_FORCE, "N", "feed-forward Stribeck force above Cf at rest", 0.0)
-    ff_stribeck_velocity: float = param_field(Range(low=0.0, high=MAX_SPEED, high_inclusive=True), "m/s",
+    ff_stribeck_velocity: float = param_field(Range(low=1e-9, high=MAX_SPEED, low_inclusive=True, high_inclusive=True), "m/s",
                                               "feed-forward Stribeck velocity", 1e-3)
     ff_offset: float = param_field(FORCE, "N", "feed-forward constant force", 0.0)
     lookahead: int = param_field(Integer(minimum=0, maximum=1_000_000), "samples",

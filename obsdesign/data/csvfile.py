@@ -104,6 +104,8 @@ def read_csv(path: Path, delimiter: str | None = None) -> dict[str, np.ndarray]:
                          f"neither empty nor a '#' comment in {path.name!r}")
     head_no, head = lines[0]
     body = lines[1:]
+    if not body:  # issue 36: numpy's loadtxt would warn (a UserWarning naming a StringIO) before the error
+        raise ValueError(f"path: expected rows of numbers below the header (line {head_no}), found none in {path.name!r}")
     found = delimiter is None
     if found:
         delimiter = detect_delimiter(head, body[0][1] if body else head)

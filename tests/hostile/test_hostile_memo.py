@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import stat
 import warnings
 
@@ -242,8 +243,8 @@ def _poison(memo_dir) -> int:
 
 @pytest.mark.slow
 def test_the_report_on_a_poisoned_memo_is_byte_identical_to_one_without(memo_dir, tmp_path, monkeypatch, cli):
-    """The issue's criterion: ``report`` built with the memo off, then on a memo whose every entry is poisoned
-    (about 90 s on the 2-core machine)."""
+    """The issue's criterion: ``report`` built with the memo off, then on a memo whose every entry is poisoned,
+    byte for byte but for the line with the date and wall time (about 3 min on the loaded 2-core machine)."""
     monkeypatch.setenv("OBSDESIGN_CACHE", "off")
     status, _, err = cli("report", "--no-paper-studies", "--no-circle", "--quiet", "-o", tmp_path / "off.html",
                          seconds=600)
@@ -256,9 +257,13 @@ def test_the_report_on_a_poisoned_memo_is_byte_identical_to_one_without(memo_dir
     status, _, err = cli("report", "--no-paper-studies", "--no-circle", "--quiet", "-o", tmp_path / "poisoned.html",
                          seconds=600)
     assert status == 0 and err and all("result memo" in line for line in err), err
-    off = (tmp_path / "off.html").read_bytes()
-    assert (tmp_path / "fill.html").read_bytes() == off
-    assert (tmp_path / "poisoned.html").read_bytes() == off
+    def page(name):  # the one line that differs between any two builds: the date and the wall time
+        return re.sub(rb"Generated [0-9-]+ by obsdesign \S+ in [0-9.]+ s\.", b"Generated", (tmp_path / name).read_bytes())
+
+    off = page("off.html")
+    assert off.count(b"Generated") == 1 and b"<math" in off
+    assert page("fill.html") == off
+    assert page("poisoned.html") == off
 
 
 def test_check_and_pid_do_not_hang_on_a_fifo(memo_dir, cli):
