@@ -13,14 +13,24 @@ libraries is most of a short command's time. This module keeps such a result on 
 
 Only pure functions of that key are kept. A hit returns exactly the value the computation returned
 (floats stored by their ``repr``, which round-trips every double), so outputs are identical with and
-without the memo; ``tests/test_memo.py`` compares each kept result with a fresh computation. The
-certificate's searched ``P`` is only a proposal: it is verified (NumPy) on every call, whatever its
-origin, so even an entry edited by hand cannot certify a design.
+without the memo; ``tests/test_memo.py`` compares each kept result with a fresh computation.
+
+Nothing read back is taken on trust (docs/cli.md, "The memo's trust model"); a failed check is a miss
+(computed again, rewritten) with one :class:`MemoWarning`:
+
+- the folder and its namespaces are created 0700 and used only if they are the user's own and not
+  writable by others; an entry is read only if it is a regular file (no FIFO, device, folder or symbolic
+  link) of at most :data:`MAX_ENTRY_BYTES`;
+- every entry is signed: HMAC-SHA-256 of its format, key and value under the folder's secret (a 0600 file
+  of 32 random bytes), so an entry edited, damaged, copied from elsewhere or written by another user is a miss;
+- on load the value must be what :func:`_encode` writes (a strict schema) and pass the caller's ``valid``
+  (its shape) and ``verify`` (a cheap re-verification against the inputs: margins, peaks, poles);
+- values are data, never markup (the report's derivation is a tree rendered with escaping every time).
+  The certificate's searched ``P`` is only a proposal: it is verified (NumPy) on every call.
 
 The folder is ``$OBSDESIGN_CACHE_DIR``, else ``$XDG_CACHE_HOME/obsdesign``, else
 ``~/.cache/obsdesign``; ``OBSDESIGN_CACHE=off`` turns the memo off. Entries are written atomically
-(temporary file, then rename); an unreadable, corrupt or unwritable entry is recomputed, never an
-error. ``obsdesign cache --clear`` is not needed: deleting the folder is always safe.
+(temporary file, then rename); an unwritable folder is never an error. Deleting the folder is always safe.
 
 Examples
 --------
