@@ -182,6 +182,8 @@ SPEED = Range(low=0.0, high=MAX_SPEED, low_inclusive=True, high_inclusive=True)
 FORCE = Range(low=-MAX_FORCE, high=MAX_FORCE, low_inclusive=True, high_inclusive=True)
 NONNEGATIVE_FORCE = Range(low=0.0, high=MAX_FORCE, low_inclusive=True, high_inclusive=True)
 DISTANCE = Range(low=0.0, high=MAX_DISTANCE, low_inclusive=True, high_inclusive=True)
+#: The PID's derivative filter ratio N (its time constant is (kd/kp)/N).
+DERIVATIVE_N = Range(low=0.1, high=1e4, low_inclusive=True, high_inclusive=True)
 #: A friction table's largest velocity [m/s or rad/s].
 V_MAX = Range(low=0.0, high=MAX_SPEED, high_inclusive=True)
 #: A drive's force per current [N/A or N m/A]: beyond 1e-6 to 1e6 the current column is a unit mistake.

@@ -233,7 +233,24 @@ def _verification(k: float, T_I: float, tau: float, phi: float) -> list:
 
 
 def loop_polynomials(k: float, T_I: float, tau: float, phi: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Numerator and denominator of ``L = C H`` and of ``H`` (coefficients in ``s``, highest first), NumPy only."""
+    """``L = C H`` of eq:Cpid and eq:linplant as polynomials in ``s`` (highest power first), NumPy only.
+
+    Parameters
+    ----------
+    k, T_I, tau, phi : float
+        Total gain [V/m], integrator time [s], plant time constant [s], plant gain [m/(V s)].
+
+    Returns
+    -------
+    (ndarray, ndarray, ndarray)
+        Numerator and denominator of ``L``, and the numerator of ``S = H / (1 + H C)`` over ``den_L + num_L``.
+
+    Examples
+    --------
+    >>> num, den, _ = loop_polynomials(400.0, 0.1, 0.01, 0.04)
+    >>> [float(c) for c in den]
+    [0.001, 0.1, 0.0, 0.0]
+    """
     num_C, den_C = np.array([k * tau * T_I, k * (tau + T_I), k]), np.array([T_I, 0.0])
     num_H, den_H = np.array([phi]), np.array([tau, 1.0, 0.0])
     return np.polymul(num_C, num_H), np.polymul(den_C, den_H), np.polymul(num_H, den_C)
@@ -250,6 +267,19 @@ def _close(a: float, b: float, rtol: float = _RTOL) -> bool:
 def check_margins(num_L, den_L, *, pm: float, wgc: float, gm: float, wpc: float | None = None) -> str | None:
     """Why kept margins are not those of the loop ``L = num_L / den_L`` (continuous), or ``None`` if they are.
 
+    Parameters
+    ----------
+    num_L, den_L : array_like
+        The loop's polynomials in ``s`` (highest power first).
+    pm, wgc : float
+        Kept phase margin [deg] and gain crossover [rad/s].
+    gm : float
+        Kept gain margin [-] (``inf``: none).
+    wpc : float, optional
+        Kept phase crossover [rad/s].
+
+    Notes
+    -----
     Cheap arithmetic (NumPy's ``polyval``), used when a result is read back from the result memo: at the
     kept gain crossover ``|L| = 1`` and ``180 + arg L`` is the kept phase margin; a finite gain margin is
     ``1 / |L|`` where the phase is -180 deg (at ``wpc`` when given, else at a phase crossover on a grid),
@@ -288,7 +318,24 @@ def check_margins(num_L, den_L, *, pm: float, wgc: float, gm: float, wpc: float 
 
 def check_peak(num, den, *, peak: float, w_peak: float, name: str) -> str | None:
     """Why a kept peak of ``|num / den|`` over frequency is wrong (its value at ``w_peak``, and no grid point
-    above it), or ``None``."""
+    above it), or ``None``.
+
+    Parameters
+    ----------
+    num, den : array_like
+        The system's polynomials in ``s`` (highest power first).
+    peak, w_peak : float
+        Kept peak magnitude and its frequency [rad/s].
+    name : str
+        The system's name, for the reason.
+
+    Examples
+    --------
+    >>> check_peak([1.0], [1.0, 1.0], peak=1.0, w_peak=1e-4, name="G") is None
+    True
+    >>> check_peak([1.0], [1.0, 1.0], peak=0.5, w_peak=1.0, name="G")
+    'its peak of |G| 0.5 is not |G| = 0.707107 at 1 rad/s'
+    """
     if not (math.isfinite(peak) and math.isfinite(w_peak) and w_peak > 0):
         return f"a peak of |{name}| of {peak!r} at {w_peak!r} rad/s"
     at = abs(np.polyval(num, 1j * w_peak) / np.polyval(den, 1j * w_peak))

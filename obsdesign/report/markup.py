@@ -98,6 +98,11 @@ def is_derivation_tree(tree) -> bool:
     plain values (the MathML namespace on ``math``); at most 50,000 nodes, 40 deep. Text is anything: it is
     escaped when rendered.
 
+    Parameters
+    ----------
+    tree : object
+        A value read from the result memo.
+
     Examples
     --------
     >>> is_derivation_tree(['table', [['class', 'd']], ['tr', [], ['td', [], '<!--> <img onerror=x>']]])

@@ -96,9 +96,9 @@ CASES = [
      "--points: expected an integer >= 2 and <= 1000"),
     # experiment
     ("name-int", (*EXPERIMENT, "--name", "int"), 2, "--name: expected an identifier that is no keyword"),
-    ("name-python", (*EXPERIMENT, "--name", "lambda"), 2, "a keyword of python"),
-    ("name-octave", (*EXPERIMENT, "--name", "endfunction"), 2, "a keyword of octave"),
-    ("name-js", (*EXPERIMENT, "--name", "debugger"), 2, "a keyword of js"),
+    ("name-python", (*EXPERIMENT, "--name", "lambda"), 2, "a keyword of Python"),
+    ("name-octave", (*EXPERIMENT, "--name", "endfunction"), 2, "a keyword of Octave/MATLAB"),
+    ("name-js", (*EXPERIMENT, "--name", "debugger"), 2, "a keyword of JavaScript"),
     ("name-reserved", (*EXPERIMENT, "--name", "__x"), 2, "reserved"),
     # simulate
     ("circle-modes-empty", ("simulate", "circle", "--modes", ""), 2, "--modes: expected a comma list"),
@@ -165,10 +165,10 @@ def test_the_keyword_lists_hold_every_keyword_of_the_running_python():
 
     from obsdesign.export.literals import KEYWORDS
 
-    assert set(keyword.kwlist) <= KEYWORDS["python"]
-    assert {"int", "return", "_Bool", "restrict"} <= KEYWORDS["c"]
-    assert {"end", "function", "endfunction", "unwind_protect"} <= KEYWORDS["octave"]
-    assert {"let", "yield", "await", "enum"} <= KEYWORDS["js"]
+    assert set(keyword.kwlist) <= KEYWORDS["Python"]
+    assert {"int", "return", "_Bool", "restrict"} <= KEYWORDS["C"]
+    assert {"end", "function", "endfunction", "unwind_protect"} <= KEYWORDS["Octave/MATLAB"]
+    assert {"let", "yield", "await", "enum"} <= KEYWORDS["JavaScript"]
 
 
 def test_the_ceilings_are_documented():
