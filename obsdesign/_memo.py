@@ -433,8 +433,8 @@ def memo(namespace: str, inputs: Any, compute: Callable[[], Any], valid: Callabl
         canonical = _canonical(encoded)
         folder = _folder(namespace, create=True)
         secret = _secret(cache_dir(), create=True)
-        if secret is None:
-            raise OSError("the memo's secret cannot be created")
+        if secret is None or folder is None:
+            raise OSError("the memo's folder or secret cannot be created")
         text = json.dumps({"format": _FORMAT, "key": key, "digest": _digest(key, canonical, secret), "value": encoded},
                           allow_nan=False)
         from ._io import atomic_write

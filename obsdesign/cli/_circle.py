@@ -35,7 +35,8 @@ def add_circle_flags(p) -> None:
     g.add_argument("--direction", choices=("ccw", "cw", "both"), default="ccw", help="direction (default ccw)")
     g.add_argument("--modes", type=_modes, help="compare: comma list of pid and the compensation modes "
                                                  "(observer, feedforward, blend); default the config's mode")
-    g.add_argument("--revolutions", type=integer(1), default=1, help="evaluated revolutions (default 1)")
+    g.add_argument("--revolutions", type=integer(1, 1000), default=1, help="evaluated revolutions, at most 1000 "
+                                                                         "(default 1)")
     g.add_argument("--lookahead", type=integer(0), help="feed-forward ramp before a reversal [samples] "
                                                         "([compensation] lookahead)")
     g.add_argument("--buildup", type=NONNEGATIVE_ARG, help="feed-forward build-up distance [m] ([compensation] buildup)")

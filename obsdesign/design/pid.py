@@ -338,7 +338,7 @@ def check_peak(num, den, *, peak: float, w_peak: float, name: str) -> str | None
     """
     if not (math.isfinite(peak) and math.isfinite(w_peak) and w_peak > 0):
         return f"a peak of |{name}| of {peak!r} at {w_peak!r} rad/s"
-    at = abs(np.polyval(num, 1j * w_peak) / np.polyval(den, 1j * w_peak))
+    at = float(abs(np.polyval(num, 1j * w_peak) / np.polyval(den, 1j * w_peak)))
     if not _close(at, peak):
         return f"its peak of |{name}| {peak:.6g} is not |{name}| = {at:.6g} at {w_peak:.6g} rad/s"
     grid = np.abs(np.polyval(num, 1j * _GRID) / np.polyval(den, 1j * _GRID)).max()
