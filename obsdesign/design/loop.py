@@ -200,7 +200,7 @@ def loop_analysis(cfg: Config | None = None, *, phi: float | None = None, tau: f
     TypeError
         ``cfg`` is not a Config.
     ValueError
-        An override is out of range, or ``delay_samples`` is not an integer >= 0.
+        An override is out of range, or ``delay_samples`` is not an integer in [0, 10000].
 
     Examples
     --------

@@ -146,6 +146,24 @@ def test_a_forged_loop_entry_is_re_verified(index, value, memo_dir):
             again.closed_loop_poles) == fresh
 
 
+@pytest.mark.parametrize("preset, delay", [("vcm", 0), ("table1", 2)])
+@pytest.mark.parametrize("index, value", [(1, 89.0), (0, 50.0), (5, 1.01), (7, 0.9), (12, [0.5 + 0j] * 5), (13, 0.1)])
+def test_a_forged_sampled_loop_entry_is_re_verified(preset, delay, index, value, memo_dir):
+    """The sampled margins ``loop`` prints, re-verified against ``L(exp(j w dt))`` of the closed-form ZOH plant."""
+    from obsdesign.design.sampled_loop import sampled_loop
+
+    cfg = od.load_preset(preset).override(delay_samples=delay)
+    fresh = sampled_loop(cfg).to_dict()
+    entry = _entry(memo_dir, "sampled_loop")
+    forged = _memo._strict_decode(json.loads(entry.read_text())["value"])
+    if index == 0 and not math.isfinite(forged[0]):
+        index, value = 3, 1.0  # no gain margin to forge: a phase crossover instead
+    forged[index] = value
+    _forge(entry, memo_dir, forged)
+    with pytest.warns(_memo.MemoWarning):
+        assert sampled_loop(cfg).to_dict() == fresh
+
+
 def test_an_entry_from_another_memo_folder_is_not_used(memo_dir, tmp_path, monkeypatch):
     """Entries signed by another folder's secret (copied from another machine or user) are misses."""
     cfg = od.load_preset("vcm")
