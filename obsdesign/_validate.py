@@ -162,6 +162,34 @@ FINITE = Range()
 SAMPLE_TIME = Range(low=1e-12, high=1.0, low_inclusive=True, high_inclusive=True)
 
 
+# Ceilings of sizes and counts (docs/cli.md, "Limits"): far beyond any precision axis, low enough that a
+# value past them is a unit or typing mistake, not a design, and that nothing allocates without bound.
+#: Largest speed [m/s, or rad/s on a rotary axis] a velocity parameter or table may hold.
+MAX_SPEED = 1e3
+#: Largest force [N, or N m] a compensation parameter may hold.
+MAX_FORCE = 1e6
+#: Largest distance [m] (a build-up, a stroke).
+MAX_DISTANCE = 1e3
+#: Largest computation or drive delay [samples] (1 s at 10 kHz); the delay line holds this many values.
+MAX_DELAY_SAMPLES = 10_000
+#: Most bootstrap replicates of ``identify`` (each refits every stage on a resampled record).
+MAX_BOOTSTRAP = 100_000
+#: Largest CSV record read [bytes] (held in memory as text, then as floats: about 3 times this).
+MAX_CSV_BYTES = 2**30
+#: Longest CSV line [characters] (a thousand columns of 100 characters); a longer one is not a record.
+MAX_CSV_LINE = 100_000
+SPEED = Range(low=0.0, high=MAX_SPEED, low_inclusive=True, high_inclusive=True)
+FORCE = Range(low=-MAX_FORCE, high=MAX_FORCE, low_inclusive=True, high_inclusive=True)
+NONNEGATIVE_FORCE = Range(low=0.0, high=MAX_FORCE, low_inclusive=True, high_inclusive=True)
+DISTANCE = Range(low=0.0, high=MAX_DISTANCE, low_inclusive=True, high_inclusive=True)
+#: The PID's derivative filter ratio N (its time constant is (kd/kp)/N).
+DERIVATIVE_N = Range(low=0.1, high=1e4, low_inclusive=True, high_inclusive=True)
+#: A friction table's largest velocity [m/s or rad/s].
+V_MAX = Range(low=0.0, high=MAX_SPEED, high_inclusive=True)
+#: A drive's force per current [N/A or N m/A]: beyond 1e-6 to 1e6 the current column is a unit mistake.
+MOTOR_CONSTANT = Range(low=1e-6, high=1e6, low_inclusive=True, high_inclusive=True)
+
+
 def check_choice(name: str, value: Any, options) -> str:
     """``value`` if it is one of ``options`` (strings), else a ``ValueError`` listing them."""
     options = tuple(options)

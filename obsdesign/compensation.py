@@ -44,7 +44,18 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from ._validate import FINITE, NONNEGATIVE, POSITIVE, Choice, Integer, Range, param_field, validate_fields
+from ._validate import (
+    DISTANCE,
+    FORCE,
+    MAX_SPEED,
+    NONNEGATIVE_FORCE,
+    SPEED,
+    Choice,
+    Integer,
+    Range,
+    param_field,
+    validate_fields,
+)
 from .sampled.choices import COMPENSATION_MODES
 
 __all__ = ["CompensationSpec", "Flag"]
@@ -118,15 +129,16 @@ class CompensationSpec:
     gain: float = param_field(Range(low=0.0, high=1.0, high_inclusive=True), "-",
                          "fraction of the friction estimate compensated", 1.0)
     viscous: bool = param_field(Flag(), "-", "add sigma * v_hat to the filtered estimate", False)
-    deadzone: float = param_field(NONNEGATIVE, "m/s", "compensation fades out below this |v_hat| (0: off)", 0.0)
+    deadzone: float = param_field(SPEED, "m/s", "compensation fades out below this |v_hat| (0: off)", 0.0)
     mode: str = param_field(Choice(COMPENSATION_MODES.names()), "-",
                             "what compensates: observer estimate, reference feed-forward or their blend", "observer")
-    ff_stribeck: float = param_field(NONNEGATIVE, "N", "feed-forward Stribeck force above Cf at rest", 0.0)
-    ff_stribeck_velocity: float = param_field(POSITIVE, "m/s", "feed-forward Stribeck velocity", 1e-3)
-    ff_offset: float = param_field(FINITE, "N", "feed-forward constant force", 0.0)
+    ff_stribeck: float = param_field(NONNEGATIVE_FORCE, "N", "feed-forward Stribeck force above Cf at rest", 0.0)
+    ff_stribeck_velocity: float = param_field(Range(low=1e-9, high=MAX_SPEED, low_inclusive=True, high_inclusive=True), "m/s",
+                                              "feed-forward Stribeck velocity", 1e-3)
+    ff_offset: float = param_field(FORCE, "N", "feed-forward constant force", 0.0)
     lookahead: int = param_field(Integer(minimum=0, maximum=1_000_000), "samples",
                                  "feed-forward ramp to zero before a reference reversal (0: off)", 0)
-    buildup: float = param_field(NONNEGATIVE, "m", "feed-forward build-up distance after a start (0: off)", 0.0)
+    buildup: float = param_field(DISTANCE, "m", "feed-forward build-up distance after a start (0: off)", 0.0)
     ff_presliding: bool = param_field(Flag(), "-",
                                       "feed-forward Coulomb term follows the pre-sliding curve of [friction] s", True)
 

@@ -35,8 +35,8 @@ from typing import Any, Mapping, NamedTuple
 
 from ._format import toml_value
 from ._io import atomic_write
-from ._validate import (FINITE, NONNEGATIVE, POSITIVE, SAMPLE_TIME, Choice, FrozenMap, Integer, Range, Text,
-                        document_fields, param_field, section_from_table, validate_fields)
+from ._validate import (DERIVATIVE_N, FINITE, MAX_DELAY_SAMPLES, NONNEGATIVE, POSITIVE, SAMPLE_TIME, Choice, FrozenMap,
+                        Integer, Range, Text, document_fields, param_field, section_from_table, validate_fields)
 from .axis import LINEAR, AxisSpec
 from .compensation import CompensationSpec
 from .plant_spec import PlantFrictionSpec
@@ -162,10 +162,10 @@ class PIDSpec:
         Range(low=0.0, optional=True), "m/(V s)", "plant gain of eq:linplant (default K tau / m)", None
     )
     derivative_N: float = param_field(
-        POSITIVE, "-", "derivative filter: time constant (kd/kp)/N in simulations", 10.0
+        DERIVATIVE_N, "-", "derivative filter: time constant (kd/kp)/N in simulations (0.1 to 1e4)", 10.0
     )
     delay_samples: int = param_field(
-        Integer(minimum=0), "samples", "computation delay: the command of sample n is applied from n + d", 0
+        Integer(minimum=0, maximum=MAX_DELAY_SAMPLES), "samples", "computation delay: the command of sample n is applied from n + d", 0
     )
 
     def __post_init__(self) -> None:

@@ -491,7 +491,7 @@ def test_controller_files_errors(args, kwargs, exc, match):
     ({"viscous": 1}, TypeError, "compensation.viscous: expected true or false, found int 1"),
     ({"deadzone": -1e-3}, ValueError, "compensation.deadzone: expected a finite number >= 0"),
     ({"deadzone": math.inf}, ValueError, "compensation.deadzone"),
-    ({"deadzone": True}, TypeError, "compensation.deadzone: expected a finite number >= 0, found bool True"),
+    ({"deadzone": True}, TypeError, "compensation.deadzone: expected a finite number >= 0 and <= 1000, found bool True"),
 ])
 def test_compensation_spec_errors(kwargs, exc, match):
     with pytest.raises(exc, match=match):

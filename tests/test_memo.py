@@ -11,7 +11,9 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import re
 import shutil
+import warnings
 
 import numpy as np
 import pytest
@@ -106,8 +108,9 @@ def test_a_broken_entry_is_a_miss(memo_dir):
     (entry,) = (memo_dir / "a").iterdir()
     for broken in ("{not json", json.dumps([1.0]), json.dumps({"__complex__": 3})):
         entry.write_text(broken)
-        assert _memo.memo("a", (2.0,), lambda: [1.0, 2.0], valid=_memo.list_of(2)) == [1.0, 2.0]
-    assert json.loads(entry.read_text()) == [1.0, 2.0]  # rewritten
+        with pytest.warns(_memo.MemoWarning, match="computed instead"):
+            assert _memo.memo("a", (2.0,), lambda: [1.0, 2.0], valid=_memo.list_of(2)) == [1.0, 2.0]
+    assert json.loads(entry.read_text())["value"] == [1.0, 2.0]  # rewritten
 
 
 def test_an_unwritable_folder_still_gives_the_value(tmp_path, monkeypatch):
@@ -131,6 +134,16 @@ def test_the_source_hash_sees_every_python_file_and_nothing_else(tmp_path):
     target = root / "design" / "pid.py"
     target.write_text(target.read_text() + "\n# an edit\n")
     assert _memo.source_hash(root) != before
+
+
+def _forge(entry, value) -> None:
+    """Replace an entry's value and sign it as the memo does (a forger who knows the format): only the
+    schema and the re-verification stand between it and the result."""
+    data = json.loads(entry.read_text())
+    data["value"] = _memo._encode(value)
+    secret = bytes.fromhex((entry.parent.parent / "secret").read_text())
+    data["digest"] = _memo._digest(data["key"], _memo._canonical(data["value"]), secret)
+    entry.write_text(json.dumps(data))
 
 
 def _fields(result) -> dict:
@@ -210,8 +223,9 @@ def test_kept_frequency_responses_are_python_control_s(preset, override, memo_di
             assert got.dtype == want.dtype and got.tobytes() == want.tobytes(), name
         assert kept_response(na, "G_friction_filtered", w).tobytes() == product.tobytes()
     for entry in (memo_dir / "frequency_response").iterdir():
-        entry.write_text(json.dumps([[1.0], [2.0]]))  # the wrong length: computed again
-    assert kept_response(la, "L", w).tobytes() == wants[1].tobytes()
+        entry.write_text(json.dumps([[1.0], [2.0]]))  # not an entry: computed again
+    with pytest.warns(_memo.MemoWarning):
+        assert kept_response(la, "L", w).tobytes() == wants[1].tobytes()
     with pytest.raises(ValueError, match="name: expected a system of LoopAnalysis, found 'K'"):
         kept_response(la, "K", w)
 
@@ -223,8 +237,10 @@ def test_a_tampered_search_result_cannot_certify_more(memo_dir):
     assert entries
     for bad in ([[1.0, 0.0], [0.0, -1.0]], [[1.0, 0.0], [0.0, 1e-300]], [[1.0, 5.0], [5.0, 26.0]], "x"):
         for e in entries:
-            e.write_text(json.dumps(bad))
-        got = certify(design)
+            _forge(e, bad)
+        with warnings.catch_warnings():  # a positive definite proposal is used (and verified), another warns
+            warnings.simplefilter("ignore", _memo.MemoWarning)
+            got = certify(design)
         assert got.verdict == honest.verdict and got.decay_rate <= honest.decay_rate * (1 + 1e-12)
         # whatever P came back, it proves the decay rate claimed, at both ends (balanced or not)
         A_lo, A_hi = design.matrices(0.0)[0], design.matrices(design.kappa)[0]
@@ -260,8 +276,9 @@ def test_the_kept_equal_noise_target_is_the_computed_one(preset, override, memo_
     assert (memo_dir / "reference_noise_rms").exists()
     assert _same(first, fresh) and _same(kept, fresh)
     for entry in (memo_dir / "reference_noise_rms").iterdir():
-        entry.write_text(json.dumps(-1.0))  # not a noise RMS: computed again
-    assert _same(reference_noise_rms(cfg), fresh)
+        _forge(entry, -1.0)  # not a noise RMS: computed again
+    with pytest.warns(_memo.MemoWarning):
+        assert _same(reference_noise_rms(cfg), fresh)
 
 
 def test_a_mis_shaped_riccati_entry_is_solved_again(memo_dir):
@@ -271,32 +288,31 @@ def test_a_mis_shaped_riccati_entry_is_solved_again(memo_dir):
     fresh = build_kalman(cfg, q=1e3)
     for bad in ([[1.0, 2.0], [3.0, 4.0]], "x", [[1.0, 2.0, "3"]] * 3, None):
         for entry in (memo_dir / "dlqe").iterdir():
-            entry.write_text(json.dumps(bad))
-        again = build_kalman(cfg, q=1e3)
+            _forge(entry, bad)
+        with pytest.warns(_memo.MemoWarning):
+            again = build_kalman(cfg, q=1e3)
         assert np.array_equal(again.Phi, fresh.Phi) and np.array_equal(again.g1, fresh.g1), bad
 
 
-HOSTILE = ["<table><tr><td><img src=x onerror=alert(1)></td></tr></table>",
-           "</table><script>alert(1)</script>",
-           '<table><tr><td><a href="javascript:alert(1)">x</a></td></tr></table>',
-           "<table><tr><td><math xmlns='http://evil'><mi>x</mi></math></td></tr></table>",
-           "<table><tr><td><mi style='background:url(http://x)'>x</mi></td></tr></table>",
-           "<table><tr><td><mi mathvariant='\"'>x</mi></td></tr></table><!DOCTYPE x>",
-           "<table><tr><td><mi>*/ \\\n''' \"\"\" </mi></td></tr></table><?php ?>"]
-
-
-def test_a_kept_derivation_is_embedded_only_if_it_is_the_table(memo_dir):
-    from obsdesign.report.markup import is_derivation_markup
+def test_a_kept_derivation_is_data_rendered_with_escaping(memo_dir, monkeypatch):
+    """The memo keeps the derivation as a tree; the page's markup is rendered from it every time, the same
+    with and without the memo, and a tree with an element outside the allowlist is derived again."""
+    from obsdesign.report.markup import derivation_tree, is_derivation_tree, render_derivation
     from obsdesign.report.page import derivation_markup
     from obsdesign.symbolic import derive
     from obsdesign.symbolic.printing import derivation_html
 
-    fresh = {v: derivation_html(derive(v)) for v in ("static", "lag")}
-    assert all(is_derivation_markup(text) for text in fresh.values())  # what the report writes passes
+    fresh = {v: render_derivation(derivation_tree(derivation_html(derive(v)))) for v in ("static", "lag")}
+    monkeypatch.setenv("OBSDESIGN_CACHE", "off")
+    assert derivation_markup("static") == fresh["static"]
+    monkeypatch.delenv("OBSDESIGN_CACHE")
     assert derivation_markup("static") == fresh["static"]  # computed and kept
-    (entry,) = (memo_dir / "derivation_html").iterdir()
-    for bad in HOSTILE:
-        assert not is_derivation_markup(bad), bad
-        entry.write_text(json.dumps(bad))
-        assert derivation_markup("static") == fresh["static"]  # derived again, not embedded
-        assert json.loads(entry.read_text()) == fresh["static"]  # and the entry rewritten
+    (entry,) = (memo_dir / "derivation_tree").iterdir()
+    kept = json.loads(entry.read_text())["value"]
+    assert is_derivation_tree(kept) and re.search(r"<[a-z/!?]", entry.read_text()) is None  # data, not markup
+    assert derivation_markup("static") == fresh["static"]  # read back
+    for bad in (["table", [], ["style", [], "td {display: none}"]], ["table", [["onclick", "x"]]], "<table>", []):
+        _forge(entry, bad)
+        with pytest.warns(_memo.MemoWarning, match="shape"):
+            assert derivation_markup("static") == fresh["static"]  # derived again, not embedded
+        assert json.loads(entry.read_text())["value"] == kept  # and the entry rewritten

@@ -121,8 +121,8 @@ def test_tune_identified_emps():
 
 @pytest.mark.parametrize("argv, match", [
     (["--objective", "speed"], "argument --objective: invalid choice: 'speed'"),
-    (["--delay-samples", "1.5"], "argument --delay-samples: expected an integer >= 0, found '1.5'"),
-    (["--delay-samples", "-1"], "argument --delay-samples: expected an integer >= 0, found '-1'"),
+    (["--delay-samples", "1.5"], "argument --delay-samples: expected an integer >= 0 and <= 10000, found '1.5'"),
+    (["--delay-samples", "-1"], "argument --delay-samples: expected an integer >= 0 and <= 10000, found '-1'"),
     (["-o", "x.txt"], "argument -o: expected a file ending in .toml"),
 ])
 def test_cli_bad_input(argv, match, capsys, tmp_path, monkeypatch):

@@ -19,7 +19,12 @@ def _feeds(text: str) -> tuple[float, ...]:
 
 
 def _modes(text: str) -> tuple[str, ...]:
-    return tuple(p.strip() for p in text.split(",") if p.strip())
+    """``--modes pid,observer``: at least one mode, each once."""
+    modes = tuple(p.strip() for p in text.split(",") if p.strip())
+    if not modes or len(set(modes)) != len(modes):
+        raise argparse.ArgumentTypeError(f"expected a comma list of distinct modes (pid and the compensation modes), "
+                                         f"found {text!r}")
+    return modes
 
 
 def add_circle_flags(p) -> None:
@@ -30,7 +35,8 @@ def add_circle_flags(p) -> None:
     g.add_argument("--direction", choices=("ccw", "cw", "both"), default="ccw", help="direction (default ccw)")
     g.add_argument("--modes", type=_modes, help="compare: comma list of pid and the compensation modes "
                                                  "(observer, feedforward, blend); default the config's mode")
-    g.add_argument("--revolutions", type=integer(1), default=1, help="evaluated revolutions (default 1)")
+    g.add_argument("--revolutions", type=integer(1, 1000), default=1, help="evaluated revolutions, at most 1000 "
+                                                                         "(default 1)")
     g.add_argument("--lookahead", type=integer(0), help="feed-forward ramp before a reversal [samples] "
                                                         "([compensation] lookahead)")
     g.add_argument("--buildup", type=NONNEGATIVE_ARG, help="feed-forward build-up distance [m] ([compensation] buildup)")
@@ -43,6 +49,9 @@ def cmd_circle(args: argparse.Namespace) -> int:
     """Run the circle test and print one row per mode, feed and direction (``--json``: the rows)."""
     from ..sim.circle import circle_modes
 
+    if args.out is not None:  # the circle has no single trace to write
+        raise UsageError("obsdesign simulate circle: argument --out: not with circle (its rows: --json; its "
+                         "picture: --plot)")
     if args.config is None and args.preset is None:
         args.preset = "vcm"
     cfg = load(args).override(noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,

@@ -56,16 +56,17 @@ FINITE_ARG = number(FINITE)
 PHASE_ARG = number(Range(low=0.0, high=90.0), " deg")
 
 
-def integer(minimum: int):
-    """An argparse type: an integer >= minimum."""
+def integer(minimum: int, maximum: int | None = None):
+    """An argparse type: an integer >= minimum (and <= maximum, a documented ceiling)."""
 
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
             value = minimum - 1
-        if value < minimum:
-            raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}, found {text!r}")
+        if value < minimum or (maximum is not None and value > maximum):
+            bound = f" and <= {maximum}" if maximum is not None else ""
+            raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}{bound}, found {text!r}")
         return value
 
     return parse

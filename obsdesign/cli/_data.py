@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from .._validate import MAX_BOOTSTRAP
 from ..params import preset_names
 from ..sampled.choices import SCHEDULES
 from ._dynamic import add_refine_flags, refine_from_args
@@ -134,10 +135,14 @@ def _pairs(args: argparse.Namespace, flag: str, items, parse) -> dict:
         try:
             if not sep or name not in names:
                 raise ValueError
-            out[name] = parse(text)
+            value = parse(text)
         except ValueError:
             raise UsageError(f"obsdesign {args.command}: argument {flag}: expected {form} with NAME one of "
                              f"{', '.join(names)}, found {item!r}") from None
+        if name in out:
+            raise UsageError(f"obsdesign {args.command}: argument {flag}: expected each parameter once, found "
+                             f"{name!r} twice")
+        out[name] = value
     return out
 
 
@@ -184,6 +189,10 @@ def _cmd_identify(args: argparse.Namespace) -> int:
                      seed=args.seed, input_timing=args.input_timing, filter_hz=args.filter_hz,
                      decimation=args.decimation)
     ident, refined = refine_from_args(args, trace, ident)
+    peak = ident.force_peak / abs(ident.input_gain) if ident.input_gain else 0.0
+    if args.u_max is not None and peak > args.u_max * (1 + 1e-9):
+        raise UsageError(f"obsdesign identify: argument --u-max: expected at least the log's peak |input| {peak:.6g} "
+                         f"(the actuator reached it: a wrong limit or unit?), found {args.u_max:g}")
     payload = dict(ident.to_dict(), **({"refinement": refined} if refined else {}))
     text = str(ident)
     try:
@@ -273,8 +282,9 @@ def add_commands(sub) -> None:
                    help="decimation factor of the fit's rows (default: the sampling rate / the cut-off, rounded)")
     p.add_argument("--u-max", type=POSITIVE_ARG, metavar="U",
                    help="the actuator limit in the input unit (default 1.2 x the log's peak, with a warning)")
-    p.add_argument("--bootstrap", type=integer(0), default=400, metavar="N",
-                   help="bootstrap replicates of the intervals (default 400; 0: 1.96 standard errors)")
+    p.add_argument("--bootstrap", type=integer(0, MAX_BOOTSTRAP), default=400, metavar="N",
+                   help="bootstrap replicates of the intervals, at most 100000 (default 400; 0: 1.96 standard "
+                        "errors)")
     p.add_argument("--seed", type=integer(0), default=0, help="seed of the bootstrap (default 0)")
     p.add_argument("--input-timing", choices=INPUT_TIMINGS, default="sample",
                    help="hold: the logged input is held until the next sample (a sampled controller's output); "

@@ -30,11 +30,13 @@ def _cmd_derive(args: argparse.Namespace) -> int:
 def _cmd_check(args: argparse.Namespace) -> int:
     import warnings
 
+    from .._memo import MemoWarning
     from ..design import check_stability
 
     cfg = load(args)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # reported in the output instead
+        warnings.simplefilter("default", MemoWarning)  # a refused memo entry is still said
         with finite_design(args, ("rho", "kappa")):
             report = check_stability(cfg)
     emit(args, report, report.to_dict(), units=cfg.units)

@@ -54,13 +54,15 @@ def refine_from_args(args: argparse.Namespace, trace, ident):
 
 
 def _cmd_experiment(args: argparse.Namespace) -> int:
-    from ..data.experiment import C_NAME, design_experiment
+    from ..data.experiment import design_experiment
+    from ..export.literals import check_identifier
 
     check_output_file("experiment", "--csv", args.csv, (".csv",))
     check_output_file("experiment", "--c", args.c, (".c", ".h"))
-    if not C_NAME.match(args.name):
-        raise UsageError(f"obsdesign experiment: argument --name: expected a C identifier (a letter or _, then "
-                         f"letters, digits or _, at most 63), found {args.name!r}")
+    try:
+        check_identifier("--name", args.name)
+    except ValueError as e:
+        raise UsageError(f"obsdesign experiment: argument {e}") from None
     try:
         exp = design_experiment(stroke=args.stroke, speed=args.speed, force=args.force, mass=args.mass, dt=args.dt,
                                 travel=args.travel, resolution=args.resolution, levels=args.levels,

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 
+from .._validate import MAX_DELAY_SAMPLES
 from ._common import POSITIVE_ARG, add_config_flags, check_output_file, emit, finite_design, integer, load
 
 __all__ = ["add_commands"]
@@ -45,7 +46,7 @@ def add_commands(sub) -> None:
     add_config_flags(p, default_preset="vcm")
     p.add_argument("--phi", type=POSITIVE_ARG, help="override the plant gain phi [m/(V s)] of eq:linplant (> 0)")
     p.add_argument("--tau", type=POSITIVE_ARG, help="override the plant time constant tau [s] of eq:linplant (> 0)")
-    p.add_argument("--delay", type=integer(0), metavar="N",
+    p.add_argument("--delay", type=integer(0, MAX_DELAY_SAMPLES), metavar="N",
                    help="computation delay of the sampled loop [samples] (integer >= 0; default pid.delay_samples)")
     p.add_argument("--json", action="store_true",
                    help="print one JSON object (continuous: gain_margin_db, phase_margin_deg, crossover_rad_s, max_S, "

@@ -173,6 +173,10 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     finally:
         if client is not None:
             client.close()
+    failed = [row for row in res.rows if row.get("status") == "failed"]
+    if res.rows and len(failed) == len(res.rows):  # nothing to summarise: say why, exit 2 (bad input)
+        raise UsageError(f"obsdesign sweep: all {len(failed)} runs failed; the first (run {failed[0]['run']}): "
+                         f"{failed[0]['error']} (rows in {str(out / 'results.csv')!r})")
     from ..report.figures import save_figure  # matplotlib: only once there is something to draw
     from ..report.sweep_figures import sweep_distribution_figure, sweep_map_figure
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from .._validate import FINITE, parse_number
-from ._common import POSITIVE_ARG, UsageError, integer
+from .._validate import FINITE, MOTOR_CONSTANT, V_MAX, parse_number
+from ._common import UsageError, integer, number
 
 __all__ = ["add_table_flags", "table_options"]
 
@@ -20,11 +20,13 @@ def _velocities(text: str) -> tuple[float, ...]:
 def add_table_flags(p) -> None:
     """Add the table's flags to the ``export`` parser ``p``."""
     g = p.add_argument_group("friction table (--what friction-table)")
-    g.add_argument("--points", type=integer(2), help="breakpoints, placed to bound the interpolation error "
-                                                     "(default 20)")
+    g.add_argument("--points", type=integer(2, 1000), help="breakpoints, placed to bound the interpolation error "
+                                                           "(2 to 1000, default 20)")
     g.add_argument("--velocities", type=_velocities, help="the breakpoints [m/s] instead, a comma list from 0")
-    g.add_argument("--v-max", type=POSITIVE_ARG, help="largest velocity [m/s] (default the axis's)")
-    g.add_argument("--motor-constant", type=POSITIVE_ARG, help="force per current [N/A]: adds the current column")
+    g.add_argument("--v-max", type=number(V_MAX, " m/s"), help="largest velocity [m/s], at most 1e3 (default the "
+                                                             "axis's)")
+    g.add_argument("--motor-constant", type=number(MOTOR_CONSTANT, " N/A"), help="force per current [N/A], 1e-6 to "
+                                                                             "1e6: adds the current column")
 
 
 def table_options(args: argparse.Namespace) -> dict | None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ._common import POSITIVE_ARG, add_config_flags, check_output_file, emit, integer, load, number
-from .._validate import Range
+from .._validate import MAX_DELAY_SAMPLES, Range
 from ..design.objectives import OBJECTIVES, TRACKING_SCENARIOS
 
 __all__ = ["add_commands"]
@@ -38,7 +38,8 @@ def add_commands(sub) -> None:
     p.add_argument("--min-phase-margin", type=number(Range(low=0.0, high=180.0, low_inclusive=True), " deg"),
                    help="least phase margin [deg] of the sampled loop with the compensation (incl. the delay)")
     p.add_argument("--max-command-noise", type=POSITIVE_ARG, help="largest RMS [V] of the command from sensor noise")
-    p.add_argument("--delay-samples", type=integer(0), help="override the computation delay [samples] (integer >= 0)")
+    p.add_argument("--delay-samples", type=integer(0, MAX_DELAY_SAMPLES),
+                   help="override the computation delay [samples] (0 to 10000)")
     p.add_argument("--reversal-rate", type=POSITIVE_ARG, help="reversals per second of the lag model (default 1)")
     p.add_argument("--keep-gain", action="store_true", help="keep the config's compensation gain")
     p.add_argument("-o", "--output", metavar="FILE", help="write the tuned config (.toml)")

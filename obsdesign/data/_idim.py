@@ -6,9 +6,10 @@ import math
 
 import numpy as np
 
+from .._validate import MAX_BOOTSTRAP
 from .trace import MIN_SAMPLES
 
-__all__ = ["check_int", "ols", "implausible", "quantization", "time_window", "positive_number", "second_difference"]
+__all__ = ["MAX_BOOTSTRAP", "check_int", "ols", "implausible", "quantization", "time_window", "positive_number", "second_difference"]
 
 
 def second_difference(x: np.ndarray, dt: float) -> np.ndarray:
@@ -38,9 +39,9 @@ def second_difference(x: np.ndarray, dt: float) -> np.ndarray:
     return a
 
 
-def check_int(name: str, value: object, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise ValueError(f"{name}: expected an integer >= {low}, found {value!r}")
+def check_int(name: str, value: object, low: int, high: int | None = None) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low or (high and value > high):
+        raise ValueError(f"{name}: expected an integer >= {low}{f' and <= {high}' if high else ''}, found {value!r}")
     return int(value)
 
 

@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._validate import MAX_CSV_BYTES, MAX_CSV_LINE
 from .logfile import Channel, FileRefused, LogFile
 
 __all__ = ["read_csv", "detect_delimiter", "DELIMITERS", "parse_delimiter", "DECIMALS", "parse_decimal"]
@@ -206,9 +207,15 @@ def read_csv(path: Path, delimiter: str | None = None, decimal: str | None = Non
         ``format`` ``'CSV'``; ``metadata``: the header block's ``Key;Value`` lines and ``encoding``,
         ``delimiter``, ``decimal``.
     """
+    if path.stat().st_size > MAX_CSV_BYTES:  # issue 36: sizes with a ceiling (and the line check below)
+        raise FileRefused(f"path: expected a CSV file of at most {MAX_CSV_BYTES} bytes, found {path.stat().st_size}")
     text, encoding = _decode(path)
     lines = [(i + 1, line) for i, line in enumerate(text.splitlines())
              if line.strip() and not line.lstrip().startswith("#")]
+    no, line = max(lines, key=lambda item: len(item[1]), default=(0, ""))
+    if len(line) > MAX_CSV_LINE:
+        raise FileRefused(f"path: expected CSV lines of at most {MAX_CSV_LINE} characters, found {len(line)} on line "
+                         f"{no} of {path.name!r}")
     if not lines:
         raise FileRefused(f"path: expected a CSV file with a header row of column names, found no line that is "
                           f"neither empty nor a '#' comment in {path.name!r}")

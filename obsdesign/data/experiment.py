@@ -107,7 +107,8 @@ class Experiment:
         Parameters
         ----------
         name : str
-            The array's name: a C identifier (:data:`C_NAME`), so no other user text reaches the file.
+            The array's name: a C identifier that is no keyword of an export language
+            (:func:`obsdesign.export.literals.check_identifier`), so no other user text reaches the file.
 
         Examples
         --------
@@ -117,9 +118,9 @@ class Experiment:
         ...
         ValueError: name: expected a C identifier (a letter or _, then letters, digits or _, at most 63), found 'x;y'
         """
-        if not isinstance(name, str) or not C_NAME.match(name):
-            raise ValueError(f"name: expected a C identifier (a letter or _, then letters, digits or _, at most 63), "
-                             f"found {name!r}")
+        from ..export.literals import check_identifier
+
+        check_identifier("name", name)  # no keyword of C (nor of the other export languages)
         body = ",\n".join("  " + ", ".join(f"{v:.12g}" for v in self.x_ref[i:i + 6])
                           for i in range(0, self.x_ref.size, 6))
         return (f"/* identification experiment: {self.x_ref.size} samples at dt = {self.dt:.9g} s, "

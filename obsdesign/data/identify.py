@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._idim import check_int, implausible, positive_number, quantization, second_difference, time_window
+from ._idim import MAX_BOOTSTRAP, check_int, implausible, positive_number, quantization, second_difference, time_window
 from .choices import INPUT_TIMINGS, STRIBECK_CHOICES
 from .cutoff import choose_filter
 from .estimate import NO_INTERVAL_REASON, cautions, estimate
@@ -324,7 +324,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     window : (float, float), optional
         Only the samples with ``t0 <= t <= t1`` [s].
     n_boot : int
-        Bootstrap replicates of the intervals (0: intervals of 1.96 standard errors).
+        Bootstrap replicates of the intervals, at most 100,000 (0: intervals of 1.96 standard errors).
     seed : int
         Seed of the bootstrap.
     input_timing : {'sample', 'hold'}
@@ -404,7 +404,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     both = sorted(set(fix) & set(bounds))
     if both:
         raise ValueError(f"fix, bounds: expected a parameter either fixed or bounded, found {both[0]!r} in both")
-    n_boot, seed = check_int("n_boot", n_boot, 0), check_int("seed", seed, 0)
+    n_boot, seed = check_int("n_boot", n_boot, 0, MAX_BOOTSTRAP), check_int("seed", seed, 0)
     dt = trace.sample_time
     fs = 1.0 / dt
     position, force, span = time_window(trace, window)

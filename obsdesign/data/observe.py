@@ -219,6 +219,11 @@ def _matching_config(cfg: Config, trace: Trace) -> Config:
             f"(within {DT_TOLERANCE:g} relative), found {dt:.9g} s; the trace's sample time wins (the observer "
             f"runs at the rate the data were sampled): set dt = {trace.sample_time:.9g} in the config's "
             f"[observer] table (cfg.override(dt={trace.sample_time:.9g}))")
+    log, axis = ("rotary" if trace.units.rotary else "linear"), ("rotary" if cfg.units.rotary else "linear")
+    if log != axis:  # the same numbers in other units (kg and kg m^2, N and N m): a wrong config, not a design
+        raise ValueError(f"cfg: expected a {log} axis as the trace's units say ({trace.units.position}), found a "
+                         f"{axis} config; give a config with [axis] kind = {log!r} (identify ... -o FILE.toml "
+                         "writes one)")
     return cfg
 
 
@@ -249,7 +254,8 @@ def observe(cfg: "Config | SampledController", trace: Trace, *, stiffness: str |
     TypeError
         If ``cfg`` is not a Config or SampledController, or ``trace`` not a Trace.
     ValueError
-        If the sample times differ or the schedule is unknown.
+        If the sample times differ, the trace's axis (linear or rotary) is not the config's, or the
+        schedule is unknown.
 
     Notes
     -----

@@ -141,6 +141,10 @@ def _build(ident, *, name, K, u_max, rho, presliding_window):
     else:
         if isinstance(u_max, bool) or not isinstance(u_max, (int, float)) or not (math.isfinite(u_max) and u_max > 0):
             raise ValueError(f"u_max: expected the actuator limit > 0 [{unit_in}], found {u_max!r}")
+        peak = ident.force_peak / gain
+        if peak > u_max * (1 + 1e-9):  # the log went beyond the limit: a wrong limit, unit or gain
+            raise ValueError(f"u_max: expected at least the log's peak |input| {peak:.6g} {unit_in} (the actuator "
+                             f"reached it), found {u_max!r}")
         u_max_rule = "the actuator limit given"
     if isinstance(rho, bool) or not isinstance(rho, (int, float)) or not rho > 1:
         raise ValueError(f"rho: expected a finite number > 1 (stable observer), found {rho!r}")

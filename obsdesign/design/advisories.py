@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import warnings
 
+from .._memo import MemoWarning
 from ..params import Config
 import numpy as np
 
@@ -51,6 +52,7 @@ def design_warnings(cfg: Config) -> tuple[str, ...]:
     """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # returned instead
+        warnings.simplefilter("default", MemoWarning)  # a refused memo entry is still said
         report = check_stability(cfg, search=False)  # the verdicts only: no search for the best P
     notes = list(report.warnings)
     failed = report.failed()

@@ -43,9 +43,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._memo import list_of, memo
+from .._memo import memo
 from ..params import Config, load_preset
-from .pid import PIDDesign, design_pid, kept_response, lazy_system, peak_magnitude
+from .pid import PIDDesign, check_margins, check_peak, design_pid, kept_response, lazy_system, loop_polynomials, peak_magnitude
 from .sampled_loop import SampledLoop, sampled_loop
 from .._display import ResultDisplay
 
@@ -200,7 +200,7 @@ def loop_analysis(cfg: Config | None = None, *, phi: float | None = None, tau: f
     TypeError
         ``cfg`` is not a Config.
     ValueError
-        An override is out of range, or ``delay_samples`` is not an integer >= 0.
+        An override is out of range, or ``delay_samples`` is not an integer in [0, 10000].
 
     Examples
     --------
@@ -215,7 +215,8 @@ def loop_analysis(cfg: Config | None = None, *, phi: float | None = None, tau: f
     cfg = cfg.override(phi=phi, tau=tau, delay_samples=delay_samples)
     pid = design_pid(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S, phase_margin_deg=cfg.pid.phase_margin_deg)
     gm, pm, wpc, wgc, max_S, w_S, max_T, w_T, poles, bandwidth = memo(
-        "loop", (pid.k, pid.T_I, pid.tau, pid.phi), lambda: _numbers(pid), valid=list_of(10))
+        "loop", (pid.k, pid.T_I, pid.tau, pid.phi), lambda: _numbers(pid), valid=_is_loop_numbers,
+        verify=lambda value: _verify(pid, value))
     sampled = sampled_loop(cfg)
     return LoopAnalysis(
         gain_margin_db=20.0 * math.log10(gm) if math.isfinite(gm) else math.inf,
@@ -224,6 +225,33 @@ def loop_analysis(cfg: Config | None = None, *, phi: float | None = None, tau: f
         bandwidth_rad_s=bandwidth, closed_loop_poles=tuple(poles),
         delay_margin_s=math.radians(pm) / wgc, max_CS=math.inf, sampled=sampled, pid=pid,
     )
+
+
+def _is_loop_numbers(value) -> bool:
+    return (isinstance(value, list) and len(value) == 10 and all(isinstance(value[i], float) for i in (0, 1, 2, 3, 4,
+            5, 6, 7, 9)) and isinstance(value[8], list) and all(isinstance(p, complex) for p in value[8]))
+
+
+def _verify(pid: PIDDesign, value: list) -> str | None:
+    """Why kept loop numbers are not those of the PID's loop (NumPy arithmetic), or ``None``."""
+    gm, pm, wpc, wgc, max_S, w_S, max_T, w_T, poles, bandwidth = value
+    num_L, den_L, _ = loop_polynomials(*pid._system_args())
+    char = np.polyadd(den_L, num_L)
+    why = (check_margins(num_L, den_L, pm=pm, wgc=wgc, gm=gm, wpc=wpc if math.isfinite(gm) else None)
+           or check_peak(den_L, char, peak=max_S, w_peak=w_S, name="S")
+           or check_peak(num_L, char, peak=max_T, w_peak=w_T, name="T"))
+    if why is not None:
+        return why
+    roots = sorted((complex(r) for r in np.roots(char)), key=lambda p: (p.real, p.imag))
+    scale = max(abs(r) for r in roots)
+    if len(roots) != len(poles) or any(abs(a - b) > 1e-6 * scale for a, b in zip(roots, poles)):
+        return "its closed-loop poles are not the roots of the characteristic polynomial"
+    if math.isfinite(bandwidth):
+        dc = abs(num_L[-1] / char[-1]) if char[-1] else 1.0
+        at = abs(np.polyval(num_L, 1j * bandwidth) / np.polyval(char, 1j * bandwidth))
+        if abs(20.0 * math.log10(at / dc) - _HALF_POWER_DB) > 1e-3:
+            return f"its bandwidth {bandwidth:.6g} rad/s is not where |T| is 3 dB down"
+    return None
 
 
 def _systems(pid: PIDDesign) -> dict:

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._display import ResultDisplay
-from .._memo import list_of, memo
+from .._memo import memo
 from .._validate import NONNEGATIVE, POSITIVE, Range
 from ..params import Config
 
@@ -34,7 +34,7 @@ if TYPE_CHECKING:
     import control as ct
 
 __all__ = ["PIDDesign", "design_pid", "pid_gains", "pid_from_config", "pid_from_gains", "peak_magnitude",
-           "lazy_system", "kept_response"]
+           "lazy_system", "kept_response", "loop_polynomials", "check_margins", "check_peak"]
 
 
 class lazy_system:  # noqa: N801 (used like property)
@@ -232,9 +232,145 @@ def _verification(k: float, T_I: float, tau: float, phi: float) -> list:
     return [peak, w_peak, float(pm), float(gm), float(wgc), bool(np.all(np.real(ct.poles(sys["S"])) < 0))]
 
 
+def loop_polynomials(k: float, T_I: float, tau: float, phi: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``L = C H`` of eq:Cpid and eq:linplant as polynomials in ``s`` (highest power first), NumPy only.
+
+    Parameters
+    ----------
+    k, T_I, tau, phi : float
+        Total gain [V/m], integrator time [s], plant time constant [s], plant gain [m/(V s)].
+
+    Returns
+    -------
+    (ndarray, ndarray, ndarray)
+        Numerator and denominator of ``L``, and the numerator of ``S = H / (1 + H C)`` over ``den_L + num_L``.
+
+    Examples
+    --------
+    >>> num, den, _ = loop_polynomials(400.0, 0.1, 0.01, 0.04)
+    >>> [float(c) for c in den]
+    [0.001, 0.1, 0.0, 0.0]
+    """
+    num_C, den_C = np.array([k * tau * T_I, k * (tau + T_I), k]), np.array([T_I, 0.0])
+    num_H, den_H = np.array([phi]), np.array([tau, 1.0, 0.0])
+    return np.polymul(num_C, num_H), np.polymul(den_C, den_H), np.polymul(num_H, den_C)
+
+
+_GRID = np.logspace(-4, 6, 801)
+_RTOL = 1e-6
+
+
+def _close(a: float, b: float, rtol: float = _RTOL) -> bool:
+    return bool(abs(a - b) <= rtol * max(abs(a), abs(b), 1e-300))
+
+
+def check_margins(num_L, den_L, *, pm: float, wgc: float, gm: float, wpc: float | None = None) -> str | None:
+    """Why kept margins are not those of the loop ``L = num_L / den_L`` (continuous), or ``None`` if they are.
+
+    Parameters
+    ----------
+    num_L, den_L : array_like
+        The loop's polynomials in ``s`` (highest power first).
+    pm, wgc : float
+        Kept phase margin [deg] and gain crossover [rad/s].
+    gm : float
+        Kept gain margin [-] (``inf``: none).
+    wpc : float, optional
+        Kept phase crossover [rad/s].
+
+    Notes
+    -----
+    Cheap arithmetic (NumPy's ``polyval``), used when a result is read back from the result memo: at the
+    kept gain crossover ``|L| = 1`` and ``180 + arg L`` is the kept phase margin; a finite gain margin is
+    ``1 / |L|`` where the phase is -180 deg (at ``wpc`` when given, else at a phase crossover on a grid),
+    an infinite one means the grid holds no phase crossover.
+    """
+    def L(w):
+        jw = 1j * np.asarray(w, dtype=float)
+        return np.polyval(num_L, jw) / np.polyval(den_L, jw)
+
+    if math.isfinite(wgc) and wgc > 0:
+        at = complex(L(wgc))
+        if not _close(abs(at), 1.0, 1e-5):
+            return f"its gain crossover {wgc:.6g} rad/s has |L| = {abs(at):.6g}, not 1"
+        phase = (180.0 + math.degrees(math.atan2(at.imag, at.real))) % 360.0
+        if not (_close(phase, pm % 360.0, 1e-5) or abs(phase - pm % 360.0) > 360.0 - 1e-6):
+            return f"its phase margin {pm:.6g} deg is not the loop's {phase:.6g} deg at {wgc:.6g} rad/s"
+    elif math.isfinite(pm):
+        return f"a phase margin of {pm:.6g} deg without a gain crossover"
+    values = L(_GRID)
+    crossing = (values.imag[:-1] * values.imag[1:] <= 0) & (values.real[:-1] < 0)
+    if math.isinf(gm):
+        if gm < 0 or crossing.any():
+            return "an infinite gain margin although the phase crosses -180 deg"
+    elif not (gm > 0):
+        return f"a gain margin of {gm!r}"
+    elif wpc is not None:
+        if not (math.isfinite(wpc) and wpc > 0):
+            return f"a gain margin of {gm:.6g} without a phase crossover"
+        at = complex(L(wpc))
+        if not (_close(abs(at), 1.0 / gm, 1e-5) and abs(at.imag) <= 1e-5 * abs(at) and at.real < 0):
+            return f"its gain margin {gm:.6g} is not the loop's at {wpc:.6g} rad/s"
+    elif not crossing.any():
+        return f"a gain margin of {gm:.6g} although the phase never crosses -180 deg"
+    return None
+
+
+def check_peak(num, den, *, peak: float, w_peak: float, name: str) -> str | None:
+    """Why a kept peak of ``|num / den|`` over frequency is wrong (its value at ``w_peak``, and no grid point
+    above it), or ``None``.
+
+    Parameters
+    ----------
+    num, den : array_like
+        The system's polynomials in ``s`` (highest power first).
+    peak, w_peak : float
+        Kept peak magnitude and its frequency [rad/s].
+    name : str
+        The system's name, for the reason.
+
+    Examples
+    --------
+    >>> check_peak([1.0], [1.0, 1.0], peak=1.0, w_peak=1e-4, name="G") is None
+    True
+    >>> check_peak([1.0], [1.0, 1.0], peak=0.5, w_peak=1.0, name="G")
+    'its peak of |G| 0.5 is not |G| = 0.707107 at 1 rad/s'
+    """
+    if not (math.isfinite(peak) and math.isfinite(w_peak) and w_peak > 0):
+        return f"a peak of |{name}| of {peak!r} at {w_peak!r} rad/s"
+    at = float(abs(np.polyval(num, 1j * w_peak) / np.polyval(den, 1j * w_peak)))
+    if not _close(at, peak):
+        return f"its peak of |{name}| {peak:.6g} is not |{name}| = {at:.6g} at {w_peak:.6g} rad/s"
+    grid = np.abs(np.polyval(num, 1j * _GRID) / np.polyval(den, 1j * _GRID)).max()
+    if grid > peak * (1 + _RTOL):
+        return f"its peak of |{name}| {peak:.6g} is below |{name}| = {grid:.6g} elsewhere"
+    return None
+
+
+def _verify(args: tuple):
+    """The re-verification of a kept ``pid`` entry (see :func:`obsdesign._memo.memo`)."""
+    def verify(value) -> str | None:
+        num_L, den_L, num_S = loop_polynomials(*args)
+        peak, w_peak, pm, gm, wgc, stable = value
+        char = np.polyadd(den_L, num_L)
+        why = (check_margins(num_L, den_L, pm=pm, wgc=wgc, gm=gm)
+               or check_peak(num_S, char, peak=peak, w_peak=w_peak, name="S"))
+        if why is None and stable != bool(np.all(np.roots(char).real < 0)):
+            why = f"it says the closed loop is {'stable' if stable else 'unstable'}; its poles say otherwise"
+        return why
+
+    return verify
+
+
+def _is_pid_numbers(value) -> bool:
+    return (isinstance(value, list) and len(value) == 6 and all(isinstance(x, float) for x in value[:5])
+            and isinstance(value[5], bool))
+
+
 def _build(k: float, T_I: float, tau: float, phi: float, phase_margin_deg: float) -> PIDDesign:
     args = (k, T_I, tau, phi)
-    peak, w_peak, pm, gm, wgc, stable = memo("pid", args, lambda: _verification(*args), valid=list_of(6))
+    peak, w_peak, pm, gm, wgc, stable = memo("pid", args, lambda: _verification(*args), valid=_is_pid_numbers,
+                                             verify=_verify(args))
     return PIDDesign(
         k=k, T_I=T_I, tau=tau, phi=phi, kp=k * (T_I + tau) / T_I, ki=k / T_I, kd=k * tau,  # eq:PIDparams
         phase_margin_deg=phase_margin_deg, omega_s=math.tan(math.radians(phase_margin_deg)) / T_I,

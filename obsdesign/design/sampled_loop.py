@@ -46,7 +46,7 @@ import numpy as np
 
 from .._display import ResultDisplay
 from .._memo import list_of, memo
-from .._validate import POSITIVE, check_integer
+from .._validate import MAX_DELAY_SAMPLES, POSITIVE, check_integer
 from ..params import Config
 from .pid import lazy_system, pid_gains
 
@@ -313,7 +313,7 @@ def sampled_loop(cfg: Config, *, delay_samples: int | None = None) -> SampledLoo
     TypeError
         ``cfg`` is not a Config.
     ValueError
-        ``delay_samples`` is not an integer >= 0.
+        ``delay_samples`` is not an integer in [0, 10000].
 
     Examples
     --------
@@ -321,17 +321,19 @@ def sampled_loop(cfg: Config, *, delay_samples: int | None = None) -> SampledLoo
     >>> sampled_loop(od.load_preset("vcm"), delay_samples=-1)
     Traceback (most recent call last):
     ...
-    ValueError: delay_samples: expected an integer >= 0, found -1
+    ValueError: delay_samples: expected an integer >= 0 and <= 10000, found -1
     """
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
-    d = cfg.pid.delay_samples if delay_samples is None else check_integer("delay_samples", delay_samples, minimum=0)
+    d = cfg.pid.delay_samples if delay_samples is None else check_integer("delay_samples", delay_samples, minimum=0,
+                                                                                      maximum=MAX_DELAY_SAMPLES)
     dt, N = cfg.observer.dt, cfg.pid.derivative_N
     _, _, kp, ki, kd = pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
                                  phase_margin_deg=cfg.pid.phase_margin_deg)
     tau_d = kd / kp / N  # as obsdesign.sampled.controller.sampled_controller
     args = (kp, ki, kd, tau_d, dt, cfg.phi, cfg.pid.tau, d)
-    numbers = memo("sampled_loop", args, lambda: _numbers(*args), valid=list_of(17))
+    numbers = memo("sampled_loop", args, lambda: _numbers(*args), valid=list_of(17),
+                   verify=lambda value: _verify(args, value))
     gm, pm, wgc, wpc, dm, max_S, w_S, max_T, w_T, max_PS, max_CS, w_CS, poles, rmax, over, rise, settle = numbers
     return SampledLoop(
         dt=dt, delay_samples=d, derivative_N=N, gain_margin=gm,
@@ -353,6 +355,53 @@ def _systems(kp, ki, kd, tau_d, dt, phi, tau, d) -> dict:
     one = ct.tf([1.0], [1.0], dt)
     return {"C": C, "H": H, "L": L, "S": ct.feedback(one, L), "T": ct.feedback(L, one), "PS": ct.feedback(H, Cd),
             "CS": ct.feedback(Cd, H)}
+
+
+def _loop_polynomials(kp, ki, kd, tau_d, dt, phi, tau, d) -> tuple:
+    """``L(z) = C(z) H_zoh(z) z^-d`` as polynomials in ``z`` (NumPy only: :func:`discrete_pid`'s numerator and
+    the closed form of the ZOH plant, ``phi ((dt - tau (1 - e)) z + tau (1 - e) - dt e) / ((z - 1)(z - e))``)."""
+    a, e = math.exp(-dt / tau_d), math.exp(-dt / tau)
+    zm1, zma, zme = np.array([1.0, -1.0]), np.array([1.0, -a]), np.array([1.0, -e])
+    num_C = (kp * np.polymul(zm1, zma) + ki * dt * np.polymul([1.0, 0.0], zma)
+             + kd * (1.0 - a) / dt * np.polymul(zm1, zm1))
+    num_H = phi * np.array([dt - tau * (1.0 - e), tau * (1.0 - e) - dt * e])
+    den = np.polymul(np.polymul(zm1, zma), np.polymul(zm1, zme))
+    return np.polymul(num_C, num_H), np.polymul(den, np.r_[1.0, np.zeros(d)])
+
+
+def _verify(args: tuple, value: list) -> str | None:
+    """Why kept sampled-loop numbers are not those of the loop (cheap arithmetic on ``L(exp(j w dt))``), or None."""
+    gm, pm, wgc, wpc, _, max_S, w_S, max_T, w_T, _, _, _, poles, rmax, *_ = value
+    dt = args[4]
+    num, den = _loop_polynomials(*args)
+
+    def L(w: float) -> complex:
+        z = complex(math.cos(w * dt), math.sin(w * dt))
+        return complex(np.polyval(num, z) / np.polyval(den, z))
+
+    if not all(isinstance(x, (float, int)) for x in (gm, pm, wgc, wpc, max_S, w_S, max_T, w_T, rmax)):
+        return "holds a number of another type"
+    if math.isfinite(wgc) and wgc > 0:
+        at = L(wgc)
+        if abs(abs(at) - 1.0) > 1e-5 or abs((180.0 + math.degrees(math.atan2(at.imag, at.real))) % 360.0
+                                             - pm % 360.0) > 1e-4 * max(1.0, abs(pm)):
+            return f"its phase margin {pm:.6g} deg is not the loop's at {wgc:.6g} rad/s"
+    if math.isfinite(gm) and math.isfinite(wpc) and wpc > 0:
+        at = L(wpc)
+        if abs(abs(at) * gm - 1.0) > 1e-5 or at.real > 0:
+            return f"its gain margin {gm:.6g} is not the loop's at {wpc:.6g} rad/s"
+    for peak, w, name in ((max_S, w_S, "S"), (max_T, w_T, "T")):
+        if math.isfinite(w) and w > 0:
+            at = L(w)
+            got = abs(1.0 / (1.0 + at)) if name == "S" else abs(at / (1.0 + at))
+            if abs(got - peak) > 1e-6 * max(abs(peak), 1e-300):
+                return f"its peak of |{name}| {peak:.6g} is not |{name}| = {got:.6g} at {w:.6g} rad/s"
+    roots = sorted((complex(p) for p in np.roots(np.polyadd(den, num))), key=lambda p: (abs(p), p.imag))
+    if (not isinstance(poles, (list, tuple)) or len(poles) != len(roots)
+            or any(not isinstance(p, complex) or abs(p - r) > 1e-6 for p, r in zip(poles, roots))
+            or abs(max(abs(r) for r in roots) - rmax) > 1e-9):
+        return "its closed-loop poles are not the roots of the characteristic polynomial"
+    return None
 
 
 def _numbers(kp, ki, kd, tau_d, dt, phi, tau, d) -> list:

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._validate import POSITIVE, check_integer
+from .._validate import MOTOR_CONSTANT, V_MAX, check_integer
 from ..axis import LINEAR, AxisSpec
 from ..params import Config
 from .literals import comment_text
@@ -126,11 +126,11 @@ def friction_table(cfg: Config, *, points: int = 20, v_max: float | None = None,
     points : int
         Number of breakpoints, 2 to 1000 (default 20, the drives' table size).
     v_max : float, optional
-        Largest velocity [m/s]; default the axis's: ``(K u_max - |G| - Cf) / sigma``.
+        Largest velocity [m/s], at most 1e3 (:data:`obsdesign._validate.V_MAX`); default the axis's: ``(K u_max - |G| - Cf) / sigma``.
     velocities : sequence of float, optional
         Breakpoints given instead (strictly increasing from 0, within ``v_max``).
     motor_constant : float, optional
-        Force per current [N/A]: adds the current column.
+        Force per current [N/A], 1e-6 to 1e6 (:data:`obsdesign._validate.MOTOR_CONSTANT`): adds the current column.
 
     Returns
     -------
@@ -145,9 +145,9 @@ def friction_table(cfg: Config, *, points: int = 20, v_max: float | None = None,
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
     pl, fr = cfg.plant, cfg.friction
     top = (pl.K * pl.u_max - abs(pl.G) - fr.Cf) / fr.sigma
-    v_max = top if v_max is None else POSITIVE.check("v_max", v_max)
+    v_max = top if v_max is None else V_MAX.check("v_max", v_max)
     if motor_constant is not None:
-        motor_constant = POSITIVE.check("motor_constant", motor_constant)
+        motor_constant = MOTOR_CONSTANT.check("motor_constant", motor_constant)
     grid = np.linspace(0.0, v_max, GRID)
     force = _model(cfg)
     f_grid = force(grid)

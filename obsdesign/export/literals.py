@@ -11,7 +11,9 @@ Generated code carries user text (a config ``name``) in two ways only:
   outside printable ASCII, so the literal is pure ASCII on one line and reads back
   as the exact text.
 
-The LaTeX export carries no user text.
+The LaTeX export carries no user text. A user-chosen identifier (the ``experiment`` C array's
+``--name``) goes through :func:`check_identifier`: a plain identifier that is no keyword of any export
+language (:data:`KEYWORDS`, the one list of them) and not reserved in C.
 
 Examples
 --------
@@ -32,11 +34,76 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["NAME_MAX", "comment_text", "python_string", "c_string", "octave_string", "js_string"]
+__all__ = ["NAME_MAX", "comment_text", "python_string", "c_string", "octave_string", "js_string", "KEYWORDS",
+           "check_identifier"]
 
 #: Longest user text placed in a comment or docstring.
 NAME_MAX = 64
 _UNSAFE = re.compile(r"[^A-Za-z0-9 _.,+\-]")
+
+#: The reserved words of every language code is exported in (generated identifiers never use one).
+KEYWORDS = {
+    "C": frozenset(  # C23 keywords, their C11 spellings and the macros of <stdbool.h>, <stddef.h>
+        "alignas alignof auto bool break case char const constexpr continue default do double else enum extern "
+        "false float for goto if inline int long nullptr register restrict return short signed sizeof static "
+        "static_assert struct switch thread_local true typedef typeof typeof_unqual union unsigned void volatile "
+        "while _Alignas _Alignof _Atomic _BitInt _Bool _Complex _Decimal128 _Decimal32 _Decimal64 _Generic "
+        "_Imaginary _Noreturn _Static_assert _Thread_local NULL".split()),
+    "Python": frozenset(  # keyword.kwlist of Python 3.11 to 3.13
+        "False None True and as assert async await break class continue def del elif else except finally for "
+        "from global if import in is lambda nonlocal not or pass raise return try while with yield".split()),
+    "Octave/MATLAB": frozenset(  # iskeyword() of GNU Octave 8 and MATLAB R2024
+        "__FILE__ __LINE__ arguments break case catch classdef continue do else elseif end end_try_catch "
+        "end_unwind_protect endclassdef endenumeration endevents endfor endfunction endif endmethods endparfor "
+        "endproperties endspmd endswitch endwhile enumeration events for function global if methods otherwise "
+        "parfor persistent properties return spmd switch try until unwind_protect unwind_protect_cleanup "
+        "while".split()),
+    "JavaScript": frozenset(  # ECMAScript 2024 reserved words, strict-mode and module reservations
+        "arguments await break case catch class const continue debugger default delete do else enum eval export "
+        "extends false finally for function if implements import in instanceof interface let new null package "
+        "private protected public return static super switch this throw true try typeof var void while with "
+        "yield".split()),
+}
+_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,62}")
+
+
+def check_identifier(name: str, text) -> str:
+    """``text`` if it can name a variable in every export language, else ``ValueError`` naming ``name``.
+
+    Parameters
+    ----------
+    name : str
+        The parameter or flag the text came from (for the message).
+    text : str
+        The identifier.
+
+    A letter or ``_``, then letters, digits or ``_``, at most 63 characters (C's portable limit); no
+    keyword of C, Python, Octave/MATLAB or JavaScript (:data:`KEYWORDS`); not reserved in C (``__`` or
+    ``_`` and a capital first).
+
+    Examples
+    --------
+    >>> check_identifier("name", "axis_x")
+    'axis_x'
+    >>> check_identifier("name", "int")
+    Traceback (most recent call last):
+    ...
+    ValueError: name: expected an identifier that is no keyword of an export language, found 'int' (a keyword of C)
+    >>> check_identifier("name", "end")
+    Traceback (most recent call last):
+    ...
+    ValueError: name: expected an identifier that is no keyword of an export language, found 'end' (a keyword of Octave/MATLAB)
+    """
+    if not isinstance(text, str) or not _IDENTIFIER.fullmatch(text):
+        raise ValueError(f"{name}: expected a C identifier (a letter or _, then letters, digits or _, at most 63), "
+                         f"found {text!r}")
+    languages = [lang for lang, words in KEYWORDS.items() if text in words]
+    if text.startswith("__") or re.match(r"_[A-Z]", text):
+        languages.append("C (reserved: __ or _ and a capital)")
+    if languages:
+        raise ValueError(f"{name}: expected an identifier that is no keyword of an export language, found {text!r} "
+                         f"(a keyword of {', '.join(languages)})")
+    return text
 
 
 def _text(text) -> str:

@@ -1,5 +1,5 @@
 """The report page's markup rules: one number format, the content policy with its check, and the
-allowlist a kept derivation table must pass before it is put on a page.
+derivation table as data (what the result memo keeps) with its schema and its escaping renderer.
 
 Shared by the entry point :mod:`obsdesign.report.html` and the page builder
 :mod:`obsdesign.report.page` (one place for both, no import cycle).
@@ -9,16 +9,17 @@ from __future__ import annotations
 
 import base64
 import hashlib
+import html
 import math
 import re
 from html.parser import HTMLParser
 
 from .._format import with_unit
 
-__all__ = ["ReportContentError", "is_derivation_markup"]
+__all__ = ["ReportContentError", "derivation_tree", "is_derivation_tree", "render_derivation"]
 
 #: What :func:`obsdesign.symbolic.printing.derivation_html` writes: an HTML table of MathML presentation
-#: elements. A derivation read back from the result memo (a file on disk) must hold nothing else.
+#: elements. A derivation tree read back from the result memo (a file on disk) must hold nothing else.
 _DERIVATION_TAGS = frozenset({
     "table", "caption", "tr", "th", "td", "math", "mi", "mn", "mo", "ms", "mtext", "mspace", "mrow", "mfrac",
     "msqrt", "mroot", "msub", "msup", "msubsup", "munder", "mover", "munderover", "mtable", "mtr", "mtd",
@@ -30,60 +31,146 @@ _MATHML_NS = "http://www.w3.org/1998/Math/MathML"
 _PLAIN_VALUE = re.compile(r"[A-Za-z0-9 .,%#+-]*")
 
 
-class _DerivationCheck(HTMLParser):
+#: Ceilings of a kept derivation tree: the largest one written (variant ``lag``) has about 2,000 nodes, 9 deep.
+_MAX_NODES = 50_000
+_MAX_DEPTH = 40
+
+
+class _TreeBuilder(HTMLParser):
+    """Reads the derivation markup SymPy's printer wrote (this process's own output) into a tree."""
+
     def __init__(self) -> None:
         super().__init__(convert_charrefs=True)
-        self.ok = True
+        self.root: list = ["root", []]
+        self.stack = [self.root]
 
     def handle_starttag(self, tag, attrs):
-        if tag not in _DERIVATION_TAGS:
-            self.ok = False
-        for name, value in attrs:
-            if name == "xmlns":
-                self.ok &= tag == "math" and value == _MATHML_NS
-            else:
-                self.ok &= name in _DERIVATION_ATTRS and _PLAIN_VALUE.fullmatch(value or "") is not None
+        node = [tag, [[name, value or ""] for name, value in attrs]]
+        self.stack[-1].append(node)
+        self.stack.append(node)
 
-    handle_startendtag = handle_starttag
+    def handle_startendtag(self, tag, attrs):
+        self.stack[-1].append([tag, [[name, value or ""] for name, value in attrs]])
 
     def handle_endtag(self, tag):
-        self.ok &= tag in _DERIVATION_TAGS
+        if len(self.stack) > 1 and self.stack[-1][0] == tag:
+            self.stack.pop()
+        else:
+            raise ValueError(f"derivation markup: unbalanced </{tag}>")
 
-    def handle_decl(self, decl):
-        self.ok = False
-
-    handle_pi = unknown_decl = handle_decl
+    def handle_data(self, data):
+        self.stack[-1].append(data)
 
 
-def is_derivation_markup(text) -> bool:
-    """Whether ``text`` is a derivation table as the report writes it: allowed elements and attributes only.
+def derivation_tree(markup: str) -> list:
+    """The derivation table as data: ``[tag, [[attribute, value], ...], child, ...]``, text children as strings.
 
-    The report embeds its derivation as markup; read back from the result memo it is a file on disk,
-    so it is embedded only when every element is one of the table and MathML presentation elements
-    and every attribute a presentation keyword with a plain value. Otherwise the derivation is computed
-    again (and the entry rewritten).
+    What the result memo keeps of the derivation (never markup): :func:`render_derivation` writes the page's
+    markup from it, escaping every text and attribute, whether the tree was just computed or read from disk.
 
     Parameters
     ----------
-    text : str
-        The markup (anything else is not a derivation table).
+    markup : str
+        :func:`obsdesign.symbolic.printing.derivation_html` of a derivation (the package's own output).
+
+    Returns
+    -------
+    list
+        The root element's tree.
 
     Examples
     --------
-    >>> is_derivation_markup("<table class='obsdesign-derivation'><tr><td><math xmlns="
-    ...                      "'http://www.w3.org/1998/Math/MathML'><mi>x</mi></math></td></tr></table>")
+    >>> derivation_tree("<table class='d'><tr><td>a &lt; b</td></tr></table>")
+    ['table', [['class', 'd']], ['tr', [], ['td', [], 'a < b']]]
+    """
+    builder = _TreeBuilder()
+    builder.feed(markup)
+    builder.close()
+    if len(builder.stack) != 1 or len(builder.root) != 3 or not isinstance(builder.root[2], list):
+        raise ValueError("derivation markup: expected one element")
+    return builder.root[2]
+
+
+def is_derivation_tree(tree) -> bool:
+    """Whether ``tree`` is a derivation table as :func:`derivation_tree` writes it (the memo entry's schema).
+
+    Elements are the table and MathML presentation elements only; attributes presentation keywords with
+    plain values (the MathML namespace on ``math``); at most 50,000 nodes, 40 deep. Text is anything: it is
+    escaped when rendered.
+
+    Parameters
+    ----------
+    tree : object
+        A value read from the result memo.
+
+    Examples
+    --------
+    >>> is_derivation_tree(['table', [['class', 'd']], ['tr', [], ['td', [], '<!--> <img onerror=x>']]])
     True
-    >>> is_derivation_markup("<table><tr><td><img src=x onerror=alert(1)></td></tr></table>")
+    >>> is_derivation_tree(['table', [], ['style', [], 'td {display: none}']])
     False
-    >>> is_derivation_markup("<table><tr><td><mi mathvariant='x\\' onclick='y'>a</mi></td></tr></table>")
+    >>> is_derivation_tree(['table', [['onclick', 'x']]])
     False
     """
-    if not isinstance(text, str):
-        return False
-    check = _DerivationCheck()
-    check.feed(text)
-    check.close()
-    return check.ok
+    count = 0
+    todo = [(tree, 0)]
+    while todo:
+        node, depth = todo.pop()
+        count += 1
+        if count > _MAX_NODES or depth > _MAX_DEPTH:
+            return False
+        if isinstance(node, str):
+            continue
+        if not (isinstance(node, list) and len(node) >= 2 and node[0] in _DERIVATION_TAGS
+                and isinstance(node[1], list)):
+            return False
+        for pair in node[1]:
+            if not (isinstance(pair, list) and len(pair) == 2 and all(isinstance(p, str) for p in pair)):
+                return False
+            name, value = pair
+            if name == "xmlns":
+                if node[0] != "math" or value != _MATHML_NS:
+                    return False
+            elif name not in _DERIVATION_ATTRS or _PLAIN_VALUE.fullmatch(value) is None:
+                return False
+        todo.extend((child, depth + 1) for child in node[2:])
+    return isinstance(tree, list) and bool(tree) and tree[0] == "table"
+
+
+def render_derivation(tree: list) -> str:
+    """The page's markup of a derivation tree: elements from the allowlist, every text and value escaped.
+
+    Parameters
+    ----------
+    tree : list
+        A tree that passes :func:`is_derivation_tree`.
+
+    Raises
+    ------
+    ValueError
+        ``tree`` is not a derivation tree.
+
+    Examples
+    --------
+    >>> render_derivation(['table', [['class', 'd']], ['tr', [], ['td', [], '<!--> <img onerror=x>']]])
+    '<table class="d"><tr><td>&lt;!--&gt; &lt;img onerror=x&gt;</td></tr></table>'
+    """
+    if not is_derivation_tree(tree):
+        raise ValueError("tree: expected a derivation table of allowed elements and attributes")
+    out: list[str] = []
+
+    def write(node) -> None:
+        if isinstance(node, str):
+            out.append(html.escape(node))
+            return
+        attrs = "".join(f' {name}="{html.escape(value)}"' for name, value in node[1])
+        out.append(f"<{node[0]}{attrs}>")
+        for child in node[2:]:
+            write(child)
+        out.append(f"</{node[0]}>")
+
+    write(tree)
+    return "".join(out)
 
 
 def _quantity(value, unit: str = "") -> str:

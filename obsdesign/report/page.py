@@ -17,7 +17,7 @@ import numpy as np
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
 
 from .. import __version__, studies
-from .._memo import memo
+from .._memo import MemoWarning, memo
 from ..design import check_stability, noise_analysis, pid_from_config
 from ..design.pid import kept_response
 from ..params import Config
@@ -26,7 +26,7 @@ from .circle_section import circle_section, feed_runs
 from .data_section import data_section
 from .explorer import explorer_context, explorer_json
 from .figures import inline_svg
-from .markup import _CSP_MARK, _quantity, _with_csp, is_derivation_markup
+from .markup import _CSP_MARK, _quantity, _with_csp, derivation_tree, is_derivation_tree, render_derivation
 from .study_figures import experiments_figure, friction_loops_figure
 
 __all__ = ["render_page", "loops_part", "circle_part", "derivation_markup"]
@@ -65,26 +65,28 @@ def _bode_figure(curves, bound=None, ylabel=""):
     return fig
 
 
-def _derivation_html(variant: str) -> str:
+def _derivation_tree(variant: str) -> list:
     from ..symbolic import derive  # SymPy: only when the memo does not hold the derivation
     from ..symbolic.printing import derivation_html
 
-    return derivation_html(derive(variant))
+    return derivation_tree(derivation_html(derive(variant)))
 
 
 def derivation_markup(variant: str) -> str:
-    """The derivation table of the page (MathML), from the result memo or from SymPy.
+    """The derivation table of the page (MathML), rendered from data kept in the result memo or from SymPy.
 
-    A pure function of the variant and the code, so SymPy runs once per package version
-    (:mod:`obsdesign._memo`); read back from disk it is embedded only if it passes
-    :func:`obsdesign.report.markup.is_derivation_markup`, else it is derived again.
+    The memo keeps the table as data (:func:`obsdesign.report.markup.derivation_tree`), never as markup:
+    SymPy runs once per package version (:mod:`obsdesign._memo`), and the markup is written by
+    :func:`obsdesign.report.markup.render_derivation` every time, escaping every text and attribute. A kept
+    tree with an element or attribute outside the allowlist is a miss (derived again, one warning).
 
     Parameters
     ----------
     variant : str
         ``static`` or ``lag``.
     """
-    return memo("derivation_html", (variant,), lambda: _derivation_html(variant), valid=is_derivation_markup)
+    return render_derivation(memo("derivation_tree", (variant,), lambda: _derivation_tree(variant),
+                                  valid=is_derivation_tree))
 
 
 def loops_part(cfg: Config, experiments) -> tuple[list, str]:
@@ -161,6 +163,7 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     bar.set_postfix_str(steps[1])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
+        warnings.simplefilter("default", MemoWarning)  # a refused memo entry is still said
         rep = check_stability(cfg)
     ctx["stability"] = rep
     ctx["eigen_svg"] = svg(_eigen_figure(rep.design))
