@@ -35,7 +35,7 @@ from __future__ import annotations
 import re
 
 __all__ = ["NAME_MAX", "comment_text", "python_string", "c_string", "octave_string", "js_string", "KEYWORDS",
-           "check_identifier"]
+           "ST_LANGUAGE", "check_identifier"]
 
 #: Longest user text placed in a comment or docstring.
 NAME_MAX = 64
@@ -63,7 +63,27 @@ KEYWORDS = {
         "extends false finally for function if implements import in instanceof interface let new null package "
         "private protected public return static super switch this throw true try typeof var void while with "
         "yield".split()),
+    # IEC 61131-3 (3rd edition) keywords, elementary type names and standard function names, with the common
+    # extensions of CODESYS/TwinCAT (POINTER, REFERENCE, ...); ST is case-insensitive: compared in upper case
+    "IEC 61131-3 ST": frozenset("""
+ABSTRACT ACTION AND AND_THEN ANY ANY_BIT ANY_CHAR ANY_CHARS ANY_DATE ANY_DERIVED ANY_DURATION ANY_ELEMENTARY ANY_INT
+ANY_MAGNITUDE ANY_NUM ANY_REAL ANY_SIGNED ANY_STRING ANY_UNSIGNED ARRAY AT BOOL BY BYTE CASE CHAR CLASS CONFIGURATION
+CONSTANT CONTINUE DATE DATE_AND_TIME DINT DO DT DWORD ELSE ELSIF EN ENO END_ACTION END_CASE END_CLASS
+END_CONFIGURATION END_FOR END_FUNCTION END_FUNCTION_BLOCK END_IF END_INTERFACE END_METHOD END_NAMESPACE END_PROGRAM
+END_PROPERTY END_REPEAT END_RESOURCE END_STEP END_STRUCT END_TRANSITION END_TYPE END_UNION END_VAR END_WHILE EXIT
+EXTENDS F_EDGE FALSE FINAL FOR FROM FUNCTION FUNCTION_BLOCK IF IMPLEMENTS INITIAL_STEP INT INTERFACE INTERNAL
+INTERVAL JMP LDATE LDATE_AND_TIME LDT LINT LREAL LTIME LTIME_OF_DAY LTOD LWORD METHOD MOD NAMESPACE NON_RETAIN NOT
+NULL OF ON OR OR_ELSE OVERLAP OVERRIDE PERSISTENT POINTER PRIORITY PRIVATE PROGRAM PROPERTY PROTECTED PUBLIC
+READ_ONLY READ_WRITE REAL REF REFERENCE REF_TO REPEAT RESOURCE RETAIN RETURN R_EDGE SINGLE SINT STEP STRING STRUCT
+SUPER TASK THEN THIS TIME TIME_OF_DAY TO TOD TRANSITION TRUE TYPE UDINT UINT ULINT UNION UNTIL USING USINT VAR
+VAR_ACCESS VAR_CONFIG VAR_EXTERNAL VAR_GLOBAL VAR_INPUT VAR_INST VAR_IN_OUT VAR_OUTPUT VAR_STAT VAR_TEMP WCHAR
+WHILE WITH WORD WSTRING XOR
+ABS SQRT LN LOG EXP EXPT SIN COS TAN ASIN ACOS ATAN ATAN2 ADD SUB MUL DIV MOVE SHL SHR ROL ROR SEL MAX MIN LIMIT MUX
+GT GE EQ LE LT NE LEN LEFT RIGHT MID CONCAT INSERT DELETE REPLACE FIND TRUNC ROUND SIZEOF ADR
+""".split()),
 }
+#: The case-insensitive language of :data:`KEYWORDS` (its words are written in upper case).
+ST_LANGUAGE = "IEC 61131-3 ST"
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,62}")
 
 
@@ -78,7 +98,8 @@ def check_identifier(name: str, text) -> str:
         The identifier.
 
     A letter or ``_``, then letters, digits or ``_``, at most 63 characters (C's portable limit); no
-    keyword of C, Python, Octave/MATLAB or JavaScript (:data:`KEYWORDS`); not reserved in C (``__`` or
+    keyword of C, Python, Octave/MATLAB, JavaScript or IEC 61131-3 ST (:data:`KEYWORDS`; ST in any case);
+    not reserved in C (``__`` or
     ``_`` and a capital first).
 
     Examples
@@ -88,16 +109,20 @@ def check_identifier(name: str, text) -> str:
     >>> check_identifier("name", "int")
     Traceback (most recent call last):
     ...
-    ValueError: name: expected an identifier that is no keyword of an export language, found 'int' (a keyword of C)
+    ValueError: name: expected an identifier that is no keyword of an export language, found 'int' (a keyword of C, IEC 61131-3 ST)
     >>> check_identifier("name", "end")
     Traceback (most recent call last):
     ...
     ValueError: name: expected an identifier that is no keyword of an export language, found 'end' (a keyword of Octave/MATLAB)
+    >>> check_identifier("name", "Elsif")
+    Traceback (most recent call last):
+    ...
+    ValueError: name: expected an identifier that is no keyword of an export language, found 'Elsif' (a keyword of IEC 61131-3 ST)
     """
     if not isinstance(text, str) or not _IDENTIFIER.fullmatch(text):
         raise ValueError(f"{name}: expected a C identifier (a letter or _, then letters, digits or _, at most 63), "
                          f"found {text!r}")
-    languages = [lang for lang, words in KEYWORDS.items() if text in words]
+    languages = [lang for lang, words in KEYWORDS.items() if (text.upper() if lang == ST_LANGUAGE else text) in words]
     if text.startswith("__") or re.match(r"_[A-Z]", text):
         languages.append("C (reserved: __ or _ and a capital)")
     if languages:
