@@ -87,12 +87,10 @@ def test_discrete_pid_is_the_kernels_recursion(make):
     e = rng.standard_normal(400) * 1e-4
     e[0] = 0.0  # the kernel takes e_prev = e at n = 0; zero initial state needs e[0] = e[-1] = 0
     e[150:] = 1e-4  # and a step
-    from obsdesign.sampled.kernel import delay_buffer
-
-    cst, ost, ez, ub = CONTROLLER_STATE, OBSERVER_STATE, np.zeros(1), delay_buffer(ctrl)
+    cst, ost, ez = CONTROLLER_STATE, OBSERVER_STATE, np.zeros(1)
     u = np.empty(e.size)
     for n in range(e.size):  # x_ref = 0, x_meas = -e
-        cst, ost, u[n], *_ = controller_sample(cst, ost, ez, ub, n, 0.0, 0.0, 1.0, 0.0, -e[n], 0.0, obs, est, ctrl)
+        cst, ost, u[n], *_ = controller_sample(cst, ost, ez, n, 0.0, 0.0, 1.0, 0.0, -e[n], 0.0, obs, est, ctrl)
     dt = cfg.observer.dt
     C = discrete_pid(kp=sc.kp, ki=sc.ki, kd=sc.kd, tau_d=sc.tau_d, dt=dt)
     y = ct.forced_response(C, np.arange(e.size) * dt, e).outputs.ravel()

@@ -38,7 +38,9 @@ def add_commands(sub) -> None:
     p.add_argument("--min-phase-margin", type=number(Range(low=0.0, high=180.0, low_inclusive=True), " deg"),
                    help="least phase margin [deg] of the sampled loop with the compensation (incl. the delay)")
     p.add_argument("--max-command-noise", type=POSITIVE_ARG, help="largest RMS [V] of the command from sensor noise")
-    p.add_argument("--delay-samples", type=integer(0), help="override the computation delay [samples] (integer >= 0)")
+    p.add_argument("--delay-samples", type=integer(0),
+                   help="override the drive's delay [samples] from the sampled position to the applied command "
+                        "([hardware] delay_samples, integer >= 0)")
     p.add_argument("--reversal-rate", type=POSITIVE_ARG, help="reversals per second of the lag model (default 1)")
     p.add_argument("--keep-gain", action="store_true", help="keep the config's compensation gain")
     p.add_argument("-o", "--output", metavar="FILE", help="write the tuned config (.toml)")

@@ -49,7 +49,7 @@ def compensated_loop(cfg: Config, est, gain: float) -> tuple[float, bool, float]
 
     from ..estimators import noise_level
 
-    dt, d, K = cfg.observer.dt, cfg.pid.delay_samples, cfg.plant.K
+    dt, d, K = cfg.observer.dt, cfg.hardware.delay_samples, cfg.plant.K
     C, H = _pid_and_plant(cfg.phi, cfg.pid.tau, cfg.pid.max_S, cfg.pid.phase_margin_deg, cfg.pid.derivative_N, dt)
     Gy = est.transfer_from_measurement()[1, 0]
     Gu = est.transfer_from_input()[1, 0]

@@ -2,7 +2,7 @@
 
 Two systems, each labelled where it is printed: the **continuous idealisation** below (ideal PID, no
 sampling; the top-level numbers) and the **sampled loop** that runs (ZOH plant, the kernel's discrete
-PID with its derivative filter, ``pid.delay_samples`` of computation delay;
+PID with its derivative filter, ``hardware.delay_samples`` of drive delay;
 :mod:`obsdesign.design.sampled_loop`, the ``sampled`` attribute and key).
 
 The continuous loop is the one of :mod:`obsdesign.design.pid`: plant ``H = phi / (s (tau s + 1))``
@@ -189,7 +189,7 @@ def loop_analysis(cfg: Config | None = None, *, phi: float | None = None, tau: f
         Overrides of the plant gain [m/(V s)] and time constant [s] of eq:linplant;
         the PID is designed for (and the loop closed around) the overridden plant.
     delay_samples : int, optional
-        Computation delay of the sampled loop [samples] (>= 0); default ``cfg.pid.delay_samples``.
+        Computation delay of the sampled loop [samples] (>= 0); default ``cfg.hardware.delay_samples``.
 
     Returns
     -------

@@ -11,8 +11,12 @@ Per sample ``n`` (time ``n dt``):
 
 1. measure ``x_meas = Q(x + noise[n])`` (``Q``: rounding to the encoder resolution);
 2. the sampled controller: estimator, PID with compensation, feed-forward, saturation
-   (:mod:`obsdesign.sampled.kernel`); the plant's net force is ``K_plant command - G_plant``;
-3. integrate the plant to ``(n+1) dt`` with the input held: ``n_sub`` substeps of
+   (:mod:`obsdesign.sampled.kernel`);
+3. the drive's delay of ``d = PlantArgs.delay`` samples (``[hardware] delay_samples``): the command
+   computed at sample ``n`` is applied from sample ``n + d`` on (a ring buffer of ``d`` commands that
+   holds ``PlantArgs.delay_init``, the saturated feed-forward ``G / K``, before the first computed
+   command arrives); the plant's net force is ``K_plant applied - G_plant``;
+4. integrate the plant to ``(n+1) dt`` with the input held: ``n_sub`` substeps of
    Heun's method (explicit trapezoidal rule, order 2), the pre-sliding branch frozen
    within a substep and updated after it (reversals are detected at substep
    resolution).
@@ -30,9 +34,9 @@ from ..friction.kernels import friction_viscous
 from ..friction.presliding import coulomb_normalized, stiffness, track_reversal
 from ..friction.registry import FRICTION_MODELS
 from ..sampled.choices import PLANTS, SCHEDULES
-from ..sampled.kernel import CONTROLLER_STATE, OBSERVER_STATE, controller_sample, delay_buffer
+from ..sampled.kernel import CONTROLLER_STATE, OBSERVER_STATE, controller_sample
 
-__all__ = ["run_loop", "PlantArgs", "Signals", "Outputs", "empty_outputs", "OUTPUT_NAMES", "PLANT_PHYSICAL",
+__all__ = ["run_loop", "delay_buffer", "PlantArgs", "Signals", "Outputs", "empty_outputs", "OUTPUT_NAMES", "PLANT_PHYSICAL",
            "PLANT_MODEL"]
 
 PLANT_PHYSICAL = PLANTS.code("physical")
@@ -64,6 +68,12 @@ class PlantArgs(NamedTuple):
         Plant friction model (:data:`obsdesign.friction.FRICTION_MODELS` code).
     plant_params : ndarray
         Its parameters (paper: the ``PP_*`` layout; others: :meth:`~obsdesign.friction.FrictionModelInfo.pack`).
+    delay : int
+        The drive's delay [samples] between the sampled position and the applied command
+        (``[hardware] delay_samples``): the command computed at sample ``n`` acts from ``n + delay``.
+    delay_init : float
+        The command [V] the drive applies before the first computed one arrives: the design's saturated
+        feed-forward ``G / K``.
     """
 
     n_sub: int
@@ -74,6 +84,8 @@ class PlantArgs(NamedTuple):
     G: float
     friction_code: int
     plant_params: np.ndarray
+    delay: int
+    delay_init: float
 
 
 class Signals(NamedTuple):
@@ -210,7 +222,8 @@ def run_loop(obs, est, ctrl, plant, sig, out):
     cst = CONTROLLER_STATE
     fst = np.zeros(max(friction_n_state(fcode, pp), 1))  # the friction state of lugre/dahl/gms
     ez = np.zeros(est.Phi.shape[0])  # state of a linear estimator
-    ubuf = delay_buffer(ctrl)  # the commands in flight of the computation delay
+    ubuf = delay_buffer(plant)  # the commands in flight of the drive's delay
+    delay = plant.delay
     # the paper plant's parameters as scalars (the hot loop below reads no arrays)
     Cf_p, Cfn_p, sig_p, sgn_p, off_p, s_p, beta_p, kap_p = pp[0], pp[0], pp[0], pp[0], 0.0, pp[0], pp[0], pp[0]
     if fcode == FRICTION_PAPER:
@@ -229,9 +242,14 @@ def run_loop(obs, est, ctrl, plant, sig, out):
                 k_true = stiffness(x, p_dir, p_xr, p_fr, Cf_p, s_p, kappa)
             else:
                 k_true = min(friction_stiffness(fcode, pp, fst, x, v), kappa)
-        cst, ost, total, vh, fh, ff, k_now = controller_sample(cst, ost, ez, ubuf, n, x_ref[n], v_ref[n], w_ff[n],
-                                                               u_open[n], xm,
-                                                               k_true, obs, est, ctrl)
+        cst, ost, total, vh, fh, ff, k_now = controller_sample(cst, ost, ez, n, x_ref[n], v_ref[n], w_ff[n],
+                                                               u_open[n], xm, k_true, obs, est, ctrl)
+        # 3. the drive's delay: apply the command of sample n - delay
+        if delay > 0:
+            slot = n % delay
+            applied = ubuf[slot]
+            ubuf[slot] = total
+            total = applied
         u = K_plant * total - G_plant  # net driving force, load compensated
         # record
         out.x[n] = x
@@ -249,7 +267,7 @@ def run_loop(obs, est, ctrl, plant, sig, out):
         if not (abs(x) < DIVERGED_X and abs(fh) < DIVERGED_F and abs(vh) < DIVERGED_F
                 and abs(ff) < DIVERGED_F and abs(v) < DIVERGED_F):
             return n + 1
-        # 3. plant, Heun (explicit trapezoidal, order 2) substeps with the input held
+        # 4. plant, Heun (explicit trapezoidal, order 2) substeps with the input held
         if fcode != FRICTION_PAPER:
             x, v = friction_plant_step(fcode, pp, fst, x, v, u, m, h, n_sub)
             continue
@@ -277,6 +295,26 @@ def run_loop(obs, est, ctrl, plant, sig, out):
             w += 0.5 * h * (k1w + k2w)
             p_dir, p_xr, p_fr = track_reversal(v, x, p_dir, p_xr, p_fr, s_p)
     return n_samples
+
+
+@njit(cache=True, error_model="numpy")
+def delay_buffer(plant):
+    """The commands in flight of the drive's delay before the first sample: ``max(delay, 1)`` times
+    ``plant.delay_init`` [V] (the drive holds the load until the first computed command arrives).
+
+    Parameters
+    ----------
+    plant : PlantArgs
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> from obsdesign.sim import prepare
+    >>> plant = prepare(od.load_preset("vcm").override(delay_samples=2), "positioning").kernel_args()[3]
+    >>> [round(float(u), 4) for u in delay_buffer(plant)]   # G / K = 5.27 / 3.28 V
+    [1.6067, 1.6067]
+    """
+    return np.full(max(plant.delay, 1), plant.delay_init)
 
 
 def empty_outputs(n: int) -> Outputs:

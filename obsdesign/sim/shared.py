@@ -50,9 +50,9 @@ __all__ = ["run_shared", "shares_plant", "same_run"]
 
 #: The outputs of :func:`obsdesign.sim.kernel.run_loop` that the plant and the sensor write.
 PLANT_OUTPUTS = ("x", "x_meas", "v", "f", "u")
-#: The controller's fields an open-loop command reads (:func:`obsdesign.sampled.kernel.controller_sample`,
-#: :func:`obsdesign.sampled.kernel.delay_buffer`).
-_OPEN_LOOP_FIELDS = ("controller", "K", "G", "u_max", "delay", "delay_init")
+#: The controller's fields an open-loop command reads (:func:`obsdesign.sampled.kernel.controller_sample`;
+#: the drive's delay is the plant's, :class:`obsdesign.sim.kernel.PlantArgs`).
+_OPEN_LOOP_FIELDS = ("controller", "K", "G", "u_max")
 _OPEN = CONTROLLERS.code("open-loop")
 _TRUE = SCHEDULES.code("true")
 
