@@ -121,7 +121,6 @@ class PlantLoop(ResultDisplay):
         Where the linearisation does not hold ("" where it does).
     """
 
-    _title = "Sampled loop around the simulated plant (what runs on the axis)"
     regime: str
     dt: float
     delay_samples: int
@@ -135,6 +134,10 @@ class PlantLoop(ResultDisplay):
     max_T: float
     stable: bool
     note: str
+
+    @property
+    def _title(self) -> str:  # type: ignore[override]
+        return f"Sampled loop around the simulated plant, {self.regime} (what runs on the axis)"
 
     @property
     def system(self) -> str:

@@ -189,7 +189,7 @@ class SampledLoop(ResultDisplay):
         The discrete systems (sample time ``dt``).
     """
 
-    _title = "Sampled loop (what runs): L(z) = C(z) H_zoh(z) z^-d"
+    _title = "Sampled loop on the PID's design model eq:linplant: L(z) = C(z) H_zoh(z) z^-d"
     dt: float
     delay_samples: int
     derivative_N: float

@@ -204,11 +204,19 @@ class TuneResult(ResultDisplay):
                          "margin": c.max_command_noise - d.command_noise})
         return rows
 
+    def simulated_plant(self):
+        """The PID loop (without the compensation) around the simulated plant in sliding, with the drive's
+        delay (:func:`obsdesign.design.plant_loop.plant_loop`): tuning does not change it."""
+        from .plant_loop import plant_loop
+
+        return plant_loop(self.config)
+
     def to_dict(self) -> dict:
         """JSON-ready values (``tune --json``)."""
         return {"objective": self.objective, "before": self.before, "after": self.after, "feasible": self.feasible,
                 "start": self.start.to_dict(), "chosen": self.chosen.to_dict(),
-                "constraints": self.constraint_rows(), "evaluations": self.evaluations, "wall_s": self.wall_s}
+                "constraints": self.constraint_rows(), "evaluations": self.evaluations, "wall_s": self.wall_s,
+                "simulated_plant": self.simulated_plant().to_dict()}
 
     def _rows(self):
         s, d = self.start, self.chosen
@@ -225,6 +233,9 @@ class TuneResult(ResultDisplay):
             margin = "" if r["margin"] is None else f" ({label} {r['margin']:.4g})"
             rows.append((r["constraint"], f"bound {show(r['bound'])}: start {show(r['start'])}, "
                                           f"chosen {show(r['chosen'])}{margin}"))
+        pl = self.simulated_plant()
+        rows.append(("PID loop, simulated plant", f"phase margin {pl.phase_margin_deg:.4g} deg, gain margin "
+                                                  f"{pl.gain_margin_db:.4g} dB ({pl.system})"))
         rows.append(("evaluations", f"{self.evaluations} in {self.wall_s:.1f} s"))
         return rows
 
