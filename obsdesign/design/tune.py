@@ -15,12 +15,12 @@ Constraints (:class:`Constraints`):
 
 * the certificate holds (:func:`obsdesign.design.certify`: the switched sampled observer);
 * ``min_phase_margin_deg``: phase margin of the sampled loop that runs with the compensation,
-  ``L(z) = z^-d (C H - g (Gy H / K + Gu))`` broken at the plant input: the plant ``H_zoh`` and the
-  discrete PID ``C`` of :mod:`obsdesign.design.sampled_loop`, the delay ``d``, and the path from the
-  measurement (``Gy``) and from the applied force (``Gu``) to the filtered friction estimate; the
-  closed loop must be stable;
+  ``L(z) = z^-d (C - g Gy / K) H - g Gu`` broken at the controller's output: the plant ``H_zoh`` and the
+  discrete PID ``C`` of :mod:`obsdesign.design.sampled_loop`, the drive's delay ``d``, and the path from
+  the measurement (``Gy``) and from the commanded force (``Gu``) to the filtered friction estimate
+  (:mod:`obsdesign.design.compensated_loop`); the closed loop must be stable;
 * ``max_command_noise``: RMS [V] of the command from the measurement noise through the same loop,
-  ``z^-d (-C + g Gy / K) / (1 + L)``, for band-limited noise as :func:`obsdesign.estimators.noise_level`.
+  ``(-C + g Gy / K) / (1 + L)``, for band-limited noise as :func:`obsdesign.estimators.noise_level`.
 
 Search (deterministic): a grid over ``log rho x log omega_co x gain`` (:data:`GRID`), the best
 feasible point refined by bounded Powell (``scipy.optimize.minimize``) on the objective with a
