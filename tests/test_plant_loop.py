@@ -41,7 +41,7 @@ CASES = {"vcm": od.load_preset("vcm"), "vcm-d2": od.load_preset("vcm").override(
          "rotary-4k-d1": rotary_4khz(1), "table1-lag": od.load_preset("table1")}
 
 
-def measured_loop(cfg, omegas, *, amplitude=1e-6, speed=None, settle=2.0, window=1.0):
+def measured_loop(cfg, omegas, *, amplitude=1e-6, speed=None, settle=2.0, window=1.0, controller="pid"):
     """``L(j w)`` measured on the simulator at (the DFT bins nearest to) ``omegas`` [rad/s]: the reference is a
     ramp of ``speed`` (default: 100 times the sines' largest velocity) plus sines of ``amplitude``; no noise,
     no encoder. Returns the bins' frequencies and ``L``."""
@@ -54,7 +54,7 @@ def measured_loop(cfg, omegas, *, amplitude=1e-6, speed=None, settle=2.0, window
     speed = 100 * amplitude * w.max() if speed is None else speed
     t = np.arange(n) * dt
     sines = amplitude * np.sin(np.outer(t, w)).sum(axis=1)
-    loop = prepare(cfg, "tracking", controller="pid", duration=n * dt)
+    loop = prepare(cfg, "tracking", controller=controller, duration=n * dt)
     loop = dataclasses.replace(loop, x_ref=speed * t + sines, noise=np.zeros(n))
     res = run(loop)
     assert not res.metrics["diverged"]
@@ -153,3 +153,18 @@ def test_loop_json_gives_the_measured_phase_margin_of_the_rotary_axis(tmp_path):
     assert crossing(w, L)[1] == pytest.approx(sliding["phase_margin_deg"], abs=1.0)
     assert doc["sampled"]["phase_margin_deg"] == pytest.approx(sampled_loop(cfg).phase_margin_deg, abs=1e-9)
     assert "bound" in doc["simulated_plant"]["rest"]["note"]
+
+
+@pytest.mark.parametrize("name", ["loop2k-d1", "rotary-4k-d1"])
+def test_the_compensated_loop_with_the_drives_delay_is_the_measured_one(name):
+    """tune's margin (obsdesign.design.compensated_loop: the estimator fed the controller's own command, the
+    drive's delay before the plant) against the loop measured with pid+observer in sliding (the observer's
+    stiffness is 0 there, so the loop is linear); these axes have tau = m / sigma (design model = plant)."""
+    from obsdesign.design.compensated_loop import compensated_loop
+    from obsdesign.estimators import reference_estimator
+
+    cfg = CASES[name]
+    pm, stable, _ = compensated_loop(cfg, reference_estimator(cfg), cfg.compensation.gain)
+    wc = plant_loop(cfg).crossover_rad_s
+    w, L = measured_loop(cfg, wc * np.array([0.75, 0.9, 1.0, 1.1, 1.3]), controller="pid+observer")
+    assert stable and crossing(w, L)[1] == pytest.approx(pm, abs=1.0)
