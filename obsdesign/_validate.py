@@ -135,10 +135,10 @@ class Text:
 class Integer:
     """An integer within ``[minimum, maximum]`` (``None``: open-ended), checked by :func:`check_integer`.
 
-    >>> Integer(minimum=0).check("pid.delay_samples", -1)
+    >>> Integer(minimum=0).check("hardware.delay_samples", -1)
     Traceback (most recent call last):
     ...
-    ValueError: pid.delay_samples: expected an integer >= 0, found -1
+    ValueError: hardware.delay_samples: expected an integer >= 0, found -1
     """
 
     minimum: int | None = None

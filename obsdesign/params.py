@@ -35,14 +35,15 @@ from typing import Any, Mapping, NamedTuple
 
 from ._format import toml_value
 from ._io import atomic_write
-from ._validate import (DERIVATIVE_N, FINITE, MAX_DELAY_SAMPLES, NONNEGATIVE, POSITIVE, SAMPLE_TIME, Choice, FrozenMap,
-                        Integer, Range, Text, document_fields, param_field, section_from_table, validate_fields)
+from ._validate import (DERIVATIVE_N, FINITE, NONNEGATIVE, POSITIVE, SAMPLE_TIME, Choice, FrozenMap,
+                        Range, Text, document_fields, param_field, section_from_table, validate_fields)
 from .axis import LINEAR, AxisSpec
 from .compensation import CompensationSpec
+from .hardware import HardwareSpec, move_legacy_delay
 from .plant_spec import PlantFrictionSpec
 
-__all__ = ["PlantParams", "FrictionParams", "SensorSpec", "ObserverSpec", "PIDSpec", "CompensationSpec", "AxisSpec", "Config",
-           "load_preset", "read_config", "preset_names", "VARIANTS", "PARAMETERS", "SECTIONS", "FieldRow"]
+__all__ = ["PlantParams", "FrictionParams", "SensorSpec", "ObserverSpec", "PIDSpec", "CompensationSpec", "HardwareSpec",
+           "AxisSpec", "Config", "load_preset", "read_config", "preset_names", "VARIANTS", "PARAMETERS", "SECTIONS", "FieldRow"]
 
 VARIANTS = ("lag", "static")
 
@@ -164,9 +165,6 @@ class PIDSpec:
     derivative_N: float = param_field(
         DERIVATIVE_N, "-", "derivative filter: time constant (kd/kp)/N in simulations (0.1 to 1e4)", 10.0
     )
-    delay_samples: int = param_field(
-        Integer(minimum=0, maximum=MAX_DELAY_SAMPLES), "samples", "computation delay: the command of sample n is applied from n + d", 0
-    )
 
     def __post_init__(self) -> None:
         validate_fields(self)
@@ -194,22 +192,22 @@ SECTIONS: Mapping[str, type] = FrozenMap({
     "sensor": SensorSpec,
     "observer": ObserverSpec,
     "pid": PIDSpec,
-    "compensation": CompensationSpec,
+    "compensation": CompensationSpec, "hardware": HardwareSpec,
 })
 #: Sections that may be left out of a TOML file (their defaults apply).
-_OPTIONAL_SECTIONS = ("sensor", "compensation")
+_OPTIONAL_SECTIONS = ("sensor", "compensation", "hardware")
 
 
 @dataclass(frozen=True, kw_only=True)
 class Config:
-    """A complete design: plant, friction, sensor, observer and PID sections.
+    """A complete design: plant, friction, sensor, observer, PID, compensation and hardware sections.
 
     Attributes
     ----------
     name : str
         Name of the design.
-    plant, friction, sensor, observer, pid, compensation : dataclass
-        The sections of :data:`SECTIONS`; ``sensor`` and ``compensation`` may be left out of a file.
+    plant, friction, sensor, observer, pid, compensation, hardware : dataclass
+        The sections of :data:`SECTIONS`; ``sensor``, ``compensation`` and ``hardware`` may be left out.
     sources : Mapping[str, str]
         Where values come from (``"plant.m"`` -> text); not compared.
     plant_friction : PlantFrictionSpec or None
@@ -233,6 +231,7 @@ class Config:
     pid: PIDSpec
     sensor: SensorSpec = field(default_factory=SensorSpec)
     compensation: CompensationSpec = field(default_factory=CompensationSpec)
+    hardware: HardwareSpec = field(default_factory=HardwareSpec)
     sources: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
     plant_friction: PlantFrictionSpec | None = None  # [plant_friction]: the simulated plant's model
     axis: AxisSpec | None = None  # [axis]: linear or rotary, the command's unit (None: linear, V)
@@ -307,6 +306,7 @@ class Config:
         """
         if not isinstance(data, dict):
             raise TypeError(f"{source}: expected a table, found {type(data).__name__}")
+        data = move_legacy_delay(data, source=source)
         allowed = set(SECTIONS) | {"name", "sources", "plant_friction", "axis"}
         unknown = sorted(set(data) - allowed)
         if unknown:

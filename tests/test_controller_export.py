@@ -47,7 +47,8 @@ CASES = {
     "noisy-lag": (od.load_preset("table1").override(noise_rms=2e-7),
                   # simulated and exported with the schedule without reversal hysteresis
                   dict(scenario="tracking", controller="pid+observer", stiffness="estimated-raw")),
-    # the computation delay ([pid] delay_samples): the command of sample n applied from n + d
+    # the drive's delay ([hardware] delay_samples): the simulated plant applies the command of sample n from
+    # n + d; the exported controller has no delay (_applied shifts its commands)
     "delayed": (od.load_preset("table1").override(quantization=1e-7, delay_samples=2),
                 dict(scenario=od.sim.Positioning(step_down=1.2), controller="pid+observer")),
     "delayed-eso": (VCM.override(noise_rms=1e-6, delay_samples=1),
@@ -165,8 +166,18 @@ RUNNERS = {
 }
 
 
+def _applied(command, cfg):
+    """The commands the simulated drive applies: those of ``command`` ``[hardware] delay_samples`` later, the
+    saturated feed-forward ``G / K`` before the first one arrives (the exported controller has no delay)."""
+    d, pl = cfg.hardware.delay_samples, cfg.plant
+    command = np.asarray(command)
+    if d == 0:
+        return command
+    return np.concatenate([np.full(d, min(max(pl.G / pl.K, -pl.u_max), pl.u_max)), command[:-d]])
+
+
 def _max_rel(command, cfg, u_ref):
-    u = cfg.plant.K * np.asarray(command) - cfg.plant.G
+    u = cfg.plant.K * _applied(command, cfg) - cfg.plant.G
     return float(np.max(np.abs(u - u_ref[: len(u)])) / np.max(np.abs(u_ref)))
 
 

@@ -44,6 +44,8 @@ def _same(a, b) -> bool:
         return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
     if isinstance(a, dict) and isinstance(b, dict):
         return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if dataclasses.is_dataclass(a) and not isinstance(a, type) and type(a) is type(b):  # a result held in a result
+        return _same(_fields(a), _fields(b))
     return type(a) is type(b) and a == b
 
 

@@ -1,4 +1,4 @@
-"""The sampled loop that runs: config field ``pid.delay_samples``, the discrete PID ``C(z)`` against the
+"""The sampled loop that runs: config field ``hardware.delay_samples``, the discrete PID ``C(z)`` against the
 kernel's recursion, margins against an independent python-control computation, the simulator's step."""
 
 from __future__ import annotations
@@ -6,28 +6,29 @@ from __future__ import annotations
 import pytest
 
 import obsdesign as od
+from obsdesign.hardware import HardwareSpec
 
 
 # --------------------------------------------------------------------------------------------
-# pid.delay_samples: the config field
+# hardware.delay_samples: the config field (the drive's delay)
 def test_delay_samples_defaults_to_zero_and_round_trips():
     cfg = od.load_preset("vcm")
-    assert cfg.pid.delay_samples == 0
+    assert cfg.hardware.delay_samples == 0
     for d in (0, 1, 3):
         c = cfg.override(delay_samples=d)
         back = od.Config.from_toml(c.to_toml())
-        assert back == c and back.pid.delay_samples == d and type(back.pid.delay_samples) is int
-    assert "delay_samples = 0  # [samples] computation delay" in cfg.to_toml()
+        assert back == c and back.hardware.delay_samples == d and type(back.hardware.delay_samples) is int
+    assert "[hardware]\ndelay_samples = 0  # [samples] the drive's delay" in cfg.to_toml()
 
 
 @pytest.mark.parametrize("bad", [-1, 1.5, 2.0, "1", True, None])
 def test_delay_samples_rejects_what_is_not_a_nonnegative_integer(bad):
     cfg = od.load_preset("vcm")
-    with pytest.raises(ValueError, match=r"^pid\.delay_samples: expected an integer >= 0 and <= 10000, found "):
-        od.PIDSpec(max_S=1e-3, phase_margin_deg=60.0, tau=0.01, delay_samples=bad)
+    with pytest.raises(ValueError, match=r"^hardware\.delay_samples: expected an integer >= 0 and <= 10000, found "):
+        HardwareSpec(delay_samples=bad)
     text = cfg.to_toml().replace("delay_samples = 0", f"delay_samples = {bad!r}".replace("'", '"')
                                  .replace("True", "true").replace("None", '"none"'))
-    with pytest.raises(ValueError, match=r"pid\.delay_samples: expected an integer >= 0 and <= 10000, found "):
+    with pytest.raises(ValueError, match=r"hardware\.delay_samples: expected an integer >= 0 and <= 10000, found "):
         od.Config.from_toml(text)
 
 
@@ -36,8 +37,8 @@ def test_config_command_prints_delay_samples_with_its_comment():
 
     text = config_toml(od.load_preset("vcm").override(delay_samples=2))
     line = next(x for x in text.splitlines() if x.startswith("delay_samples"))
-    assert line.startswith("delay_samples = 2  # [samples] computation delay")
-    assert od.Config.from_toml(text).pid.delay_samples == 2
+    assert line.startswith("delay_samples = 2  # [samples] the drive's delay")
+    assert od.Config.from_toml(text).hardware.delay_samples == 2
 
 
 # --------------------------------------------------------------------------------------------
@@ -87,12 +88,10 @@ def test_discrete_pid_is_the_kernels_recursion(make):
     e = rng.standard_normal(400) * 1e-4
     e[0] = 0.0  # the kernel takes e_prev = e at n = 0; zero initial state needs e[0] = e[-1] = 0
     e[150:] = 1e-4  # and a step
-    from obsdesign.sampled.kernel import delay_buffer
-
-    cst, ost, ez, ub = CONTROLLER_STATE, OBSERVER_STATE, np.zeros(1), delay_buffer(ctrl)
+    cst, ost, ez = CONTROLLER_STATE, OBSERVER_STATE, np.zeros(1)
     u = np.empty(e.size)
     for n in range(e.size):  # x_ref = 0, x_meas = -e
-        cst, ost, u[n], *_ = controller_sample(cst, ost, ez, ub, n, 0.0, 0.0, 1.0, 0.0, -e[n], 0.0, obs, est, ctrl)
+        cst, ost, u[n], *_ = controller_sample(cst, ost, ez, n, 0.0, 0.0, 1.0, 0.0, -e[n], 0.0, obs, est, ctrl)
     dt = cfg.observer.dt
     C = discrete_pid(kp=sc.kp, ki=sc.ki, kd=sc.kd, tau_d=sc.tau_d, dt=dt)
     y = ct.forced_response(C, np.arange(e.size) * dt, e).outputs.ravel()

@@ -47,7 +47,7 @@ def add_commands(sub) -> None:
     p.add_argument("--phi", type=POSITIVE_ARG, help="override the plant gain phi [m/(V s)] of eq:linplant (> 0)")
     p.add_argument("--tau", type=POSITIVE_ARG, help="override the plant time constant tau [s] of eq:linplant (> 0)")
     p.add_argument("--delay", type=integer(0, MAX_DELAY_SAMPLES), metavar="N",
-                   help="computation delay of the sampled loop [samples] (integer >= 0; default pid.delay_samples)")
+                   help="the drive's delay in the sampled loop [samples] (0 to 10000; default hardware.delay_samples)")
     p.add_argument("--json", action="store_true",
                    help="print one JSON object (continuous: gain_margin_db, phase_margin_deg, crossover_rad_s, max_S, "
                         "max_T, bandwidth_rad_s, closed_loop_poles, ...; the sampled loop under 'sampled')")

@@ -39,7 +39,8 @@ def add_commands(sub) -> None:
                    help="least phase margin [deg] of the sampled loop with the compensation (incl. the delay)")
     p.add_argument("--max-command-noise", type=POSITIVE_ARG, help="largest RMS [V] of the command from sensor noise")
     p.add_argument("--delay-samples", type=integer(0, MAX_DELAY_SAMPLES),
-                   help="override the computation delay [samples] (0 to 10000)")
+                   help="override the drive's delay [samples] from the sampled position to the applied command "
+                        "([hardware] delay_samples, 0 to 10000)")
     p.add_argument("--reversal-rate", type=POSITIVE_ARG, help="reversals per second of the lag model (default 1)")
     p.add_argument("--keep-gain", action="store_true", help="keep the config's compensation gain")
     p.add_argument("-o", "--output", metavar="FILE", help="write the tuned config (.toml)")

@@ -1,11 +1,12 @@
 """The sampled loop that runs with the friction compensation (the constraint of :func:`obsdesign.design.tune`).
 
-Broken at the plant input, ``L(z) = z^-d ((C - g Gy / K) H_zoh - g Gu)``: the ZOH plant ``H_zoh`` and
-the kernel's discrete PID ``C`` of :mod:`obsdesign.design.sampled_loop`, the computation delay ``d``, and
-the compensation ``g f_hat / K`` whose estimate sees the measurement (``Gy``) and the applied force
-``K w`` (``Gu``; the kernel feeds the estimator the force applied over the last interval). The
-measurement noise reaches the command through ``z^-d (-C + g Gy / K) / (1 + L)``. With ``g -> 0`` it is
-the loop of :func:`obsdesign.design.sampled_loop.sampled_loop`.
+Broken at the controller's output, ``L(z) = z^-d (C - g Gy / K) H_zoh - g Gu``: the ZOH plant ``H_zoh`` and
+the kernel's discrete PID ``C`` of :mod:`obsdesign.design.sampled_loop`, the drive's delay ``d`` between the
+command and the plant (``[hardware] delay_samples``), and the compensation ``g f_hat / K`` whose estimate
+sees the measurement (``Gy``) and the controller's own command ``K c`` (``Gu``; the kernel feeds the
+estimator the force it commanded over the last interval, undelayed: the controller does not know the
+drive's delay). The measurement noise reaches the command through ``(-C + g Gy / K) / (1 + L)``. With
+``g -> 0`` it is the loop of :func:`obsdesign.design.sampled_loop.sampled_loop`.
 
 Examples
 --------
@@ -49,12 +50,12 @@ def compensated_loop(cfg: Config, est, gain: float) -> tuple[float, bool, float]
 
     from ..estimators import noise_level
 
-    dt, d, K = cfg.observer.dt, cfg.pid.delay_samples, cfg.plant.K
+    dt, d, K = cfg.observer.dt, cfg.hardware.delay_samples, cfg.plant.K
     C, H = _pid_and_plant(cfg.phi, cfg.pid.tau, cfg.pid.max_S, cfg.pid.phase_margin_deg, cfg.pid.derivative_N, dt)
     Gy = est.transfer_from_measurement()[1, 0]
     Gu = est.transfer_from_input()[1, 0]
     delay = ct.ss(ct.tf([1.0], [1.0] + [0.0] * d, dt)) if d else ct.ss([], [], [], [[1.0]], dt)
-    L = delay * ((C - (gain / K) * Gy) * H - gain * Gu)  # one copy of the plant's states
+    L = delay * (C - (gain / K) * Gy) * H - gain * Gu  # one copy of the plant's states
     if not float(np.max(np.abs(ct.feedback(L, 1).poles()))) < 1.0:
         return -math.inf, False, math.inf
 
@@ -62,8 +63,8 @@ def compensated_loop(cfg: Config, est, gain: float) -> tuple[float, bool, float]
         z = np.exp(1j * theta)
         r = {name: _freq(sys, z) for name, sys in (("C", C), ("H", H), ("Gy", Gy), ("Gu", Gu))}
         zd = z ** (-d)
-        Lz = zd * (r["C"] * r["H"] - (gain / K) * r["Gy"] * r["H"] - gain * r["Gu"])
-        return Lz, zd * (-r["C"] + (gain / K) * r["Gy"]) / (1.0 + Lz)
+        Lz = zd * (r["C"] * r["H"] - (gain / K) * r["Gy"] * r["H"]) - gain * r["Gu"]
+        return Lz, (-r["C"] + (gain / K) * r["Gy"]) / (1.0 + Lz)
 
     theta = np.geomspace(1e-7 * math.pi, math.pi, LOOP_POINTS)
     Lz, _ = loop(theta)

@@ -1,9 +1,11 @@
 """Loop views of the sensitivity-based PID: margins, sensitivities, bandwidth, poles.
 
-Two systems, each labelled where it is printed: the **continuous idealisation** below (ideal PID, no
-sampling; the top-level numbers) and the **sampled loop** that runs (ZOH plant, the kernel's discrete
-PID with its derivative filter, ``pid.delay_samples`` of computation delay;
-:mod:`obsdesign.design.sampled_loop`, the ``sampled`` attribute and key).
+Three systems, each labelled where it is printed: the **continuous idealisation** below (ideal PID, no
+sampling; the top-level numbers), the **sampled loop** on the PID's design model (ZOH plant, the kernel's
+discrete PID with its derivative filter, ``hardware.delay_samples`` of drive delay;
+:mod:`obsdesign.design.sampled_loop`, the ``sampled`` attribute and key) and the same sampled loop around
+the **simulated plant** (mass, viscous friction, pre-sliding stiffness, actuator gain of the plant that
+``simulate`` runs; :mod:`obsdesign.design.plant_loop`, the ``simulated`` attribute, key ``simulated_plant``).
 
 The continuous loop is the one of :mod:`obsdesign.design.pid`: plant ``H = phi / (s (tau s + 1))``
 (eq:linplant), controller ``C = k (tau s + 1)(T_I s + 1) / (T_I s)`` (eq:Cpid) and the
@@ -46,6 +48,7 @@ import numpy as np
 from .._memo import memo
 from ..params import Config, load_preset
 from .pid import PIDDesign, check_margins, check_peak, design_pid, kept_response, lazy_system, loop_polynomials, peak_magnitude
+from .plant_loop import PlantLoop, plant_loops
 from .sampled_loop import SampledLoop, sampled_loop
 from .._display import ResultDisplay
 
@@ -90,7 +93,9 @@ class LoopAnalysis(ResultDisplay):
     max_CS : float
         Peak of ``|C / (1 + L)|`` [V/m] (noise to command): ``inf`` for the ideal PID (``kd s``).
     sampled : SampledLoop
-        The loop that runs (:func:`obsdesign.design.sampled_loop.sampled_loop`).
+        The sampled loop on the design model (:func:`obsdesign.design.sampled_loop.sampled_loop`).
+    simulated : dict of str to PlantLoop
+        The sampled loop around the simulated plant, by regime (:func:`obsdesign.design.plant_loop.plant_loops`).
     pid : PIDDesign
         The PID design the loop is built from.
     L, S, T : control.TransferFunction
@@ -112,6 +117,7 @@ class LoopAnalysis(ResultDisplay):
     delay_margin_s: float
     max_CS: float
     sampled: SampledLoop
+    simulated: dict[str, PlantLoop] = field(default_factory=dict)
     pid: PIDDesign = field(repr=False, compare=False)
     L = lazy_system()
     S = lazy_system()
@@ -145,14 +151,17 @@ class LoopAnalysis(ResultDisplay):
             "delay_margin_s": self.delay_margin_s,
             "max_CS": None if not math.isfinite(self.max_CS) else self.max_CS,
             "sampled": self.sampled.to_dict(),
+            "simulated_plant": {regime: pl.to_dict() for regime, pl in self.simulated.items()},
         }
 
     def text(self, units=None) -> str:
-        """Both tables as text (units of ``units``, an :class:`~obsdesign.axis.AxisSpec`)."""
-        return super().text(units) + "\n\n" + self.sampled.text(units)
+        """The tables as text (units of ``units``, an :class:`~obsdesign.axis.AxisSpec`)."""
+        return "\n\n".join([super().text(units), self.sampled.text(units)]
+                           + [pl.text(units) for pl in self.simulated.values()])
 
     def _repr_html_(self) -> str:
-        return super()._repr_html_() + self.sampled._repr_html_()
+        return super()._repr_html_() + self.sampled._repr_html_() + "".join(
+            pl._repr_html_() for pl in self.simulated.values())
 
     def _rows(self):
         gm = self.gain_margin_db
@@ -189,7 +198,7 @@ def loop_analysis(cfg: Config | None = None, *, phi: float | None = None, tau: f
         Overrides of the plant gain [m/(V s)] and time constant [s] of eq:linplant;
         the PID is designed for (and the loop closed around) the overridden plant.
     delay_samples : int, optional
-        Computation delay of the sampled loop [samples] (>= 0); default ``cfg.pid.delay_samples``.
+        Computation delay of the sampled loop [samples] (>= 0); default ``cfg.hardware.delay_samples``.
 
     Returns
     -------
@@ -223,7 +232,7 @@ def loop_analysis(cfg: Config | None = None, *, phi: float | None = None, tau: f
         phase_margin_deg=pm, crossover_rad_s=wgc, phase_crossover_rad_s=wpc,
         max_S=max_S, omega_max_S=w_S, max_T=max_T, omega_max_T=w_T, max_S_disturbance=pid.max_S_achieved,
         bandwidth_rad_s=bandwidth, closed_loop_poles=tuple(poles),
-        delay_margin_s=math.radians(pm) / wgc, max_CS=math.inf, sampled=sampled, pid=pid,
+        delay_margin_s=math.radians(pm) / wgc, max_CS=math.inf, sampled=sampled, simulated=plant_loops(cfg), pid=pid,
     )
 
 

@@ -1,4 +1,4 @@
-"""The sampled loop that runs: ZOH plant, the kernel's discrete PID, a computation delay of d samples.
+"""The sampled loop that runs: ZOH plant, the kernel's discrete PID, the drive's delay of d samples.
 
 At sample ``n`` the controller (:func:`obsdesign.sampled.kernel.controller_sample`) computes, from
 the error ``e[n] = x_ref[n] - x_meas[n]``,
@@ -13,9 +13,9 @@ so its z-transform (zero initial state) is exactly
 ``C(z) = kp + ki dt z / (z - 1) + kd (1 - a) / dt (z - 1) / (z - a)``.
 
 The command is held over ``[n dt, (n + 1) dt)`` (ZOH) on the plant ``H = phi / (s (tau s + 1))``
-of eq:linplant, ``H_zoh(z) = c2d(H, dt, 'zoh')``, after ``d = pid.delay_samples`` samples of
-computation delay: ``L(z) = C(z) H_zoh(z) z^-d``. The linear loop leaves out the feed-forward, the
-friction compensation, the saturation (with its conditional integration) and quantization.
+of eq:linplant, ``H_zoh(z) = c2d(H, dt, 'zoh')``, after ``d = hardware.delay_samples`` samples of
+the drive's delay: ``L(z) = C(z) H_zoh(z) z^-d``. The linear loop leaves out the feed-forward, the friction
+compensation, the saturation (with its conditional integration) and quantization.
 
 Computed with python-control on the discrete system: margins (``stability_margins``), the delay
 margin ``PM / omega_c`` (the extra delay the loop tolerates, exact for whole samples: the loop stays
@@ -189,7 +189,7 @@ class SampledLoop(ResultDisplay):
         The discrete systems (sample time ``dt``).
     """
 
-    _title = "Sampled loop (what runs): L(z) = C(z) H_zoh(z) z^-d"
+    _title = "Sampled loop on the PID's design model eq:linplant: L(z) = C(z) H_zoh(z) z^-d"
     dt: float
     delay_samples: int
     derivative_N: float
@@ -302,7 +302,7 @@ def sampled_loop(cfg: Config, *, delay_samples: int | None = None) -> SampledLoo
     cfg : Config
         The design: ``pid`` section, ``phi``, ``observer.dt``, ``pid.derivative_N``.
     delay_samples : int, optional
-        Computation delay [samples] (>= 0); default ``cfg.pid.delay_samples``.
+        Computation delay [samples] (>= 0); default ``cfg.hardware.delay_samples``.
 
     Returns
     -------
@@ -325,7 +325,7 @@ def sampled_loop(cfg: Config, *, delay_samples: int | None = None) -> SampledLoo
     """
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
-    d = cfg.pid.delay_samples if delay_samples is None else check_integer("delay_samples", delay_samples, minimum=0,
+    d = cfg.hardware.delay_samples if delay_samples is None else check_integer("delay_samples", delay_samples, minimum=0,
                                                                                       maximum=MAX_DELAY_SAMPLES)
     dt, N = cfg.observer.dt, cfg.pid.derivative_N
     _, _, kp, ki, kd = pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,

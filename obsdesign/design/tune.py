@@ -15,12 +15,12 @@ Constraints (:class:`Constraints`):
 
 * the certificate holds (:func:`obsdesign.design.certify`: the switched sampled observer);
 * ``min_phase_margin_deg``: phase margin of the sampled loop that runs with the compensation,
-  ``L(z) = z^-d (C H - g (Gy H / K + Gu))`` broken at the plant input: the plant ``H_zoh`` and the
-  discrete PID ``C`` of :mod:`obsdesign.design.sampled_loop`, the delay ``d``, and the path from the
-  measurement (``Gy``) and from the applied force (``Gu``) to the filtered friction estimate; the
-  closed loop must be stable;
+  ``L(z) = z^-d (C - g Gy / K) H - g Gu`` broken at the controller's output: the plant ``H_zoh`` and the
+  discrete PID ``C`` of :mod:`obsdesign.design.sampled_loop`, the drive's delay ``d``, and the path from
+  the measurement (``Gy``) and from the commanded force (``Gu``) to the filtered friction estimate
+  (:mod:`obsdesign.design.compensated_loop`); the closed loop must be stable;
 * ``max_command_noise``: RMS [V] of the command from the measurement noise through the same loop,
-  ``z^-d (-C + g Gy / K) / (1 + L)``, for band-limited noise as :func:`obsdesign.estimators.noise_level`.
+  ``(-C + g Gy / K) / (1 + L)``, for band-limited noise as :func:`obsdesign.estimators.noise_level`.
 
 Search (deterministic): a grid over ``log rho x log omega_co x gain`` (:data:`GRID`), the best
 feasible point refined by bounded Powell (``scipy.optimize.minimize``) on the objective with a
@@ -204,11 +204,19 @@ class TuneResult(ResultDisplay):
                          "margin": c.max_command_noise - d.command_noise})
         return rows
 
+    def simulated_plant(self):
+        """The PID loop (without the compensation) around the simulated plant in sliding, with the drive's
+        delay (:func:`obsdesign.design.plant_loop.plant_loop`): tuning does not change it."""
+        from .plant_loop import plant_loop
+
+        return plant_loop(self.config)
+
     def to_dict(self) -> dict:
         """JSON-ready values (``tune --json``)."""
         return {"objective": self.objective, "before": self.before, "after": self.after, "feasible": self.feasible,
                 "start": self.start.to_dict(), "chosen": self.chosen.to_dict(),
-                "constraints": self.constraint_rows(), "evaluations": self.evaluations, "wall_s": self.wall_s}
+                "constraints": self.constraint_rows(), "evaluations": self.evaluations, "wall_s": self.wall_s,
+                "simulated_plant": self.simulated_plant().to_dict()}
 
     def _rows(self):
         s, d = self.start, self.chosen
@@ -225,6 +233,9 @@ class TuneResult(ResultDisplay):
             margin = "" if r["margin"] is None else f" ({label} {r['margin']:.4g})"
             rows.append((r["constraint"], f"bound {show(r['bound'])}: start {show(r['start'])}, "
                                           f"chosen {show(r['chosen'])}{margin}"))
+        pl = self.simulated_plant()
+        rows.append(("PID loop, simulated plant", f"phase margin {pl.phase_margin_deg:.4g} deg, gain margin "
+                                                  f"{pl.gain_margin_db:.4g} dB ({pl.system})"))
         rows.append(("evaluations", f"{self.evaluations} in {self.wall_s:.1f} s"))
         return rows
 

@@ -191,9 +191,8 @@ def controller_constants(cfg, *, controller: str | None = None, compensation: Co
         ``SIGMA``, ``V_HAT0``, ``F_HAT0``, the PID (``KP``, ``KI``, ``KD``, ``ALPHA_D``), the
         compensation (``COMP_ON``, ``COMP_GAIN``, ``COMP_VISCOUS``, ``COMP_DEADZONE``; flags are
         0.0 or 1.0; modes ``feedforward``/``blend`` add ``COMP_MODE``, the model ``FF_CF``,
-        ``FF_STRIBECK``, ``FF_VS``, ``FF_OFFSET`` and ``BLEND_VISCOUS``) and the computation delay (``DELAY`` [samples], ``DELAY_INIT``: the saturated
-        ``G / K`` in flight before the first command). ``paper``/``paper-k0``: ``CF``, ``S``,
-        ``KAPPA``, ``L1``, ``L2``, the affine observer arrays ``A0_i`` ... ``G1_i``, the low-pass
+        ``FF_STRIBECK``, ``FF_VS``, ``FF_OFFSET`` and ``BLEND_VISCOUS``); no delay (``[hardware]
+        delay_samples`` is the drive's, never the controller's). ``paper``/``paper-k0``: ``CF``, ``S``, ``KAPPA``, ``L1``, ``L2``, the affine observer arrays ``A0_i`` ... ``G1_i``, the low-pass
         ``LP_*``, ``SCHEDULE`` (the registry's code; :data:`SCHEDULE_ZERO` for ``paper-k0``) and
         ``REVERSAL_THRESHOLD`` [m]. A baseline: ``E_NZ`` and its arrays ``E_PHI_i_j``, ``E_GU_i``,
         ``E_G0_i``, ``E_G1_i``, ``E_CZ_r_j``, ``E_D_r``, ``E_INIT_i_c``.
@@ -227,7 +226,6 @@ def controller_constants(cfg, *, controller: str | None = None, compensation: Co
         "F_HAT0": obs.f_hat0, "KP": c.kp, "KI": c.ki, "KD": c.kd, "ALPHA_D": c.alpha_d,
         "COMP_ON": 1.0 if ctrl.controller == "pid+observer" else 0.0, "COMP_GAIN": c.comp_gain,
         "COMP_VISCOUS": 1.0 if c.comp_viscous else 0.0, "COMP_DEADZONE": c.comp_deadzone,
-        "DELAY": c.delay, "DELAY_INIT": c.delay_init,
     }
     if ctrl.controller == "pid+observer" and ctrl.compensation.mode != "observer":
         consts.update({"COMP_MODE": c.comp_mode, "FF_CF": c.ff_cf, "FF_STRIBECK": c.ff_stribeck, "FF_VS": c.ff_vs,
@@ -381,7 +379,7 @@ def controller_files(cfg, language: str, *, controller: str | None = None,
         "codes": {k: _literal(v) for k, v in codes.items()} if not baseline else {},
         "core": _c_core() if language == "c" and not baseline else "",
         "helpers": _python_helpers(baseline) if language == "python" else "",
-        "terms": discretize._TERMS, "delay": ctrl.delay,
+        "terms": discretize._TERMS,
         "ffmode": compensation.mode != "observer" and controller == "pid+observer",
         "blend": compensation.mode == "blend" and controller == "pid+observer",
         "blend_viscous": cfg.observer.variant == "lag",

@@ -55,8 +55,8 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
         ``[compensation]`` section, saturation): ``obsdesign_controller.h/.c``, ``obsdesign_controller.py``,
         ``obsdesign_controller*.m``, ``obsdesign_controller.mjs``, ``obsdesign_controller.fmu``
         (:mod:`~obsdesign.export.fmu`: compiled for this platform when a C compiler is found),
-        ``obsdesign_controller.st`` and ``.xml`` (:mod:`~obsdesign.export.st`; the controller's
-        ``fmu`` and ``st`` need ``[pid] delay_samples = 0``). The observer's ``fmu`` and ``st`` are
+        ``obsdesign_controller.st`` and ``.xml`` (:mod:`~obsdesign.export.st`). No export holds the drive's delay
+        (``[hardware] delay_samples``). The observer's ``fmu`` and ``st`` are
         ``obsdesign_observer.fmu``, ``obsdesign_observer.st`` and ``.xml``.
     controller : str, optional
         With ``what='controller'``: the controller of :func:`obsdesign.simulate` to generate

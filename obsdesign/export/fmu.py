@@ -52,7 +52,7 @@ from .codegen import c_files, export_spec
 from .controller import _environment, _literal, controller_constants, controller_files, exported_controller
 from .literals import comment_text
 
-__all__ = ["FMU_NAME", "OBSERVER_FMU_NAME", "MODEL_IDENTIFIER", "fmu_archive", "fmu_platform", "check_no_delay"]
+__all__ = ["FMU_NAME", "OBSERVER_FMU_NAME", "MODEL_IDENTIFIER", "fmu_archive", "fmu_platform"]
 
 #: The archive's file name.
 FMU_NAME = "obsdesign_controller.fmu"
@@ -92,37 +92,6 @@ _OBSERVER_INPUTS = (("u_prev", "N", "net force K u - G held over the interval th
                     ("x_meas", "m", "measured position (encoder)"))
 _OBSERVER_OUTPUTS = (("v_hat", "m/s", "velocity estimate", "obsdesign_observer_velocity(&m->c)"),
                      ("f_hat", "N", "friction estimate", "obsdesign_observer_friction(&m->c)"))
-
-
-def check_no_delay(ctrl, fmt: str) -> None:
-    """Refuse a controller with a computation delay (``[pid] delay_samples`` > 0) for ``fmt``.
-
-    The delay is the drive's (the hardware's), not the controller's: the FMU and the PLC block
-    run the controller without it. Set ``delay_samples = 0`` to export.
-
-    Parameters
-    ----------
-    ctrl : SampledController
-        The controller to export.
-    fmt : str
-        The format's name, for the message.
-
-    Raises
-    ------
-    ValueError
-        ``ctrl.delay`` > 0.
-
-    Examples
-    --------
-    >>> import obsdesign as od
-    >>> check_no_delay(exported_controller(od.load_preset("vcm").override(delay_samples=1)), "fmu")
-    Traceback (most recent call last):
-    ...
-    ValueError: delay_samples: the fmu export runs the controller without the computation delay (it is the drive's); expected 0, found 1
-    """
-    if ctrl.delay:
-        raise ValueError(f"delay_samples: the {fmt} export runs the controller without the computation delay "
-                         f"(it is the drive's); expected 0, found {ctrl.delay}")
 
 
 def fmu_platform() -> str | None:
@@ -172,7 +141,6 @@ def _variables(units, inputs, outputs, consts) -> tuple[list[dict], list[dict], 
 
 def _controller_model(cfg, choices) -> _Model:
     ctrl = exported_controller(cfg, **choices)
-    check_no_delay(ctrl, "fmu")
     ffmode = ctrl.controller == "pid+observer" and ctrl.compensation.mode != "observer"
     outputs = [(n, u, d, "m->c." + f) for n, u, d, f in _OUTPUTS]
     variables = _variables(ctrl.config.units, _INPUTS + (_FF_INPUTS if ffmode else ()), outputs,
@@ -279,7 +247,7 @@ def fmu_archive(cfg, *, what: str = "controller", binary: bool | None = None, co
     Parameters
     ----------
     cfg : Config or SampledController
-        The design (``[pid] delay_samples`` must be 0), or the controller itself.
+        The design, or the controller itself (the drive's ``[hardware] delay_samples`` is not in it).
     what : {'controller', 'observer'}
         ``controller`` (default): ``obsdesign_controller.fmu`` around the files of ``--format c --what
         controller``; ``observer``: ``obsdesign_observer.fmu`` around those of ``--format c`` (the
@@ -299,7 +267,7 @@ def fmu_archive(cfg, *, what: str = "controller", binary: bool | None = None, co
     Raises
     ------
     ValueError
-        ``delay_samples`` > 0; ``binary=True`` without a compiler or on a platform with no FMI folder;
+        ``binary=True`` without a compiler or on a platform with no FMI folder;
         and the errors of :func:`~obsdesign.export.controller.controller_files`.
     OSError
         The compiler failed.

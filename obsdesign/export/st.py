@@ -42,7 +42,6 @@ from ..sampled.choices import SCHEDULES
 from .codegen import axis_note, export_spec
 from . import WHAT
 from .controller import SCHEDULE_ZERO, _environment, _literal, controller_constants, exported_controller
-from .fmu import check_no_delay
 from .literals import KEYWORDS, ST_LANGUAGE, comment_text
 
 __all__ = ["ST_KEYWORDS", "FB_NAME", "OBSERVER_FB_NAME", "st_files", "st_literal", "check_st_identifier"]
@@ -396,7 +395,7 @@ def st_files(cfg, *, what: str = "controller", controller: str | None = None, sc
     Parameters
     ----------
     cfg : Config or SampledController
-        The design (``[pid] delay_samples`` must be 0), or the controller itself.
+        The design, or the controller itself (the drive's ``[hardware] delay_samples`` is not in it).
     what : {'controller', 'observer'}
         ``controller`` (default): ``FB_ObsdesignController``, the whole sampled controller;
         ``observer``: ``FB_ObsdesignObserver``, the observer export's step (inputs ``u_prev``,
@@ -412,7 +411,7 @@ def st_files(cfg, *, what: str = "controller", controller: str | None = None, sc
     Raises
     ------
     ValueError
-        ``delay_samples`` > 0, a generated identifier that is an ST keyword or clashes, and the
+        A generated identifier that is an ST keyword or clashes, and the
         errors of :func:`~obsdesign.export.controller.controller_files`.
     """
     if check_choice("what", what, _WHAT) == "observer":
@@ -430,7 +429,6 @@ def st_files(cfg, *, what: str = "controller", controller: str | None = None, sc
                          f"x_meas [{u('m')}]; outputs v_hat [{u('m/s')}], f_hat [{u('N')}].")
     else:
         ctrl = exported_controller(cfg, controller=controller, schedule=schedule, estimator=estimator)
-        check_no_delay(ctrl, "st")
         pous = (*_FUNCTIONS, _block(ctrl, ctrl.config.units))
         cfg, u = ctrl.config, ctrl.config.units.unit
         header = _header(cfg, "controller", f"controller {ctrl.controller}, estimator {ctrl.estimator}, schedule "

@@ -166,10 +166,6 @@ class ControllerArgs(NamedTuple):
         Saturation of the command [V].
     comp_gain, comp_viscous, comp_deadzone : float, bool, float
         The compensation law of :class:`obsdesign.params.CompensationSpec`.
-    delay : int
-        Computation delay [samples] between the measurement and the command's output.
-    delay_init : float
-        The command [V] in flight before the first computed one arrives: the saturated feed-forward ``G / K``.
     comp_mode : int
         Compensation mode code (:data:`obsdesign.sampled.choices.COMPENSATION_MODES`).
     ff_cf, ff_stribeck, ff_vs, ff_offset : float
@@ -193,8 +189,6 @@ class ControllerArgs(NamedTuple):
     comp_gain: float
     comp_viscous: bool
     comp_deadzone: float
-    delay: int
-    delay_init: float
     comp_mode: int
     ff_cf: float
     ff_stribeck: float
@@ -254,12 +248,6 @@ class SampledController:
         return self.config.observer.dt
 
     @property
-    def delay(self) -> int:
-        """Computation delay [samples] (``[pid] delay_samples``): the command computed at sample ``n`` is
-        applied from ``n + delay`` on."""
-        return self.config.pid.delay_samples
-
-    @property
     def alpha_d(self) -> float:
         """Pole of the first-order derivative filter per sample, ``exp(-dt / tau_d)`` (0 without one)."""
         return math.exp(-self.dt / self.tau_d) if self.tau_d > 0.0 else 0.0
@@ -285,7 +273,6 @@ class SampledController:
         c = ControllerArgs(controller=CONTROLLERS.code(self.controller), dt=self.dt, K=pl.K, G=pl.G, sigma=fr.sigma,
                            kp=self.kp, ki=self.ki, kd=self.kd, alpha_d=self.alpha_d, u_max=pl.u_max,
                            comp_gain=comp.gain, comp_viscous=comp.viscous, comp_deadzone=comp.deadzone,
-                           delay=self.delay, delay_init=min(max(pl.G / pl.K, -pl.u_max), pl.u_max),
                            comp_mode=COMPENSATION_MODES.code(comp.mode), ff_cf=fr.Cf, ff_stribeck=comp.ff_stribeck,
                            ff_vs=comp.ff_stribeck_velocity, ff_offset=comp.ff_offset,
                            blend_viscous=cfg.observer.variant == "lag")

@@ -14,11 +14,13 @@ same order):
    ``comp / K`` for ``pid+observer``: mode ``observer`` :func:`compensation_force`; ``feedforward``
    and ``blend`` :func:`reference_compensation` of the reference velocity ``v_ref`` and weight
    ``w_ff`` (inputs of the sample, :func:`obsdesign.sampled.reference.reference_feedforward`);
-3. load feed-forward ``G / K``, saturation at ``u_max``;
-4. computation delay of ``d`` samples (``[pid] delay_samples``): the command computed at sample ``n``
-   is applied from sample ``n + d`` on (a ring buffer of ``d`` commands, which holds the saturated
-   feed-forward ``G / K`` before the first computed command reaches the output); the applied
-   command's net force ``K command - G`` is what the estimator is fed at the next sample.
+3. load feed-forward ``G / K``, saturation at ``u_max``; the command's net force ``K command - G`` is
+   what the estimator is fed at the next sample.
+
+The controller does not wait: the drive's delay between the sampled position and the applied command
+(``[hardware] delay_samples``) belongs to the plant and is simulated there
+(:func:`obsdesign.sim.kernel.run_loop`), so an exported controller on hardware that has the delay sees
+the loop that was simulated (docs/delay.md).
 
 :func:`observe_loop` runs step 1 alone over measured data. The arguments come in named groups
 (:class:`~obsdesign.sampled.controller.ObserverArgs`, ``EstimatorArgs``, ``ControllerArgs``) built
@@ -38,7 +40,7 @@ from ..estimators.registry import FIRST_BASELINE_CODE
 from .choices import COMPENSATION_MODES, CONTROLLERS, ESTIMATORS, SCHEDULES
 
 __all__ = ["observer_sample", "controller_sample", "compensation_force", "reference_compensation",
-           "feedforward_model", "observe_loop", "delay_buffer", "OBSERVER_STATE", "CONTROLLER_STATE"]
+           "feedforward_model", "observe_loop", "OBSERVER_STATE", "CONTROLLER_STATE"]
 
 # Codes read once from the registries; numba freezes module globals at compile time (the registries
 # are append-only: a code never changes meaning).
@@ -206,16 +208,15 @@ def reference_compensation(n, ff, v_ref, w_ff, zb1, zb2, fb_prev, obs, ctrl):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def controller_sample(cst, ost, ez, ubuf, n, x_ref, v_ref, w_ff, u_open, xm, k_true, obs, est, ctrl):
+def controller_sample(cst, ost, ez, n, x_ref, v_ref, w_ff, u_open, xm, k_true, obs, est, ctrl):
     """One sample of the whole controller: measurement ``xm`` and reference ``x_ref`` in, command out.
 
     ``cst`` is the controller state (:data:`CONTROLLER_STATE`), ``ost`` the observer's
-    (:data:`OBSERVER_STATE`), ``ez`` the state array of a linear baseline and ``ubuf`` the
-    ``max(delay, 1)`` commands in flight (:func:`delay_buffer`; both updated in place); ``v_ref``
+    (:data:`OBSERVER_STATE`), ``ez`` the state array of a linear baseline (updated in place); ``v_ref``
     [m/s] and ``w_ff`` are the reference velocity and feed-forward weight of the sample (read by the
     modes ``feedforward`` and ``blend`` only); ``u_open`` is the open-loop force [N] of the sample
     (``open-loop`` only). Returns ``(cst, ost, command [V]
-    applied from this sample on (after saturation, with the feed-forward, delayed), v_hat, f_hat,
+    computed at this sample (after saturation, with the feed-forward), v_hat, f_hat,
     f_hat_filtered (the compensated signal), k)``.
     """
     u_prev, xm_prev, integ, deriv, e_prev, zb1, zb2, fb_prev = cst
@@ -245,33 +246,8 @@ def controller_sample(cst, ost, ez, ubuf, n, x_ref, v_ref, w_ff, u_open, xm, k_t
         total = ctrl.u_max
     elif total < -ctrl.u_max:
         total = -ctrl.u_max
-    if ctrl.delay > 0:  # the computation delay: apply the command of sample n - delay
-        slot = n % ctrl.delay
-        applied = ubuf[slot]
-        ubuf[slot] = total
-        total = applied
     cst = (K * total - ctrl.G, xm, integ, deriv, e_prev, zb1, zb2, fb_prev)
     return cst, ost, total, vh, fh, ff, k_now
-
-
-@njit(cache=True, error_model="numpy")
-def delay_buffer(ctrl):
-    """The commands in flight before the first sample: ``max(delay, 1)`` times the saturated
-    feed-forward ``G / K`` [V] (the output holds the load until the first computed command arrives).
-
-    Parameters
-    ----------
-    ctrl : ControllerArgs
-
-    Examples
-    --------
-    >>> import obsdesign as od
-    >>> from obsdesign.sampled import sampled_controller
-    >>> _, _, c = sampled_controller(od.load_preset("vcm").override(delay_samples=2)).kernel_args()
-    >>> [round(float(u), 4) for u in delay_buffer(c)]   # G / K = 5.27 / 3.28 V
-    [1.6067, 1.6067]
-    """
-    return np.full(max(ctrl.delay, 1), ctrl.delay_init)
 
 
 @njit(cache=True, error_model="numpy")

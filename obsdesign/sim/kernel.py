@@ -11,8 +11,12 @@ Per sample ``n`` (time ``n dt``):
 
 1. measure ``x_meas = Q(x + noise[n])`` (``Q``: rounding to the encoder resolution);
 2. the sampled controller: estimator, PID with compensation, feed-forward, saturation
-   (:mod:`obsdesign.sampled.kernel`); the plant's net force is ``K_plant command - G_plant``;
-3. integrate the plant to ``(n+1) dt`` with the input held: ``n_sub`` substeps of
+   (:mod:`obsdesign.sampled.kernel`);
+3. the drive's delay of ``d = PlantArgs.delay`` samples (``[hardware] delay_samples``): the command
+   computed at sample ``n`` is applied from sample ``n + d`` on (a ring buffer of ``d`` commands that
+   holds ``PlantArgs.delay_init``, the saturated feed-forward ``G / K``, before the first computed
+   command arrives); the plant's net force is ``K_plant applied - G_plant``;
+4. integrate the plant to ``(n+1) dt`` with the input held: ``n_sub`` substeps of
    Heun's method (explicit trapezoidal rule, order 2), the pre-sliding branch frozen
    within a substep and updated after it (reversals are detected at substep
    resolution).
@@ -30,10 +34,10 @@ from ..friction.kernels import friction_viscous
 from ..friction.presliding import coulomb_normalized, stiffness, track_reversal
 from ..friction.registry import FRICTION_MODELS
 from ..sampled.choices import PLANTS, SCHEDULES
-from ..sampled.kernel import CONTROLLER_STATE, OBSERVER_STATE, controller_sample, delay_buffer
+from ..sampled.kernel import CONTROLLER_STATE, OBSERVER_STATE, controller_sample
 
-__all__ = ["run_loop", "PlantArgs", "Signals", "Outputs", "empty_outputs", "OUTPUT_NAMES", "PLANT_PHYSICAL",
-           "PLANT_MODEL"]
+__all__ = ["run_loop", "delay_buffer", "measure", "plant_interval", "plant_friction", "plant_stiffness", "paper_scalars",
+           "PlantArgs", "Signals", "Outputs", "empty_outputs", "OUTPUT_NAMES", "PLANT_PHYSICAL", "PLANT_MODEL"]
 
 PLANT_PHYSICAL = PLANTS.code("physical")
 PLANT_MODEL = PLANTS.code("model")
@@ -64,6 +68,12 @@ class PlantArgs(NamedTuple):
         Plant friction model (:data:`obsdesign.friction.FRICTION_MODELS` code).
     plant_params : ndarray
         Its parameters (paper: the ``PP_*`` layout; others: :meth:`~obsdesign.friction.FrictionModelInfo.pack`).
+    delay : int
+        The drive's delay [samples] between the sampled position and the applied command
+        (``[hardware] delay_samples``): the command computed at sample ``n`` acts from ``n + delay``.
+    delay_init : float
+        The command [V] the drive applies before the first computed one arrives: the design's saturated
+        feed-forward ``G / K``.
     """
 
     n_sub: int
@@ -74,6 +84,8 @@ class PlantArgs(NamedTuple):
     G: float
     friction_code: int
     plant_params: np.ndarray
+    delay: int
+    delay_init: float
 
 
 class Signals(NamedTuple):
@@ -185,62 +197,134 @@ def _true_friction_other(x, v, w, direction, x_r, f_r, mode, lag_model, pp, fcod
     return fc + (w if pp[PP_BETA] > 0.0 else _paper_sigma(v, pp) * v)
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def paper_scalars(plant):
+    """The paper plant's parameters as scalars ``(Cf, Cf_neg, sigma, sigma_neg, offset, s, beta, kappa,
+    asym)`` (``asym``: a physical plant with a negative side or an offset); placeholders for the other
+    models. Computed once per run: the hot loop of :func:`plant_interval` then reads no arrays."""
+    pp, fcode = plant.plant_params, plant.friction_code
+    Cf_p, Cfn_p, sig_p, sgn_p, off_p, s_p, beta_p, kap_p = pp[0], pp[0], pp[0], pp[0], 0.0, pp[0], pp[0], pp[0]
+    if fcode == FRICTION_PAPER:
+        Cf_p, Cfn_p, sig_p, sgn_p = pp[PP_CF], pp[PP_CF_NEG], pp[PP_SIGMA], pp[PP_SIGMA_NEG]
+        off_p, s_p, beta_p, kap_p = pp[PP_OFFSET], pp[PP_S], pp[PP_BETA], pp[PP_KAPPA]
+    asym = plant.mode == PLANT_PHYSICAL and (Cfn_p != Cf_p or sgn_p != sig_p or off_p != 0.0)
+    return Cf_p, Cfn_p, sig_p, sgn_p, off_p, s_p, beta_p, kap_p, asym
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def measure(x, noise, quantization):
+    """The sensor: ``Q(x + noise)``, ``Q`` rounding to the encoder resolution (0: none)."""
+    xm = x + noise
+    if quantization > 0.0:
+        xm = quantization * np.floor(xm / quantization + 0.5)  # float: no int64 overflow
+    return xm
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def plant_interval(ps, u, fst, h, plant, sc):
+    """The plant over one sample with the net force ``u`` [N] held: ``n_sub`` Heun substeps (explicit
+    trapezoidal, order 2) from the state ``ps = (x, v, w, p_dir, p_xr, p_fr)`` (``w``: the viscous
+    state or w3, then the pre-sliding branch); ``fst``: the friction state of lugre/dahl/gms (updated
+    in place); ``sc``: :func:`paper_scalars`. Returns the new ``ps``."""
+    x, v, w, p_dir, p_xr, p_fr = ps
+    n_sub, mode, lag_model, m = plant.n_sub, plant.mode, plant.lag_model, plant.m
+    fcode, pp = plant.friction_code, plant.plant_params
+    Cf_p, Cfn_p, sig_p, sgn_p, off_p, s_p, beta_p, kap_p, asym = sc
+    if fcode != FRICTION_PAPER:
+        x, v = friction_plant_step(fcode, pp, fst, x, v, u, m, h, n_sub)
+        return x, v, w, p_dir, p_xr, p_fr
+    if asym:
+        for _ in range(n_sub):
+            k1v, k1w = _plant_rhs_asym(x, v, w, u, p_dir, p_xr, p_fr, m, Cf_p, Cfn_p, s_p, sig_p, sgn_p, beta_p, off_p)
+            xp = x + h * v
+            vp = v + h * k1v
+            wp = w + h * k1w
+            k2v, k2w = _plant_rhs_asym(xp, vp, wp, u, p_dir, p_xr, p_fr, m, Cf_p, Cfn_p, s_p, sig_p, sgn_p, beta_p,
+                                       off_p)
+            x += 0.5 * h * (v + vp)
+            v += 0.5 * h * (k1v + k2v)
+            w += 0.5 * h * (k1w + k2w)
+            p_dir, p_xr, p_fr = track_reversal(v, x, p_dir, p_xr, p_fr, s_p)
+        return x, v, w, p_dir, p_xr, p_fr
+    for _ in range(n_sub):
+        k1v, k1w = _plant_rhs(x, v, w, u, p_dir, p_xr, p_fr, mode, lag_model, m, Cf_p, s_p, sig_p, beta_p, kap_p)
+        xp = x + h * v
+        vp = v + h * k1v
+        wp = w + h * k1w
+        k2v, k2w = _plant_rhs(xp, vp, wp, u, p_dir, p_xr, p_fr, mode, lag_model, m, Cf_p, s_p, sig_p, beta_p, kap_p)
+        x += 0.5 * h * (v + vp)
+        v += 0.5 * h * (k1v + k2v)
+        w += 0.5 * h * (k1w + k2w)
+        p_dir, p_xr, p_fr = track_reversal(v, x, p_dir, p_xr, p_fr, s_p)
+    return x, v, w, p_dir, p_xr, p_fr
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def plant_friction(ps, fst, plant, sc):
+    """The plant's value of the estimated state w3 at state ``ps`` (:func:`plant_interval`)."""
+    x, v, w, p_dir, p_xr, p_fr = ps
+    Cf_p, s_p, sig_p, beta_p, asym = sc[0], sc[5], sc[2], sc[6], sc[8]
+    if asym or plant.friction_code != FRICTION_PAPER:
+        return _true_friction_other(x, v, w, p_dir, p_xr, p_fr, plant.mode, plant.lag_model, plant.plant_params,
+                                    plant.friction_code, fst)
+    return _true_friction(x, v, w, p_dir, p_xr, p_fr, plant.mode, plant.lag_model, Cf_p, s_p, sig_p, beta_p)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def plant_stiffness(ps, fst, plant, sc, kappa):
+    """The plant's pre-sliding stiffness at state ``ps``, at most ``kappa`` (the ``true`` schedule)."""
+    x, v, w, p_dir, p_xr, p_fr = ps
+    if plant.friction_code == FRICTION_PAPER:
+        return stiffness(x, p_dir, p_xr, p_fr, sc[0], sc[5], kappa)
+    return min(friction_stiffness(plant.friction_code, plant.plant_params, fst, x, v), kappa)
+
+
 @njit(cache=True, error_model="numpy")
 def run_loop(obs, est, ctrl, plant, sig, out):
     """Run the loop over ``len(sig.x_ref)`` samples, writing the arrays of ``out``.
 
     ``obs``, ``est``, ``ctrl``: the sampled controller's groups
     (:meth:`obsdesign.sampled.SampledController.kernel_args`), which use the design; ``plant``
-    (:class:`PlantArgs`): the simulated plant with its own mass, gain, load and friction model;
-    ``sig`` (:class:`Signals`): reference, open-loop force, noise; ``out`` (:class:`Outputs`).
+    (:class:`PlantArgs`): the simulated plant with its own mass, gain, load, friction model and the
+    drive's delay; ``sig`` (:class:`Signals`): reference, open-loop force, noise; ``out`` (:class:`Outputs`).
     Returns the number of samples written (less than the length when the run diverged).
     """
     x_ref, u_open, noise, quantization = sig.x_ref, sig.u_open, sig.noise, sig.quantization
     v_ref, w_ff = sig.v_ref, sig.w_ff
-    n_sub, mode, lag_model, m = plant.n_sub, plant.mode, plant.lag_model, plant.m
-    K_plant, G_plant, fcode, pp = plant.K, plant.G, plant.friction_code, plant.plant_params
+    K_plant, G_plant = plant.K, plant.G
     kappa = obs.kappa
     n_samples = x_ref.shape[0]
-    h = obs.dt / n_sub
-    x = 0.0
-    v = 0.0
-    w = 0.0
-    p_dir, p_xr, p_fr = 0.0, 0.0, 0.0  # plant pre-sliding branch
+    h = obs.dt / plant.n_sub
+    ps = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # x, v, w and the plant's pre-sliding branch
     ost = OBSERVER_STATE
     cst = CONTROLLER_STATE
-    fst = np.zeros(max(friction_n_state(fcode, pp), 1))  # the friction state of lugre/dahl/gms
+    fst = np.zeros(max(friction_n_state(plant.friction_code, plant.plant_params), 1))  # lugre/dahl/gms state
     ez = np.zeros(est.Phi.shape[0])  # state of a linear estimator
-    ubuf = delay_buffer(ctrl)  # the commands in flight of the computation delay
-    # the paper plant's parameters as scalars (the hot loop below reads no arrays)
-    Cf_p, Cfn_p, sig_p, sgn_p, off_p, s_p, beta_p, kap_p = pp[0], pp[0], pp[0], pp[0], 0.0, pp[0], pp[0], pp[0]
-    if fcode == FRICTION_PAPER:
-        Cf_p, Cfn_p, sig_p, sgn_p = pp[PP_CF], pp[PP_CF_NEG], pp[PP_SIGMA], pp[PP_SIGMA_NEG]
-        off_p, s_p, beta_p, kap_p = pp[PP_OFFSET], pp[PP_S], pp[PP_BETA], pp[PP_KAPPA]
-    asym = mode == PLANT_PHYSICAL and (Cfn_p != Cf_p or sgn_p != sig_p or off_p != 0.0)
+    ubuf = delay_buffer(plant)  # the commands in flight of the drive's delay
+    delay = plant.delay
+    sc = paper_scalars(plant)
     for n in range(n_samples):
+        x, v = ps[0], ps[1]
         # 1. measurement
-        xm = x + noise[n]
-        if quantization > 0.0:
-            xm = quantization * np.floor(xm / quantization + 0.5)  # float: no int64 overflow
+        xm = measure(x, noise[n], quantization)
         # 2. the sampled controller
         k_true = 0.0
         if obs.schedule == SCHEDULE_TRUE:
-            if fcode == FRICTION_PAPER:
-                k_true = stiffness(x, p_dir, p_xr, p_fr, Cf_p, s_p, kappa)
-            else:
-                k_true = min(friction_stiffness(fcode, pp, fst, x, v), kappa)
-        cst, ost, total, vh, fh, ff, k_now = controller_sample(cst, ost, ez, ubuf, n, x_ref[n], v_ref[n], w_ff[n],
-                                                               u_open[n], xm,
-                                                               k_true, obs, est, ctrl)
+            k_true = plant_stiffness(ps, fst, plant, sc, kappa)
+        cst, ost, total, vh, fh, ff, k_now = controller_sample(cst, ost, ez, n, x_ref[n], v_ref[n], w_ff[n],
+                                                               u_open[n], xm, k_true, obs, est, ctrl)
+        # 3. the drive's delay: apply the command of sample n - delay
+        if delay > 0:
+            slot = n % delay
+            applied = ubuf[slot]
+            ubuf[slot] = total
+            total = applied
         u = K_plant * total - G_plant  # net driving force, load compensated
         # record
         out.x[n] = x
         out.x_meas[n] = xm
         out.v[n] = v
-        if asym or fcode != FRICTION_PAPER:
-            out.f[n] = _true_friction_other(x, v, w, p_dir, p_xr, p_fr, mode, lag_model, pp, fcode, fst)
-        else:
-            out.f[n] = _true_friction(x, v, w, p_dir, p_xr, p_fr, mode, lag_model, Cf_p, s_p, sig_p, beta_p)
+        out.f[n] = plant_friction(ps, fst, plant, sc)
         out.v_hat[n] = vh
         out.f_hat[n] = fh
         out.f_hat_filtered[n] = ff
@@ -249,34 +333,29 @@ def run_loop(obs, est, ctrl, plant, sig, out):
         if not (abs(x) < DIVERGED_X and abs(fh) < DIVERGED_F and abs(vh) < DIVERGED_F
                 and abs(ff) < DIVERGED_F and abs(v) < DIVERGED_F):
             return n + 1
-        # 3. plant, Heun (explicit trapezoidal, order 2) substeps with the input held
-        if fcode != FRICTION_PAPER:
-            x, v = friction_plant_step(fcode, pp, fst, x, v, u, m, h, n_sub)
-            continue
-        if asym:
-            for _ in range(n_sub):
-                k1v, k1w = _plant_rhs_asym(x, v, w, u, p_dir, p_xr, p_fr, m, Cf_p, Cfn_p, s_p, sig_p, sgn_p, beta_p, off_p)
-                xp = x + h * v
-                vp = v + h * k1v
-                wp = w + h * k1w
-                k2v, k2w = _plant_rhs_asym(xp, vp, wp, u, p_dir, p_xr, p_fr, m, Cf_p, Cfn_p, s_p, sig_p, sgn_p, beta_p,
-                                           off_p)
-                x += 0.5 * h * (v + vp)
-                v += 0.5 * h * (k1v + k2v)
-                w += 0.5 * h * (k1w + k2w)
-                p_dir, p_xr, p_fr = track_reversal(v, x, p_dir, p_xr, p_fr, s_p)
-            continue
-        for _ in range(n_sub):
-            k1v, k1w = _plant_rhs(x, v, w, u, p_dir, p_xr, p_fr, mode, lag_model, m, Cf_p, s_p, sig_p, beta_p, kap_p)
-            xp = x + h * v
-            vp = v + h * k1v
-            wp = w + h * k1w
-            k2v, k2w = _plant_rhs(xp, vp, wp, u, p_dir, p_xr, p_fr, mode, lag_model, m, Cf_p, s_p, sig_p, beta_p, kap_p)
-            x += 0.5 * h * (v + vp)
-            v += 0.5 * h * (k1v + k2v)
-            w += 0.5 * h * (k1w + k2w)
-            p_dir, p_xr, p_fr = track_reversal(v, x, p_dir, p_xr, p_fr, s_p)
+        # 4. the plant to (n + 1) dt with the input held
+        ps = plant_interval(ps, u, fst, h, plant, sc)
     return n_samples
+
+
+@njit(cache=True, error_model="numpy")
+def delay_buffer(plant):
+    """The commands in flight of the drive's delay before the first sample: ``max(delay, 1)`` times
+    ``plant.delay_init`` [V] (the drive holds the load until the first computed command arrives).
+
+    Parameters
+    ----------
+    plant : PlantArgs
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> from obsdesign.sim import prepare
+    >>> plant = prepare(od.load_preset("vcm").override(delay_samples=2), "positioning").kernel_args()[3]
+    >>> [round(float(u), 4) for u in delay_buffer(plant)]   # G / K = 5.27 / 3.28 V
+    [1.6067, 1.6067]
+    """
+    return np.full(max(plant.delay, 1), plant.delay_init)
 
 
 def empty_outputs(n: int) -> Outputs:
