@@ -51,7 +51,7 @@ def files(tmp_path):
     np.savetxt(f["rotary"], np.c_[t, 0.1 * np.sin(20 * t), np.cos(20 * t)], delimiter=",", header="t,x,u",
                comments="")
     f["field"].write_text("t,x,u\n0," + "1" * 5_000_000 + ",0\n")
-    f["delay"] = _config(tmp_path / "delay.toml", "pid", "delay_samples = 1000000000")
+    f["delay"] = _config(tmp_path / "delay.toml", "hardware", "delay_samples = 1000000000")
     f["derivative"] = _config(tmp_path / "derivative.toml", "pid", "derivative_N = 1e300")
     f["deadzone"] = _config(tmp_path / "deadzone.toml", "compensation", "deadzone = 1e300")
     f["offset"] = _config(tmp_path / "offset.toml", "compensation", "ff_offset = -1e300")
@@ -79,7 +79,7 @@ CASES = [
                                   "t", "--position-unit", "rad"), 2, "expected a rotary axis"),
     # export
     ("delay-1e9", ("export", "--format", "c", "--what", "controller", "--config", "{delay}", "-o", "{out}"), 2,
-     "pid.delay_samples: expected an integer >= 0 and <= 10000"),
+     "hardware.delay_samples: expected an integer >= 0 and <= 10000"),
     ("derivative-N", ("export", "--format", "c", "--what", "controller", "--config", "{derivative}", "-o", "{out}"), 2,
      "pid.derivative_N: expected"),
     ("deadzone", ("export", "--format", "c", "--what", "controller", "--config", "{deadzone}", "-o", "{out}"), 2,
