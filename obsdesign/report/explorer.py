@@ -156,7 +156,13 @@ def explorer_context(cfg: Config, certificate=None) -> dict:
     x_ref = np.asarray(loop.x_ref)
     n_up = int(np.argmax(x_ref > 0.0))
     cert = certificate if certificate is not None else certify(design_observer(cfg))
+    from ..design.sampled_loop import sampled_loop
+
+    sl = sampled_loop(cfg)
     data = {
+        # the loop that runs, as obsdesign.design.sampled_loop analyses it: its fields' starting values
+        "loop": {"dt": sl.dt, "delay": sl.delay_samples, "kp": sl.kp, "ki": sl.ki, "kd": sl.kd,
+                 "N": sl.derivative_N, "phi": sl.phi, "tau": sl.tau},
         "fixed": {"sigma": cfg.friction.sigma, "beta": cfg.friction.beta},
         "config": {p["name"]: p["value"] for p in sliders},
         "dt": cfg.observer.dt,
