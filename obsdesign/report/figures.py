@@ -326,7 +326,7 @@ def legible(fig, *, width_px: float = PAGE_WIDTH_PX, min_px: float = MIN_TEXT_PX
         for ncol in range(1, min(3, max(1, len(labels))) + 1):
             chars = int(room / ncol / (0.6 * size)) - 5  # a DejaVu character is about 0.6 em; the handle 5
             wrapped = [_wrap(lb, chars) for lb in labels]
-            trial = ax.legend(handles, wrapped, ncols=ncol, fontsize=size, frameon=False)
+            trial = ax.legend(handles, wrapped, loc="upper center", ncols=ncol, fontsize=size, frameon=False)
             trial.set_in_layout(False)  # measured only: a trial wider than its room must not squeeze the layout
             box = trial.get_window_extent(renderer)
             trial.remove()
