@@ -17,6 +17,11 @@ Everything the page computes comes from the package's own generated code, nothin
   ``beta > 0``; 10 Heun substeps per sample with the input held; the encoder quantization), without
   random noise. The PID stays the config's design; ``m`` moves the observer's and the plant's mass.
 
+* the loop that runs: fields for the sample time, the drive's delay in samples and the PID gains start at
+  :func:`obsdesign.design.sampled_loop.sampled_loop`'s values; the page computes the margins, crossover and
+  largest closed-loop pole of the same discrete loop ``L(z) = C(z) H_zoh(z) z^-d`` (tests/test_explorer.py
+  compares them with python-control).
+
 :func:`explorer_context` gathers the numbers; :class:`Explorer` shows the explorer in a notebook.
 """
 
