@@ -243,7 +243,7 @@ def test_cli_reports_the_untuned_baseline_and_exits_0_unless_nothing_ran(tmp_pat
     env = Environment(loader=PackageLoader("obsdesign.report", "templates"), autoescape=True)
     env.filters["num"] = str
     html = env.get_template("_comparison.html.j2").render(comparison=section)
-    assert "<tr><td>dob</td><td>noise rule: no knob in [" in html
+    assert "<tr><td>dob</td><td class=\"text wide\">noise rule: no knob in [" in html
     # nothing could run: one line, exit 2, no folder
     out2 = tmp_path / "cmp2"
     assert main([*argv, "--estimators", "dob", "--out", str(out2)]) == 2

@@ -164,9 +164,9 @@ def test_a_users_report_judges_the_design_and_leaves_the_paper_out(tmp_path):
     page = out.read_text(encoding="utf-8")
     assert 'id="criteria"' in page and 'id="claims"' not in page and "Convergence, rho 0.98 vs 1.02" not in page
     assert "obsdesign report --paper-studies</code> adds them" in page
-    assert f"<code>plant.m</code></td><td>1.733</td><td>kg</td><td>moving mass</td><td>config file {path}</td>" in page
-    assert "<code>observer.rho</code></td><td>3</td><td>-</td><td>gain design parameter (stable for rho &gt; 1)</td><td>flag --rho</td>" in page
-    assert f"<code>plant.K</code></td><td>3.28</td><td>N/V</td><td>actuator force constant</td><td>config file {path}: paper section 4</td>" in page
+    assert f"<code>plant.m</code></td><td>1.733</td><td>kg</td><td class=\"text\">moving mass</td><td class=\"text\">config file {path}</td>" in page
+    assert "<code>observer.rho</code></td><td>3</td><td>-</td><td class=\"text\">gain design parameter (stable for rho &gt; 1)</td><td class=\"text\">flag --rho</td>" in page
+    assert f"<code>plant.K</code></td><td>3.28</td><td>N/V</td><td class=\"text\">actuator force constant</td><td class=\"text\">config file {path}: paper section 4</td>" in page
     for rule, _ in [THRESHOLDS[k][1:] + (None,) for k in THRESHOLDS]:
         assert rule.replace(">=", "&gt;=").replace("<=", "&lt;=").replace("'", "&#39;").replace("<", "&lt;") in page
 

@@ -65,7 +65,9 @@ def comparison_figure(rows: list[dict]):
         ax.set_title(sc)
         ax.set_xlabel("plant friction model")
         ax.set_ylabel("friction RMS error [N]")
-    axes[0][0].legend(fontsize=7, title="estimator", title_fontsize=7)
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    # below the panels, outside the bars (a figure read back from disk is not made legible by the report)
+    fig.legend(handles, labels, loc="outside lower center", ncols=max(1, len(estimators)), title="estimator")
     return fig
 
 

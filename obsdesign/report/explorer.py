@@ -17,6 +17,11 @@ Everything the page computes comes from the package's own generated code, nothin
   ``beta > 0``; 10 Heun substeps per sample with the input held; the encoder quantization), without
   random noise. The PID stays the config's design; ``m`` moves the observer's and the plant's mass.
 
+* the loop that runs: fields for the sample time, the drive's delay in samples and the PID gains start at
+  :func:`obsdesign.design.sampled_loop.sampled_loop`'s values; the page computes the margins, crossover and
+  largest closed-loop pole of the same discrete loop ``L(z) = C(z) H_zoh(z) z^-d`` (tests/test_explorer.py
+  compares them with python-control).
+
 :func:`explorer_context` gathers the numbers; :class:`Explorer` shows the explorer in a notebook.
 """
 
@@ -156,7 +161,13 @@ def explorer_context(cfg: Config, certificate=None) -> dict:
     x_ref = np.asarray(loop.x_ref)
     n_up = int(np.argmax(x_ref > 0.0))
     cert = certificate if certificate is not None else certify(design_observer(cfg))
+    from ..design.sampled_loop import sampled_loop
+
+    sl = sampled_loop(cfg)
     data = {
+        # the loop that runs, as obsdesign.design.sampled_loop analyses it: its fields' starting values
+        "loop": {"dt": sl.dt, "delay": sl.delay_samples, "kp": sl.kp, "ki": sl.ki, "kd": sl.kd,
+                 "N": sl.derivative_N, "phi": sl.phi, "tau": sl.tau},
         "fixed": {"sigma": cfg.friction.sigma, "beta": cfg.friction.beta},
         "config": {p["name"]: p["value"] for p in sliders},
         "dt": cfg.observer.dt,

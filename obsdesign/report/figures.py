@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import io
 import os
+import re
 from pathlib import Path
 
 import matplotlib  # noqa: E402
@@ -27,7 +28,16 @@ import matplotlib.pyplot as plt  # noqa: E402
 _METADATA = {"svg": {"Date": None}, "png": {}, "pdf": {"CreationDate": None}}
 
 __all__ = ["trace_figure", "save_figure", "save_trace_figure", "trace_figure_svg", "figure_svg", "inline_svg",
-           "envelope", "relabel"]
+           "envelope", "relabel", "legible", "regrid", "prefix_ids", "PAGE_WIDTH_PX", "MIN_TEXT_PX"]
+
+#: Width [CSS px] of the report's content column (its ``max-width``): a figure wider than this is drawn smaller.
+PAGE_WIDTH_PX = 1050.0
+#: Smallest text [CSS px] of a report figure on screen at that width (the page's small print is 13 px).
+MIN_TEXT_PX = 10.0
+#: CSS pixels per inch (an SVG width of ``w`` pt shows as ``w * 96 / 72`` px at zoom 1).
+_CSS_PX_PER_IN = 96.0
+#: Fraction of the font size matplotlib draws an exponent at (the ``10^{-3}`` tick labels of a log axis).
+_SUPERSCRIPT = 0.7
 
 #: Columns of :func:`envelope`: more than a figure's width in pixels (8 in at 100 dpi: 800).
 ENVELOPE_COLUMNS = 2000
@@ -186,9 +196,186 @@ def figure_svg(fig) -> str:
     return buf.getvalue()
 
 
+def regrid(fig, cells, *, ncols: int, row_height: float, width: float | None = None):
+    """Lay out a figure's axes again on a new grid (in place): ``cells[i]`` is the ``(row, column)`` of the
+    ``i``-th axes (rows and columns may be slices); the figure becomes ``rows x row_height`` inches tall.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    cells : sequence of (int or slice, int or slice)
+        One cell per axes of the figure, in the order of ``fig.axes``.
+    ncols : int
+        Columns of the grid.
+    row_height : float
+        Height [in] of one row.
+    width : float, optional
+        Width [in] of the figure (default: unchanged).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        ``fig``, with the constrained layout.
+
+    Examples
+    --------
+    >>> fig, axes = plt.subplots(1, 3, figsize=(15, 3))
+    >>> _ = regrid(fig, [(0, 0), (0, 1), (1, slice(0, 2))], ncols=2, row_height=3.0, width=10.0)
+    >>> [float(v) for v in fig.get_size_inches()], axes[2].get_subplotspec().colspan
+    ([10.0, 6.0], range(0, 2))
+    >>> plt.close(fig)
+    """
+    from matplotlib.gridspec import GridSpec
+
+    axes = [ax for ax in fig.axes if ax.get_subplotspec() is not None]
+    if len(cells) != len(axes):
+        raise ValueError(f"cells: expected one cell per axes ({len(axes)}), found {len(cells)}")
+    nrows = 1 + max(r.stop - 1 if isinstance(r, slice) else r for r, _ in cells)
+    fig.set_size_inches(width if width is not None else fig.get_figwidth(), nrows * row_height)
+    fig.set_layout_engine("constrained")
+    grid = GridSpec(nrows, ncols, figure=fig)
+    for ax, (r, c) in zip(axes, cells):
+        ax.set_subplotspec(grid[r, c])
+    return fig
+
+
+def _renderer(fig):
+    if not hasattr(fig.canvas, "get_renderer"):  # a Figure made without pyplot has the base canvas
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+        FigureCanvasAgg(fig)
+    return fig.canvas.get_renderer()
+
+
+def _wrap(label: str, chars: int) -> str:
+    import textwrap
+
+    return "\n".join(textwrap.wrap(label, max(chars, 12), break_long_words=False, break_on_hyphens=False)) or label
+
+
+def legible(fig, *, width_px: float = PAGE_WIDTH_PX, min_px: float = MIN_TEXT_PX):
+    """Make a figure readable on the report's page (in place): no wider than the page, no text smaller than
+    ``min_px`` on screen, every legend below its axes (outside the data).
+
+    A figure wider than ``width_px`` is made that wide (its height scaled alike), so the browser shows it at
+    its own size; every text is raised to ``min_px`` (an exponent of a log axis's tick label to
+    ``min_px`` as well, its base to ``min_px / 0.7``); each axes' legend is drawn again under the axes'
+    tick labels and x label, in up to three columns that fit the axes' width, long entries wrapped at spaces.
+    The layout engine is the constrained layout (it makes room for the legends).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    width_px : float
+        Width [CSS px] of the page's content column.
+    min_px : float
+        Smallest text [CSS px].
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        ``fig``.
+
+    Examples
+    --------
+    >>> fig, ax = plt.subplots(figsize=(14, 4))
+    >>> _ = ax.plot([0, 1], [0, 1], label="a line")
+    >>> _ = ax.legend(fontsize=6)
+    >>> _ = legible(fig)
+    >>> round(float(fig.get_figwidth()), 3), ax.get_legend().get_texts()[0].get_fontsize()
+    (10.938, 7.5)
+    >>> plt.close(fig)
+    """
+    from matplotlib.text import Text
+    from matplotlib.transforms import ScaledTranslation
+
+    width_in = width_px / _CSS_PX_PER_IN
+    if fig.get_figwidth() > width_in:
+        w, h = fig.get_size_inches()
+        fig.set_size_inches(width_in, h * width_in / w)
+    fig.set_layout_engine("constrained")
+    min_pt = min_px * 72.0 / _CSS_PX_PER_IN
+    for ax in fig.axes:
+        for name in ("x", "y"):
+            axis = getattr(ax, f"{name}axis")
+            floor = min_pt / _SUPERSCRIPT if axis.get_scale() == "log" else min_pt
+            labels = axis.get_ticklabels(which="both")
+            current = max((t.get_fontsize() for t in labels), default=0.0)
+            if current < floor:
+                ax.tick_params(axis=name, which="both", labelsize=floor)
+    for text in fig.findobj(Text):
+        if text.get_fontsize() < min_pt:
+            text.set_fontsize(min_pt)
+    renderer = _renderer(fig)
+    legends = []
+    for ax in fig.axes:  # all removed first: each is placed in the layout the others leave
+        legend = ax.get_legend()
+        if legend is not None:
+            labels = [t.get_text() for t in legend.get_texts()]
+            size = max(legend.get_texts()[0].get_fontsize(), min_pt) if labels else min_pt
+            legends.append((ax, legend.legend_handles, labels, size))
+            legend.remove()
+    fig.draw_without_rendering()
+    fig_pt = fig.get_figwidth() * 72.0
+    for ax, handles, labels, size in legends:
+        below = (ax.bbox.y0 - ax.get_tightbbox(renderer).y0) * 72.0 / fig.dpi + 2.0  # ticks and x label [pt]
+        anchor = ax.transAxes + ScaledTranslation(0.0, -below / 72.0, fig.dpi_scale_trans)
+        spec = ax.get_subplotspec()
+        room = 0.92 * fig_pt * (spec.get_position(fig).width if spec is not None else ax.get_position().width)
+        best = None  # (height, ncol, wrapped labels): the lowest legend that fits its room, fewer columns on a tie
+        for ncol in range(1, min(3, max(1, len(labels))) + 1):
+            chars = int(room / ncol / (0.6 * size)) - 5  # a DejaVu character is about 0.6 em; the handle 5
+            wrapped = [_wrap(lb, chars) for lb in labels]
+            trial = ax.legend(handles, wrapped, loc="upper center", ncols=ncol, fontsize=size, frameon=False)
+            trial.set_in_layout(False)  # measured only: a trial wider than its room must not squeeze the layout
+            box = trial.get_window_extent(renderer)
+            trial.remove()
+            if best is None or (box.width * 72.0 / fig.dpi <= room and box.height < best[0]):
+                best = (box.height, ncol, wrapped)
+        if best is not None:
+            ax.legend(handles, best[2], loc="upper center", ncols=best[1], bbox_to_anchor=(0.5, 0.0),
+                      bbox_transform=anchor, fontsize=size, frameon=False)
+    return fig
+
+
+_ID = re.compile(r'\bid="([^"]+)"')
+
+
+def prefix_ids(svg: str, prefix: str) -> str:
+    """``svg`` with every ``id`` and every reference to one (``href="#.."``, ``xlink:href="#.."``,
+    ``url(#..)``) prefixed, so that several figures can share one page (matplotlib numbers ``figure_1``,
+    ``axes_1``, ... from 1 in every figure, and its marker and clip-path ids repeat across figures).
+
+    Parameters
+    ----------
+    svg : str
+        An SVG document or element.
+    prefix : str
+        Letters, digits, ``-`` or ``_``, starting with a letter.
+
+    Examples
+    --------
+    >>> prefix_ids('<g id="a"><use xlink:href="#a"/><path clip-path="url(#a)"/></g>', "f1-")
+    '<g id="f1-a"><use xlink:href="#f1-a"/><path clip-path="url(#f1-a)"/></g>'
+    """
+    if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_-]*", prefix):
+        raise ValueError(f"prefix: expected letters, digits, '-' or '_' starting with a letter, found {prefix!r}")
+    ids = set(_ID.findall(svg))
+    svg = _ID.sub(lambda m: f'id="{prefix}{m.group(1)}"', svg)
+    svg = re.sub(r'(href=")#([^"]+)"', lambda m: f'{m.group(1)}#{prefix}{m.group(2)}"' if m.group(2) in ids
+                 else m.group(0), svg)
+    return re.sub(r"url\(#([^)]+)\)", lambda m: f"url(#{prefix}{m.group(1)})" if m.group(1) in ids else m.group(0),
+                  svg)
+
+
 def inline_svg(fig, units=None) -> str:
     """A figure as an ``<svg>`` element for an HTML page, closing the figure: its units those of
     ``units`` (an :class:`~obsdesign.axis.AxisSpec`, :func:`relabel`), no XML prolog, no RDF metadata.
+
+    The figure is made :func:`legible` at the page's width; its text stays text (``svg.fonttype`` ``none``:
+    selectable, searchable, and printed as text), and its ids carry a prefix of its own, the first hex
+    digits of the SHA-256 of its bytes (:func:`prefix_ids`), so that the figures of one page share no id
+    and the same figure still gives the same bytes.
 
     Parameters
     ----------
@@ -204,10 +391,12 @@ def inline_svg(fig, units=None) -> str:
     >>> text.startswith("<svg") and "<metadata>" not in text
     True
     """
-    import re
+    import hashlib
 
-    text = figure_svg(relabel(fig, units))
-    return re.sub(r"<metadata>.*?</metadata>", "", text[text.index("<svg"):], flags=re.S)
+    with matplotlib.rc_context({"svg.fonttype": "none"}):
+        text = figure_svg(legible(relabel(fig, units)))
+    text = re.sub(r"<metadata>.*?</metadata>", "", text[text.index("<svg"):], flags=re.S)
+    return prefix_ids(text, "f" + hashlib.sha256(text.encode("utf-8")).hexdigest()[:10] + "-")
 
 
 def trace_figure_svg(res) -> str:

@@ -29,7 +29,7 @@ from .figures import inline_svg
 from .markup import _CSP_MARK, _quantity, _with_csp, derivation_tree, is_derivation_tree, render_derivation
 from .study_figures import experiments_figure, friction_loops_figure
 
-__all__ = ["render_page", "loops_part", "circle_part", "derivation_markup"]
+__all__ = ["render_page", "loops_part", "circle_part", "derivation_markup", "css_string"]
 
 
 def _eigen_figure(design):
@@ -63,6 +63,36 @@ def _bode_figure(curves, bound=None, ylabel=""):
     ax.set_ylabel(ylabel)
     ax.legend(loc="best")
     return fig
+
+
+def css_string(text) -> str:
+    """``text`` as the inside of a CSS string (for the printed page's ``@page`` footer): every character but
+    letters and digits as a six-digit CSS escape, so no quote, backslash, ``<`` or line break of a user's
+    name can end the string or the style element (a space is escaped too: one after an escape would be read
+    as the escape's end).
+
+    Parameters
+    ----------
+    text : str
+
+    Examples
+    --------
+    >>> print(css_string('vcm "</style>"'))
+    vcm\\000020\\000022\\00003c\\00002fstyle\\00003e\\000022
+    """
+    return "".join(ch if ch.isascii() and ch.isalnum() else f"\\{ord(ch):06x}" for ch in str(text))
+
+
+def _loop_grid(fig):
+    """The loop view's five panels (Bode magnitude and phase, Nyquist, sensitivities, closed-loop poles:
+    :func:`obsdesign.design.loop.loop_figure`) on a grid that fills the page's width: magnitude | phase,
+    Nyquist | poles, then the sensitivities across the width (each legend below its panel)."""
+    from .figures import PAGE_WIDTH_PX, regrid
+
+    if len(fig.axes) != 5:  # another layout of the loop view: leave it to legible()
+        return fig
+    return regrid(fig, [(0, 0), (0, 1), (1, 0), (2, slice(0, 2)), (1, 1)], ncols=2, row_height=4.0,
+                  width=PAGE_WIDTH_PX / 96.0)
 
 
 def _derivation_tree(variant: str) -> list:
@@ -176,7 +206,7 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     from ..design.loop import loop_analysis, loop_figure
 
     ctx["loop_view"] = loop_analysis(cfg)
-    ctx["loop_svg"] = svg(loop_figure(ctx["loop_view"]))
+    ctx["loop_svg"] = svg(_loop_grid(loop_figure(ctx["loop_view"])))
     bar.update()
 
     bar.set_postfix_str(steps[3])
@@ -243,6 +273,9 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     env.filters["unit"] = units.unit
     env.filters["log10"] = math.log10
     env.filters["explorer_json"] = explorer_json
+    env.filters["css_string"] = css_string
+    ctx["provenance"] = (f"obsdesign {__version__} design report of {cfg.name} ({source_label}), "
+                         f"variant {variant}, rho {_quantity(cfg.observer.rho)}, generated {ctx['date']}")
     html = _with_csp(env.get_template("report.html.j2").render(csp=_CSP_MARK, **ctx))
     bar.update()
     bar.close()
