@@ -32,10 +32,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._idim import check_int, implausible, positive_number, quantization, second_difference, time_window
-from .choices import INPUT_TIMINGS, STRIBECK_CHOICES
+from .choices import INPUT_TIMINGS, MAX_DELAY, MAX_GIVEN_DELAY, STRIBECK_CHOICES
 from .cutoff import choose_filter
 from .estimate import NO_INTERVAL_REASON, cautions, estimate
 from .friction_fit import check_bounds, check_fix
+from .timing import aligned, describe, find_timing
 from .presliding import MIN_REVERSALS, MIN_ROWS as MIN_PRESLIDING_ROWS, _reversals, fit_presliding
 from .trace import REVERSAL_THRESHOLD, Trace
 from .uncertainty import N_BOOT, column_noise
@@ -123,6 +124,14 @@ class Identification:
     notices : tuple of str
         Cautions: implausible values for the units, a parameter at a bound, an errors-in-variables
         bias larger than the interval (naming a better excitation).
+    input_timing : str
+        The input timing the fit used: ``'sample'`` (as logged) or ``'hold'``.
+    delay_samples : int
+        Samples the position is logged after the input it answers to (the drive's delay).
+    timing_note : str
+        How the timing and the delay were found (:mod:`obsdesign.data.timing`), and how sure.
+    timing_evidence : dict
+        ``'timing/delay' -> BIC difference`` to the best candidate (empty when both were given).
     """
 
     model: str
@@ -173,12 +182,17 @@ class Identification:
     window: str = ""
     units: Units = field(default_factory=Units)
     notices: tuple[str, ...] = ()
+    input_timing: str = "sample"
+    delay_samples: int = 0
+    timing_note: str = ""
+    timing_evidence: dict = field(default_factory=dict)
 
     _KEYS = ("m", "sigma", "Cf", "offset", "m_std", "sigma_std", "Cf_std", "offset_std", "nrmse_percent",
              "condition_number", "samples")
     _ASYM = ("sigma_pos", "sigma_neg", "Cf_pos", "Cf_neg")
     _EXTRA = ("s", "s_note", "model", "sample_time", "filter_hz", "filter_rule", "decimation", "stribeck", "selection",
-              "interval_method", "at_bound", "fixed", "min_speed", "window")
+              "interval_method", "at_bound", "fixed", "min_speed", "window", "input_timing", "delay_samples",
+              "timing_note")
 
     def to_dict(self) -> dict:
         """JSON-ready mapping: the parameters, their standard errors and the fit statistics.
@@ -187,7 +201,7 @@ class Identification:
         condition_number, samples``; with ``asymmetric`` also ``sigma_pos, sigma_neg, Cf_pos,
         Cf_neg``; with the Stribeck term ``Fs, vs, Fs_std, vs_std``; always ``s, s_note, model,
         sample_time, filter_hz, filter_rule, decimation, stribeck, selection, interval_method, at_bound, fixed,
-        min_speed, window``, ``intervals`` (name -> [low, high]), ``eiv_shift`` and ``units``
+        min_speed, window, input_timing, delay_samples, timing_note``, ``timing_evidence``, ``intervals`` (name -> [low, high]), ``eiv_shift`` and ``units``
         (``axis``, ``input_unit``, ``mass_unit``, ``force_unit``, ``length_unit``, the logged
         ``time``/``position`` units); ``warnings`` (a list of sentences) when the identification is
         not physical, ``notices`` when there are cautions.
@@ -198,6 +212,7 @@ class Identification:
         out = {k: data[k] for k in keys}
         out["intervals"] = {k: list(v) for k, v in self.intervals.items()}
         out["eiv_shift"] = dict(self.eiv_shift)
+        out["timing_evidence"] = dict(self.timing_evidence)
         u = self.units
         out["units"] = {"axis": u.axis, "input_unit": u.input_unit(self.input_gain), "mass_unit": u.mass_unit,
                         "force_unit": u.force_unit, "length_unit": u.length_unit, "time": u.time,
@@ -265,6 +280,7 @@ class Identification:
                  f"{u.force_unit}/{u.input_unit(self.input_gain)}")]
         rows += [(n, pm(n)) for n in names]
         rows += [("s", "-" if self.s is None else f"{self.s:.5g} 1/{u.length_unit}"), ("s note", self.s_note),
+                 ("timing", self.timing_note or describe(self.input_timing, self.delay_samples)),
                  ("selection", self.selection or "-"), ("intervals", self.interval_method or "-"),
                  ("NRMSE", f"{self.nrmse_percent:.3g} %"), ("condition number", f"{self.condition_number:.4g}"),
                  ("rows in the fit", f"{self.samples} (|v| > {self.min_speed:.3g} {u.si('speed')}"
@@ -291,7 +307,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
              decimation: int | None = None, presliding_window: float = PRESLIDING_WINDOW, stribeck: str = "auto",
              fix: dict | None = None, bounds: dict | None = None, min_speed: float | None = None,
              window: tuple[float, float] | None = None, n_boot: int = N_BOOT, seed: int = 0,
-             input_timing: str = "sample") -> Identification:
+             input_timing: str = "auto", delay_samples: int | None = None) -> Identification:
     """Fit ``u = m a + sigma v + Cf sign(v) + offset`` (+ a Stribeck term) to a trace, within bounds.
 
     Parameters
@@ -327,12 +343,17 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
         Bootstrap replicates of the intervals (0: intervals of 1.96 standard errors).
     seed : int
         Seed of the bootstrap.
-    input_timing : {'sample', 'hold'}
+    input_timing : {'auto', 'sample', 'hold'}
         ``hold``: the input logged at sample ``n`` is held until ``n + 1`` (a sampled controller's
         output, zero-order hold, as in :func:`obsdesign.simulate`); the second-difference
         acceleration at ``n`` then corresponds exactly to ``(u[n-1] + u[n]) / 2``, which is used. ``sample``
-        (default, the EMPS benchmark's IDIM-LS): the input as logged. On a held input, ``sample``
+        (the EMPS benchmark's IDIM-LS): the input as logged. On a held input, ``sample``
         biases the viscous coefficient (-1 % open loop, -3 % closed loop in the coverage check).
+        ``auto`` (default): found from the data with the delay (:mod:`obsdesign.data.timing`).
+    delay_samples : int, optional
+        Samples (0 to 50) the position is logged after the input it answers to; default: found
+        from the data among 0 to 3 (``MAX_DELAY``). The fit pairs
+        ``position[n + d]`` with ``force[n]``.
 
     Returns
     -------
@@ -412,19 +433,26 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     presliding_window = positive_number("presliding_window", presliding_window, 0.0, trace.units.length_unit)
     if min_speed is not None:
         min_speed = positive_number("min_speed", min_speed, 0.0, trace.units.si("speed"))
-    if input_timing not in INPUT_TIMINGS:
+    if not isinstance(input_timing, str) or input_timing not in INPUT_TIMINGS:
         raise ValueError(f"input_timing: expected one of {', '.join(map(repr, INPUT_TIMINGS))}, found {input_timing!r}")
-    if input_timing == "hold":
-        force = np.concatenate([force[:1], 0.5 * (force[1:] + force[:-1])])
-    n = position.size
+    if delay_samples is not None:
+        delay_samples = check_int("delay_samples", delay_samples, 0)
+        if delay_samples > MAX_GIVEN_DELAY:
+            raise ValueError(f"delay_samples: expected an integer from 0 to {MAX_GIVEN_DELAY}, found {delay_samples}")
     force_range = float(np.ptp(force))
     if not force_range > 0.0:
         raise ValueError(f"input: the record has constant input ({float(force[0]):g} N in every sample of "
                          f"{trace.source!r}); nothing to identify: the fit needs a force that varies")
     border = int(math.ceil(5.0 * fs / filter_hz))
-    if n - 2 * border < 20 * q:
-        raise ValueError(f"trace: expected at least {2 * border + 20 * q} samples for filter_hz = {filter_hz:g} Hz "
-                         f"and decimation {q}, found {n}")
+    top = MAX_DELAY if delay_samples is None else delay_samples
+    if position.size - top - 2 * border < 20 * q:
+        raise ValueError(f"trace: expected at least {2 * border + 20 * q + top} samples for filter_hz = {filter_hz:g} "
+                         f"Hz, decimation {q} and a delay of up to {top} samples, found {position.size}")
+    found = find_timing(position, force, dt=dt, filter_hz=filter_hz, decimation=q,
+                        timing=None if input_timing == "auto" else input_timing, delay=delay_samples,
+                        min_speed=min_speed)
+    position, force = aligned(position, force, found.timing, found.delay)
+    n = position.size
 
     sos = signal.butter(FILTER_ORDER, filter_hz, fs=fs, output="sos")
     x_f = signal.sosfiltfilt(sos, position)
@@ -496,4 +524,5 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                           interval_method=(f"moving-block bootstrap, {n_boot} replicates, blocks of {est['block_length']} "
                                            "rows, " if n_boot else "1.96 standard errors, ") + "widened by the "
                           "errors-in-variables shift" + (f"; {NO_INTERVAL_REASON}" if est["stribeck"] and not {"Fs", "vs"} <= set(fix) else ""),
-                          units=trace.units)
+                          units=trace.units, input_timing=found.timing, delay_samples=found.delay,
+                          timing_note=found.note, timing_evidence=found.evidence)
