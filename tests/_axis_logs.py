@@ -114,6 +114,9 @@ def _simulate_kernel():
     @njit(cache=False)
     def run(r, rv, ra, n, dt, subs, hold, delay, m, sigma, Cf, Fs, vs, offset, s0, s1, kp, kd, u_max, step):
         x = np.zeros(n)
+        vel = np.zeros(n)
+        zs = np.zeros(n)
+        u_sub = np.zeros(n * subs)
         u_log = np.zeros(n)
         h = dt / subs
         xp, vp, z = r[0], 0.0, 0.0
@@ -121,6 +124,8 @@ def _simulate_kernel():
         u_hold = 0.0
         for k in range(n):
             x[k] = xp
+            vel[k] = vp
+            zs[k] = z
             # the sampled controller sees the encoder, ``delay`` samples late
             j = k - delay if k >= delay else 0
             y = np.round(x[j] / step) * step
@@ -142,6 +147,7 @@ def _simulate_kernel():
                     u = min(max(u, -u_max), u_max)
                     if i == 0:
                         u_log[k] = u
+                u_sub[k * subs + i] = u
                 g = Cf + (Fs - Cf) * np.exp(-(vp / vs) ** 2)
                 if vp != 0.0:
                     ss = g * np.sign(vp) / s0
@@ -153,9 +159,9 @@ def _simulate_kernel():
                 z = z_new
                 f = s0 * z + s1 * zdot + sigma * vp
                 acc = (u - f - offset) / m
+                xp = xp + h * vp + 0.5 * h * h * acc  # exact for the sub-step's constant acceleration
                 vp = vp + h * acc
-                xp = xp + h * vp
-        return x, u_log
+        return x, u_log, vel, zs, u_sub
 
     return run
 
@@ -165,6 +171,9 @@ _KERNEL = []
 
 def simulate_axis(spec: dict) -> dict:
     """The noise-free log of an axis of :data:`AXES`: ``t``, ``x`` (delayed, not quantized), ``force`` [N or N m].
+
+    Also ``state``: the true position, velocity and bristle state ``z`` at each sample (not delayed), and
+    ``u_sub``: the force applied in each sub-step (for the Cramer-Rao bound of benchmarks/bench_recovery.py).
 
     The plant is ``m a = F - (sigma0 z + sigma1 dz/dt + sigma v) - offset`` with LuGre's
     ``dz/dt = v - sigma0 |v| z / g(v)``, ``g = Cf + (Fs - Cf) exp(-(v/vs)^2)``, integrated with
@@ -179,12 +188,12 @@ def simulate_axis(spec: dict) -> dict:
     m = spec["m"]
     wc = 2 * np.pi * spec["rate"] / 40.0  # a crossover a fortieth of the rate
     kp, kd = m * wc**2 / 2.0, 1.4 * m * wc / 2.0
-    x, u = _KERNEL[0](r, rv, ra, n, dt, SUBSTEPS, spec["timing"] == "hold", spec["delay"], m, spec["sigma"],
+    x, u, vel, z, u_sub = _KERNEL[0](r, rv, ra, n, dt, SUBSTEPS, spec["timing"] == "hold", spec["delay"], m, spec["sigma"],
                       spec["Cf"], spec["Fs"], spec["vs"], spec["offset"], spec["sigma0"], spec["sigma1"], kp, kd,
                       spec["i_max"] * spec["gain"], spec["step"])
     d = spec["delay"]
     x_log = np.concatenate([np.full(d, x[0]), x[:n - d]]) if d else x
-    return {"t": t, "x": x_log, "force": u}
+    return {"t": t, "x": x_log, "force": u, "state": (x, vel, z), "u_sub": u_sub}
 
 
 def noisy_log(spec: dict, clean: dict, seed: int) -> dict:

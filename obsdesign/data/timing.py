@@ -58,6 +58,8 @@ TIMING_MARGIN = 10.0
 RANKING_CUTOFF = 0.5
 #: Rows within this many periods of the cut-off of a reversal are left out of the ranking.
 REVERSAL_REACH = 8.0
+#: Length of the output-error segments, in periods of the ranking's cut-off.
+SEGMENT_PERIODS = 4.0
 #: The order of the zero-phase Butterworth low-pass (that of identify).
 _ORDER = 4
 
@@ -119,6 +121,63 @@ def aligned(position: np.ndarray, force: np.ndarray, timing: str, delay: int) ->
     f = held(force) if timing == "hold" else force
     n = position.size
     return position[delay:], f[:n - delay]
+
+
+def _scores(resid: dict) -> dict:
+    """``n_eff ln(RSS_k / RSS_best)`` of each candidate, ``n_eff`` the best's rows over its correlation time."""
+    rss = {k: float(r @ r) for k, r in resid.items()}
+    best = min(rss, key=rss.get)
+    if not math.isfinite(rss[best]):
+        return {k: 0.0 for k in rss}
+    n_eff = resid[best].size / correlation_time(resid[best])
+    floor = max(rss[best], 1e-300)
+    return {k: n_eff * math.log(max(r, 1e-300) / floor) if math.isfinite(r) else math.inf for k, r in rss.items()}
+
+
+def _segments(v: np.ndarray, keep: slice, near: np.ndarray, length: int) -> np.ndarray | None:
+    """Start indices of the output-error segments: ``length`` samples inside ``keep``, away from reversals."""
+    starts = np.arange(keep.start, keep.stop - length, length)
+    clear = np.array([not near[s:s + length].any() for s in starts], dtype=bool)
+    starts = starts[clear] if starts.size else starts
+    return np.stack([starts, np.full(starts.size, length)]) if starts.size >= 8 else None
+
+
+def _output_error(x: np.ndarray, v: np.ndarray, force: np.ndarray, theta: np.ndarray, dt: float, timing: str,
+                  seg: np.ndarray) -> np.ndarray:
+    """Position residual of the rigid-axis model over short segments, each from its own start.
+
+    The model ``m a = u - sigma v - Cf sign(v) - offset`` (``theta``) is integrated over each segment
+    from the filtered velocity at its start, under the force held over each sample (``hold``) or
+    varying linearly between samples (``sample``); the segment's own position offset and a velocity error
+    (a ramp) are projected out. The logged position's noise is in the output only, not in the input:
+    a closed loop's feedback of that noise does not rank the candidates, as it does the equation error.
+    """
+    m, sigma, Cf, offset = theta
+    if not m > 0:
+        return np.full(seg.shape[1] * (seg[1, 0] - 2), np.inf)
+    starts, length = seg[0], int(seg[1, 0])
+    idx = starts[:, None] + np.arange(length)[None, :]
+    u = force[idx]
+    xs = np.zeros(idx.shape)
+    vel = v[starts].copy()
+    pos = np.zeros(starts.size)
+    for k in range(length - 1):
+        xs[:, k] = pos
+        acc = (u[:, k] - sigma * vel - Cf * np.sign(vel) - offset) / m
+        if timing == "hold":
+            pos = pos + dt * vel + 0.5 * dt**2 * acc
+            vel = vel + dt * acc
+        else:
+            nxt = (u[:, k + 1] - sigma * vel - Cf * np.sign(vel) - offset) / m
+            pos = pos + dt * vel + dt**2 * (2.0 * acc + nxt) / 6.0
+            vel = vel + 0.5 * dt * (acc + nxt)
+    xs[:, -1] = pos
+    r = x[idx] - xs
+    t = np.arange(length) * dt
+    basis = np.stack([np.ones(length), t - t.mean()], axis=1)
+    q, _ = np.linalg.qr(basis)
+    r = r - (r @ q) @ q.T
+    return r.ravel()
 
 
 def find_timing(position: np.ndarray, force: np.ndarray, *, dt: float, filter_hz: float, decimation: int,
@@ -195,33 +254,35 @@ def find_timing(position: np.ndarray, force: np.ndarray, *, dt: float, filter_hz
     scale = np.max(np.abs(X), axis=0)
     scale[scale == 0] = 1.0
     pinv = np.linalg.pinv(X / scale)
-    rss, resid = {}, {}
+    seg = _segments(v, keep, near, int(math.ceil(SEGMENT_PERIODS * fs / filter_hz)))
+    errors: dict[str, dict] = {"equation error": {}, "output error": {}}
     for tm in timings:
         f = held(force) if tm == "hold" else force
         for d in delays:
             y = dec(signal.sosfiltfilt(sos, f[top - d:n - d])[keep])[moving]
-            r = y - (X / scale) @ (pinv @ y)
-            rss[(tm, d)], resid[(tm, d)] = float(r @ r), r
-    best = min(rss, key=rss.get)
-    rows = resid[best].size
-    n_eff = rows / correlation_time(resid[best])
-    floor = max(rss[best], 1e-300)
-    score = {k: n_eff * math.log(max(r, 1e-300) / floor) for k, r in rss.items()}
+            theta = (pinv @ y) / scale
+            errors["equation error"][(tm, d)] = y - X @ theta
+            if seg is not None:  # else too few segments away from reversals: the equation error alone ranks
+                errors["output error"][(tm, d)] = _output_error(x, v, force[top - d:n - d], theta, dt, tm, seg)
+    scores = {how: _scores(res) for how, res in errors.items() if res}
+    # a candidate is rejected when every criterion puts it more than the margin above its best
+    score = {k: min(sc[k] for sc in scores.values()) for k in errors["equation error"]}
     ranked = sorted(score, key=score.get)
     # the simplest candidate the data do not reject: the smallest delay, as logged before held
     close = sorted((k for k in ranked if score[k] <= TIMING_MARGIN), key=lambda k: (k[1], INPUT_TIMINGS.index(k[0])))
     chosen = close[0]
     resolved = len(close) == 1
     evidence = {f"{k[0]}/{k[1]}": round(score[k], 1) for k in ranked}
-    how = f"equation-error residual over {len(score)} candidates, {n_eff:.0f} effective rows"
+    how = (f"{' and '.join(scores)} over {len(score)} candidates; a candidate is rejected when each puts it more than "
+           f"BIC {TIMING_MARGIN:g} above its best")
     if resolved:
-        runner = ranked[1]
-        note = f"{describe(*chosen)}: found ({how}; next best {describe(*runner)}: BIC +{score[runner]:.1f})"
+        runner = min((k for k in ranked if k != chosen), key=score.get)
+        note = (f"{describe(*chosen)}: found ({how}; the next, {describe(*runner)}, is +"
+                + ", +".join(f"{sc[runner]:.1f}" for sc in scores.values()) + ")")
     else:
         others = ", ".join(f"{k[0]}/{k[1]}" for k in close[1:])
-        note = (f"{describe(*chosen)}: not resolved by the data, the simplest of {len(close)} candidates within BIC "
-                f"{TIMING_MARGIN:g} of the best kept ({how}; also {others}); give --input-timing and "
-                f"--delay-samples if the drive's timing is known")
+        note = (f"{describe(*chosen)}: not resolved by the data, the simplest of {len(close)} candidates not rejected "
+                f"({how}; also {others}); give --input-timing and --delay-samples if the drive's timing is known")
     if given:
         note += f"; {'input timing' if given == 'timing' else 'delay'} given"
     return Timing(chosen[0], chosen[1], note, evidence, resolved, given)
