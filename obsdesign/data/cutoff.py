@@ -138,6 +138,9 @@ FORCE_POWER = 0.99
 def force_bandwidth(force: np.ndarray, sample_time: float) -> float:
     """The frequency [Hz] below which :data:`FORCE_POWER` of the force's varying power lies (Welch, 0.5 Hz bins).
 
+    The power is counted above the force's noise floor (the median density over the upper half of the band),
+    so white current noise does not widen it.
+
     Examples
     --------
     >>> t = np.arange(20_000) * 1e-3
@@ -148,6 +151,7 @@ def force_bandwidth(force: np.ndarray, sample_time: float) -> float:
 
     fs = 1.0 / sample_time
     f, p = signal.welch(force - np.mean(force), fs=fs, nperseg=min(force.size, int(round(2.0 * fs))))
+    p = np.maximum(p - float(np.median(p[f >= 0.25 * fs])), 0.0)  # less the noise floor (the upper half band)
     total = np.cumsum(p)
     if not total[-1] > 0:
         return 0.0

@@ -17,6 +17,8 @@ observer           variant ``static``, ``rho`` = 4, ``dt`` of the trace,
                    ``omega_co = 2 pi f_s / 10`` (a fifth of the Nyquist frequency)
 sensor             ``noise_rms`` and ``quantization`` estimated from the trace,
                    white noise up to the Nyquist frequency
+compensation       with the Stribeck term kept: ``ff_stribeck = Fs - Cf`` and ``ff_stribeck_velocity = vs``
+                   (the feed-forward's curve; the simulated plant keeps the paper's friction)
 pid.delay_samples  the samples the position is logged after the input it answers to, found from the
                    log or given (:mod:`obsdesign.data.timing`): the loop's delay
 pid                ``tau = m / sigma`` (so ``H = phi / (s (tau s + 1))`` with ``phi = K tau / m`` is
@@ -30,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+from ..compensation import CompensationSpec
 from ..params import Config, FrictionParams, ObserverSpec, PIDSpec, PlantParams, SensorSpec
 from ..provenance import WRITTEN_AS
 
@@ -198,6 +201,15 @@ def _build(ident, *, name, K, u_max, rho, presliding_window):
         ("pid.max_S", max_S, f"{L}/{unit_in}", "crossover k phi / sin(Phi) at a tenth of the Nyquist frequency"),
         (DELAY_KEY, delay, "samples", f"the log's delay from input to position ({_delay_rule(ident)})"),
     ]
+    compensation = CompensationSpec()
+    Fs, vs = getattr(ident, "Fs", None), getattr(ident, "vs", None)
+    if getattr(ident, "stribeck", False) and Fs is not None and vs is not None:
+        drop = max(Fs - Cf, 0.0)
+        compensation = CompensationSpec(ff_stribeck=drop, ff_stribeck_velocity=vs)
+        rules += [("compensation.ff_stribeck", drop, F, f"{src}: Fs - Cf, the Stribeck drop of the feed-forward"),
+                  ("compensation.ff_stribeck_velocity", vs, f"{L}/s", f"{src}: the Stribeck speed vs")]
+        # the simulated plant keeps the paper's friction (no Stribeck term): a LuGre plant from these levels with
+        # default bristle constants integrated to NaN on a rotary axis of 2.5e-3 kg m^2
     cfg = Config(
         name=name,
         plant=PlantParams(m=m, K=gain, G=ident.offset, u_max=u_max),
@@ -208,6 +220,7 @@ def _build(ident, *, name, K, u_max, rho, presliding_window):
         sources={key: (f"{rule} [{unit}]" if unit else rule) + f"{WRITTEN_AS}{value!r}"
                  for key, value, unit, rule in rules},
         axis=units.axis_spec(ident.input_gain),
+        compensation=compensation,
     )
     return with_drive_delay(cfg, delay), rules
 
