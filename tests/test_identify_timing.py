@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from _axis_logs import AXES, axis_trace, noisy_log, simulate_axis
+
 from obsdesign.data import identify
 from obsdesign.data.timing import TIMING_MARGIN, aligned, find_timing, held
 
@@ -177,9 +177,8 @@ def test_segment_crb_of_a_pure_inertia_is_the_closed_form():
     in 1/m, offset/m; the bound from the closed-form Jacobian (Schur complement of x0, v0) equals the
     benchmark's finite-difference one."""
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-    from bench_recovery import segment_crb
-
     from _axis_logs import SUBSTEPS
+    from bench_recovery import segment_crb
 
     rate, m, offset, L = 1e3, 0.5, 0.3, 100
     spec = dict(rate=rate, m=m, sigma=0.0, Cf=1e-9, Fs=1e-9, vs=1.0, offset=offset, sigma0=1e3, sigma1=0.0)

@@ -5,6 +5,7 @@ import io
 import json
 import math
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -267,7 +268,10 @@ def test_u_max_given_and_every_rule_shown(logs, tmp_path):
                                 position_unit="mm", input_unit="A", input_gain=GAIN), n_boot=0)
     for key, _, unit, rule in design_rules(ident, u_max=6.0):
         assert key in out and rule[:30] in out
-    assert "plant.u_max             6 A  (the actuator limit given)" in out
+    assert re.search(r"plant\.u_max +6 A  \(the actuator limit given\)", out)
+    # the fast log keeps its Stribeck term (issue 32): the feed-forward's curve is in the config
+    assert cfg.compensation.ff_stribeck == pytest.approx(ident.Fs - ident.Cf) and cfg.compensation.ff_stribeck > 0
+    assert cfg.compensation.ff_stribeck_velocity == pytest.approx(ident.vs)
 
 
 # -- bad input on the command line: one line, exit 2, nothing written -----------------------------
