@@ -141,6 +141,12 @@ def force_bandwidth(force: np.ndarray, sample_time: float) -> float:
     The power is counted above the force's noise floor (the median density over the upper half of the band),
     so white current noise does not widen it.
 
+    Parameters
+    ----------
+    force : ndarray
+    sample_time : float
+        [s]
+
     Examples
     --------
     >>> t = np.arange(20_000) * 1e-3

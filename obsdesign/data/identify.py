@@ -32,11 +32,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._idim import check_int, implausible, positive_number, quantization, second_difference, time_window
-from .choices import INPUT_TIMINGS, MAX_DELAY, MAX_GIVEN_DELAY, STRIBECK_CHOICES
+from .choices import INPUT_TIMINGS, MAX_DELAY, STRIBECK_CHOICES
 from .cutoff import choose_filter
-from .estimate import NO_INTERVAL_REASON, cautions, estimate
+from .estimate import MODEL_SHIFT_FACTOR, NO_INTERVAL_REASON, cautions, estimate, model_shift as _model_shift, widened
 from .friction_fit import check_bounds, check_fix
-from .timing import aligned, describe, find_timing
+from ._ident_rows import ASYM, FILTER_ORDER, rows
+from .timing import aligned, check_delay, find_timing
 from .presliding import MIN_REVERSALS, MIN_ROWS as MIN_PRESLIDING_ROWS, _reversals, fit_presliding
 from .trace import REVERSAL_THRESHOLD, Trace
 from .uncertainty import N_BOOT, column_noise
@@ -46,15 +47,11 @@ __all__ = ["Identification", "identify", "MODELS", "FILTER_ORDER", "DEFAULT_DECI
            "MIN_REVERSALS", "MIN_PRESLIDING_ROWS"]
 
 MODELS = ("coulomb-viscous", "asymmetric")
-#: Order of the zero-phase Butterworth low-pass (the benchmark's choice).
-FILTER_ORDER = 4
 #: Decimation factor at the largest default cut-off (a tenth of the sampling rate): the benchmark's
 #: round(0.8 fnyq / (2 * 20 Hz)) = 10 at 1 kHz. The default is ``round(fs / filter_hz)``.
 DEFAULT_DECIMATION = 10
 #: Default pre-sliding window [m]: the largest travel after a reversal still called pre-sliding.
 PRESLIDING_WINDOW = 1e-4
-#: The per-direction parameters of the ``asymmetric`` model.
-ASYM = ("sigma_pos", "sigma_neg", "Cf_pos", "Cf_neg")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -263,37 +260,7 @@ class Identification:
 
     # -- display ---------------------------------------------------------------------------------
     def _rows(self) -> list[tuple[str, str]]:
-        u = self.units
-
-        def pm(name, digits=5):
-            value, std = getattr(self, name), getattr(self, name + "_std")
-            unit = u.si(name.split("_")[0])
-            text = f"{value:.{digits}g} ± {std:.2g} {unit}"
-            if name in self.intervals:
-                lo, hi = self.intervals[name]
-                text += f"  [95 %: {lo:.{digits}g} to {hi:.{digits}g}]"
-            if name in self.fixed:
-                text += "  (fixed)"
-            if name in self.at_bound:
-                text += f"  (at its {self.at_bound[name]} bound)"
-            return text
-
-        names = ["m", "sigma", "Cf", "offset"] + (list(ASYM) if self.model == "asymmetric" else [])
-        names += ["Fs", "vs"] if self.stribeck else []
-        rows = [("model", self.model + (" + Stribeck" if self.stribeck else "")), ("source", self.source or "-"),
-                ("units", u.describe(self.input_gain) + f"; input gain {self.input_gain:g} "
-                 f"{u.force_unit}/{u.input_unit(self.input_gain)}")]
-        rows += [(n, pm(n)) for n in names]
-        rows += [("s", "-" if self.s is None else f"{self.s:.5g} 1/{u.length_unit}"), ("s note", self.s_note),
-                 ("timing", self.timing_note or describe(self.input_timing, self.delay_samples)),
-                 ("selection", self.selection or "-"), ("intervals", self.interval_method or "-"),
-                 ("NRMSE", f"{self.nrmse_percent:.3g} %"), ("condition number", f"{self.condition_number:.4g}"),
-                 ("rows in the fit", f"{self.samples} (|v| > {self.min_speed:.3g} {u.si('speed')}"
-                  + (f", {self.window}" if self.window else "") + ")"),
-                 ("filter", f"Butterworth {FILTER_ORDER}th order {self.filter_hz:.4g} Hz, zero phase ({self.filter_rule})"),
-                 ("decimation", f"{self.decimation} (sample time {self.sample_time:g} s)")]
-        rows += [("WARNING", w) for w in self.warnings] + [("caution", w) for w in self.notices]
-        return rows
+        return rows(self)
 
     def __str__(self) -> str:
         rows = self._rows()
@@ -304,36 +271,6 @@ class Identification:
         esc = html.escape
         body = "".join(f"<tr><th>{esc(k)}</th><td>{esc(v)}</td></tr>" for k, v in self._rows())
         return f"<table class='obsdesign-result'><caption>{esc('Identification (' + self.model + ')')}</caption>{body}</table>"
-
-
-#: The rows of the model-error check: speeds above this many times the fit's min speed.
-MODEL_SHIFT_FACTOR = 4.0
-
-
-def _model_shift(est: dict, cols: dict, y: np.ndarray, threshold: float, *, model, fix, bounds, vs_range,
-                 noise_var) -> dict:
-    """``name -> change of the estimate`` when the rows below :data:`MODEL_SHIFT_FACTOR` x the min speed are left out.
-
-    Near a reversal the friction follows the position (pre-sliding, a bristle's lag), not ``Cf sign(v)``:
-    a misfit of the static model that no bootstrap of its residuals sees. Where leaving those rows out
-    moves an estimate, the model does not hold there by at least that much, and the interval is widened
-    by the move (on its side). Simulated LuGre axes were biased by 0.3 to 0.9 % in m, sigma and Cf with
-    bootstrap half-widths of 0.15 to 0.7 % (covered in 0 of 4 draws); the move is of the bias's size.
-    With the Stribeck term kept, the check fits it too (on the rows left). Not done where too few rows remain.
-    """
-    sub = np.abs(cols["v"]) > MODEL_SHIFT_FACTOR * threshold
-    if np.count_nonzero(sub) < max(20, sub.size // 4):
-        return {}
-    part = {k: (c if k == "shape" else c[sub]) for k, c in cols.items()}
-    shape = cols["shape"]
-    part["shape"] = lambda vs, parts: {k: c[sub] for k, c in shape(vs, parts).items()}
-    try:
-        alt = estimate(part, y[sub], model=model, stribeck="on" if est["stribeck"] else "off", fix=fix,
-                       bounds=bounds, vs_range=vs_range, noise_var=noise_var, n_boot=0, seed=0)
-    except ValueError:
-        return {}
-    return {k: float(alt["values"][k] - est["values"][k]) for k in est["intervals"]
-            if k in alt["values"] and k not in fix}
 
 
 # -- the procedure -----------------------------------------------------------------------------
@@ -471,10 +408,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
         min_speed = positive_number("min_speed", min_speed, 0.0, trace.units.si("speed"))
     if not isinstance(input_timing, str) or input_timing not in INPUT_TIMINGS:
         raise ValueError(f"input_timing: expected one of {', '.join(map(repr, INPUT_TIMINGS))}, found {input_timing!r}")
-    if delay_samples is not None:
-        delay_samples = check_int("delay_samples", delay_samples, 0)
-        if delay_samples > MAX_GIVEN_DELAY:
-            raise ValueError(f"delay_samples: expected an integer from 0 to {MAX_GIVEN_DELAY}, found {delay_samples}")
+    delay_samples = None if delay_samples is None else check_delay(delay_samples, check_int("delay_samples",
+                                                                                           delay_samples, 0))
     force_range = float(np.ptp(force))
     if not force_range > 0.0:
         raise ValueError(f"input: the record has constant input ({float(force[0]):g} N in every sample of "
@@ -533,19 +468,9 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     values, std = est["values"], est["std"]
     model_shift = _model_shift(est, cols, y, threshold, model=model, fix=fix, bounds=bounds, vs_range=vs_range,
                                noise_var=noise_var)
-    intervals = {}
-    for name, (lo, hi) in est["intervals"].items():
-        s = model_shift.get(name, 0.0)
-        lo, hi = lo + min(s, 0.0), hi + max(s, 0.0)
-        intervals[name] = (min(lo, float(values[name])), max(hi, float(values[name])))  # holds its own estimate
-    result = {k: float(values[k]) for k in ("m", "sigma", "Cf", "offset")}
-    result.update({f"{k}_std": float(std.get(k, 0.0)) for k in ("m", "sigma", "Cf", "offset")})
-    if model == "asymmetric":
-        result.update({k: float(values[k]) for k in ASYM})
-        result.update({f"{k}_std": float(std.get(k, 0.0)) for k in ASYM})
-    if est["stribeck"]:
-        result.update(Fs=float(values["Fs"]), vs=float(values["vs"]), Fs_std=float(std.get("Fs", 0.0)),
-                      vs_std=float(std.get("vs", 0.0)))
+    intervals = widened(est["intervals"], values, model_shift)
+    shown = ("m", "sigma", "Cf", "offset") + (ASYM if model == "asymmetric" else ()) + (("Fs", "vs") if est["stribeck"] else ())
+    result = {k: float(values[k]) for k in shown} | {f"{k}_std": float(std.get(k, 0.0)) for k in shown}
     notes = implausible({k: (None if k in est["at_bound"] else v) for k, v in result.items()}, trace.input_gain)
     for note in notes:
         warnings.warn(note, stacklevel=2)
@@ -563,8 +488,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                           reversals=int(_reversals(v, REVERSAL_THRESHOLD * float(np.max(np.abs(v)))).size),
                           source=trace.source, warnings=notes, notices=notices, stribeck=est["stribeck"], selection=est["selection"],
                           intervals=intervals, eiv_shift=est["eiv_shift"], model_shift=model_shift,
-                          at_bound=est["at_bound"],
-                          fixed=tuple(sorted(fix)), min_speed=float(threshold), window=span,
+                          at_bound=est["at_bound"], fixed=tuple(sorted(fix)), min_speed=float(threshold), window=span,
                           interval_method=(f"moving-block bootstrap, {n_boot} replicates, blocks of {est['block_length']} "
                                            "rows, " if n_boot else "1.96 standard errors, ") + "widened by the "
                           "errors-in-variables shift" + (f" and by the model-error shift ({MODEL_SHIFT_FACTOR:g} x the "

@@ -52,6 +52,12 @@ DELAY_KEY = "pid.delay_samples"
 def with_drive_delay(cfg: Config, delay: int) -> Config:
     """``cfg`` with the drive's delay [samples] at :data:`DELAY_KEY`, the one place a config keeps it.
 
+    Parameters
+    ----------
+    cfg : Config
+    delay : int
+        Samples from the input to the measured position (the loop's delay).
+
     Examples
     --------
     >>> from obsdesign import load_preset

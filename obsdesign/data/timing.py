@@ -41,11 +41,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .choices import INPUT_TIMINGS, MAX_DELAY
+from .choices import INPUT_TIMINGS, MAX_DELAY, MAX_GIVEN_DELAY
 from .trace import REVERSAL_THRESHOLD
 from .uncertainty import correlation_time
 
-__all__ = ["find_timing", "Timing", "MAX_DELAY", "TIMING_MARGIN", "held", "aligned", "describe"]
+__all__ = ["find_timing", "check_delay", "Timing", "MAX_DELAY", "TIMING_MARGIN", "held", "aligned", "describe"]
 
 #: The BIC decrease another candidate must bring over the plain reading (as logged, no delay): that of the
 #: Stribeck selection (:data:`obsdesign.data.estimate.BIC_MARGIN`).
@@ -95,6 +95,12 @@ class Timing:
 def describe(timing: str, delay: int) -> str:
     """``'held input, position 1 sample late'`` and the like.
 
+    Parameters
+    ----------
+    timing : {'sample', 'hold'}
+    delay : int
+        Samples the position is late.
+
     >>> describe("sample", 0), describe("hold", 2)
     ('input as logged, no delay', 'held input, position 2 samples late')
     """
@@ -106,6 +112,10 @@ def describe(timing: str, delay: int) -> str:
 def held(force: np.ndarray) -> np.ndarray:
     """The force a held input gives the second difference at ``n``: ``(u[n-1] + u[n]) / 2`` (first sample kept).
 
+    Parameters
+    ----------
+    force : ndarray
+
     >>> held(np.array([0.0, 2.0, 4.0])).tolist()
     [0.0, 1.0, 3.0]
     """
@@ -114,6 +124,14 @@ def held(force: np.ndarray) -> np.ndarray:
 
 def aligned(position: np.ndarray, force: np.ndarray, timing: str, delay: int) -> tuple[np.ndarray, np.ndarray]:
     """Position and force paired at the same instant: ``position[n + d]`` with the (held) ``force[n]``.
+
+    Parameters
+    ----------
+    position, force : ndarray
+        The logged columns.
+    timing : {'sample', 'hold'}
+    delay : int
+        Samples the position is late.
 
     >>> aligned(np.arange(5.0), np.arange(5.0) * 10, "sample", 2)
     (array([2., 3., 4.]), array([ 0., 10., 20.]))
@@ -178,6 +196,26 @@ def _output_error(x: np.ndarray, v: np.ndarray, force: np.ndarray, theta: np.nda
     q, _ = np.linalg.qr(basis)
     r = r - (r @ q) @ q.T
     return r.ravel()
+
+
+def check_delay(delay: int, value: int) -> int:
+    """``value`` (the checked integer ``delay``) if at most :data:`~obsdesign.data.choices.MAX_GIVEN_DELAY`.
+
+    Parameters
+    ----------
+    delay : int
+        The delay as given (for the message).
+    value : int
+        The delay as an integer >= 0.
+
+    Examples
+    --------
+    >>> check_delay(2, 2)
+    2
+    """
+    if value > MAX_GIVEN_DELAY:
+        raise ValueError(f"delay_samples: expected an integer from 0 to {MAX_GIVEN_DELAY}, found {delay!r}")
+    return value
 
 
 def find_timing(position: np.ndarray, force: np.ndarray, *, dt: float, filter_hz: float, decimation: int,
