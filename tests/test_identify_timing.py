@@ -82,6 +82,7 @@ def test_identify_finds_the_timing(logs, name, timing, delay):
     assert ("found" in ident.timing_note) or ("not resolved by the data" in ident.timing_note)
     if name.startswith("rotary"):
         assert "found" in ident.timing_note
+        assert " rad " in ident.s_note and " m " not in ident.s_note  # the pre-sliding window in the axis's unit
     # against the simulated truth (LuGre, closed loop): inertia 1 %, viscous 3 %, Coulomb 2 %
     assert ident.m == pytest.approx(spec["m"], rel=0.01)
     assert ident.sigma == pytest.approx(spec["sigma"], rel=0.03)

@@ -478,7 +478,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     noise = math.sqrt(max(0.0, float(np.mean((position - x_f)[keep] ** 2)) - quantum**2 / 12.0))
     s, note = fit_presliding(x=position[keep], x_f=x_f[keep], v=v[keep], a=a[keep], u_f=u_f[keep], dt=dt,
                              m=result["m"], sigma=result["sigma"], Cf=result["Cf"], offset=result["offset"],
-                             rows=DEFAULT_DECIMATION if decimation is None else q, window=presliding_window)
+                             rows=DEFAULT_DECIMATION if decimation is None else q, window=presliding_window,
+                             length_unit=trace.units.length_unit)
     notices = trace.warnings + check_plausible(trace.units, mass=result["m"]) + cautions(
         est, cols, noise_var, trace.units, filter_hz)
     return Identification(model=model, **result, nrmse_percent=est["nrmse"], condition_number=est["condition_number"],
