@@ -11,12 +11,15 @@ A drive's log pairs each input sample with a position sample, but not always at 
 
 Each candidate ``(timing, d)`` changes only the force column of the inverse model
 ``u = m a + sigma v + Cf sign(v) + offset``: the rows (from the position) are the same for all of
-them when the position is cut by the largest delay tried. The equation-error residual of the
-least-squares fit on those rows ranks the candidates. The evidence is a BIC difference over the
-effective rows (``n_eff ln(RSS_i / RSS_best)``, ``n_eff`` the rows over the residual's correlation
-time, as in the Stribeck selection of :mod:`obsdesign.data.estimate`). The plain reading (as
-logged, no delay) is kept unless another candidate lowers the BIC by more than
-:data:`TIMING_MARGIN`; the note says so either way.
+them when the position is cut by the largest delay tried. Two criteria rank the candidates on those
+rows (filtered an octave below the fit's cut-off, rows near reversals left out): the equation-error
+residual of the least-squares fit, and the output error of the same model integrated over short
+segments from their own starts (the position's noise is in its output only, so a closed loop that feeds
+it back into the force does not rank the candidates). Each gives a BIC difference to its best over the
+effective rows (``n_eff ln(RSS_i / RSS_best)``, ``n_eff`` the rows over the residual's correlation time,
+as in the Stribeck selection of :mod:`obsdesign.data.estimate`). A candidate is rejected when every
+criterion puts it more than :data:`TIMING_MARGIN` above its best; of the others the simplest is kept
+(the smallest delay, as logged before held), and the note says whether the data resolved it.
 
 Examples
 --------
