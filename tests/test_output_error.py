@@ -151,7 +151,11 @@ def _synthetic(model, truth, seed=3):
     res = run(dataclasses.replace(loop, x_ref=exp.x_ref, u_open=np.zeros(n)))
     force = res.u + cfg.plant.G  # the actuator force (run_loop's u is net of the load)
     ne = exp.staircase_end
-    static = identify(Trace(t=res.t[:ne], position=res.x_meas[:ne], force=force[:ne], sample_time=exp.dt))
+    # the static start read as logged, no delay (as written): the refinement holds m at the static fit's, and the
+    # timing identify finds here (held: m -0.49 % instead of -0.27 % on this closed loop with its noise fed back)
+    # moves the refined delay to 0.83 samples, which absorbs that mass error (issue 32, reported)
+    static = identify(Trace(t=res.t[:ne], position=res.x_meas[:ne], force=force[:ne], sample_time=exp.dt),
+                      input_timing="sample", delay_samples=0)
     return Trace(t=res.t, position=res.x_meas, force=force, sample_time=exp.dt), static
 
 

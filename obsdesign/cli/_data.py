@@ -156,6 +156,18 @@ def _bounds_pair(text: str) -> tuple[float, float]:
     return pair
 
 
+def _delay_arg(text: str) -> int:
+    from ..data.choices import MAX_GIVEN_DELAY
+
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if not 0 <= value <= MAX_GIVEN_DELAY:
+        raise argparse.ArgumentTypeError(f"expected an integer from 0 to {MAX_GIVEN_DELAY}, found {text!r}")
+    return value
+
+
 def _window_arg(text: str) -> tuple[float, float]:
     try:
         t0, t1 = _bounds_pair(text)
@@ -186,8 +198,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
                          f"{nyquist:g} Hz of {args.data!r}, found {args.filter_hz:g}")
     ident = identify(trace, model="asymmetric" if args.asymmetric else "coulomb-viscous", stribeck=args.stribeck,
                      fix=fix, bounds=bounds, min_speed=args.min_speed, window=args.window, n_boot=args.bootstrap,
-                     seed=args.seed, input_timing=args.input_timing, filter_hz=args.filter_hz,
-                     decimation=args.decimation)
+                     seed=args.seed, input_timing=args.input_timing, delay_samples=args.delay_samples,
+                     filter_hz=args.filter_hz, decimation=args.decimation)
     ident, refined = refine_from_args(args, trace, ident)
     peak = ident.force_peak / abs(ident.input_gain) if ident.input_gain else 0.0
     if args.u_max is not None and peak > args.u_max * (1 + 1e-9):
@@ -250,7 +262,7 @@ def _cmd_observe(args: argparse.Namespace) -> int:
 
 def add_commands(sub) -> None:
     """Add ``channels``, ``identify`` and ``observe`` to the subparsers ``sub``."""
-    from ..data.choices import INPUT_TIMINGS, STRIBECK_CHOICES
+    from ..data.choices import INPUT_TIMINGS, MAX_DELAY, MAX_GIVEN_DELAY, STRIBECK_CHOICES
 
     from ..data.formats import extensions_text
 
@@ -286,9 +298,12 @@ def add_commands(sub) -> None:
                    help="bootstrap replicates of the intervals, at most 100000 (default 400; 0: 1.96 standard "
                         "errors)")
     p.add_argument("--seed", type=integer(0), default=0, help="seed of the bootstrap (default 0)")
-    p.add_argument("--input-timing", choices=INPUT_TIMINGS, default="sample",
+    p.add_argument("--input-timing", choices=INPUT_TIMINGS, default="auto",
                    help="hold: the logged input is held until the next sample (a sampled controller's output); "
-                        "default sample: as logged")
+                        "sample: as logged; default auto: found from the data with the delay")
+    p.add_argument("--delay-samples", type=_delay_arg, metavar="D",
+                   help=f"samples (0 to {MAX_GIVEN_DELAY}) the position is logged after the input it answers to "
+                        f"(default: found from the data, 0 to {MAX_DELAY})")
     add_refine_flags(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("-o", "--output", metavar="FILE.toml", help="write the identified design config")

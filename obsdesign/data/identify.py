@@ -32,10 +32,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._idim import MAX_BOOTSTRAP, check_int, implausible, positive_number, quantization, second_difference, time_window
-from .choices import INPUT_TIMINGS, STRIBECK_CHOICES
+from .choices import INPUT_TIMINGS, MAX_DELAY, STRIBECK_CHOICES
 from .cutoff import choose_filter
-from .estimate import NO_INTERVAL_REASON, cautions, estimate
+from .estimate import MODEL_SHIFT_FACTOR, NO_INTERVAL_REASON, cautions, estimate, model_shift as _model_shift, widened
 from .friction_fit import check_bounds, check_fix
+from ._ident_rows import ASYM, FILTER_ORDER, rows
+from .timing import aligned, check_delay, find_timing
 from .presliding import MIN_REVERSALS, MIN_ROWS as MIN_PRESLIDING_ROWS, _reversals, fit_presliding
 from .trace import REVERSAL_THRESHOLD, Trace
 from .uncertainty import N_BOOT, column_noise
@@ -45,15 +47,11 @@ __all__ = ["Identification", "identify", "MODELS", "FILTER_ORDER", "DEFAULT_DECI
            "MIN_REVERSALS", "MIN_PRESLIDING_ROWS"]
 
 MODELS = ("coulomb-viscous", "asymmetric")
-#: Order of the zero-phase Butterworth low-pass (the benchmark's choice).
-FILTER_ORDER = 4
 #: Decimation factor at the largest default cut-off (a tenth of the sampling rate): the benchmark's
 #: round(0.8 fnyq / (2 * 20 Hz)) = 10 at 1 kHz. The default is ``round(fs / filter_hz)``.
 DEFAULT_DECIMATION = 10
 #: Default pre-sliding window [m]: the largest travel after a reversal still called pre-sliding.
 PRESLIDING_WINDOW = 1e-4
-#: The per-direction parameters of the ``asymmetric`` model.
-ASYM = ("sigma_pos", "sigma_neg", "Cf_pos", "Cf_neg")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -110,6 +108,9 @@ class Identification:
         How :attr:`intervals` were obtained.
     eiv_shift : dict
         ``name -> shift``: predicted change of the bias-compensated estimate (errors in variables).
+    model_shift : dict
+        ``name -> shift``: the change of the estimate without the rows near reversals (below
+        :data:`MODEL_SHIFT_FACTOR` x the min speed), which widens the interval: model error.
     at_bound : dict
         ``name -> 'lower'|'upper'`` for a fitted parameter at one of its bounds.
     fixed : tuple of str
@@ -123,6 +124,14 @@ class Identification:
     notices : tuple of str
         Cautions: implausible values for the units, a parameter at a bound, an errors-in-variables
         bias larger than the interval (naming a better excitation).
+    input_timing : str
+        The input timing the fit used: ``'sample'`` (as logged) or ``'hold'``.
+    delay_samples : int
+        Samples the position is logged after the input it answers to (the drive's delay).
+    timing_note : str
+        How the timing and the delay were found (:mod:`obsdesign.data.timing`), and how sure.
+    timing_evidence : dict
+        ``'timing/delay' -> BIC difference`` to the best candidate (empty when both were given).
     """
 
     model: str
@@ -167,18 +176,24 @@ class Identification:
     intervals: dict = field(default_factory=dict)
     interval_method: str = ""
     eiv_shift: dict = field(default_factory=dict)
+    model_shift: dict = field(default_factory=dict)
     at_bound: dict = field(default_factory=dict)
     fixed: tuple[str, ...] = ()
     min_speed: float = 0.0
     window: str = ""
     units: Units = field(default_factory=Units)
     notices: tuple[str, ...] = ()
+    input_timing: str = "sample"
+    delay_samples: int = 0
+    timing_note: str = ""
+    timing_evidence: dict = field(default_factory=dict)
 
     _KEYS = ("m", "sigma", "Cf", "offset", "m_std", "sigma_std", "Cf_std", "offset_std", "nrmse_percent",
              "condition_number", "samples")
     _ASYM = ("sigma_pos", "sigma_neg", "Cf_pos", "Cf_neg")
     _EXTRA = ("s", "s_note", "model", "sample_time", "filter_hz", "filter_rule", "decimation", "stribeck", "selection",
-              "interval_method", "at_bound", "fixed", "min_speed", "window")
+              "interval_method", "at_bound", "fixed", "min_speed", "window", "input_timing", "delay_samples",
+              "timing_note")
 
     def to_dict(self) -> dict:
         """JSON-ready mapping: the parameters, their standard errors and the fit statistics.
@@ -187,7 +202,7 @@ class Identification:
         condition_number, samples``; with ``asymmetric`` also ``sigma_pos, sigma_neg, Cf_pos,
         Cf_neg``; with the Stribeck term ``Fs, vs, Fs_std, vs_std``; always ``s, s_note, model,
         sample_time, filter_hz, filter_rule, decimation, stribeck, selection, interval_method, at_bound, fixed,
-        min_speed, window``, ``intervals`` (name -> [low, high]), ``eiv_shift`` and ``units``
+        min_speed, window, input_timing, delay_samples, timing_note``, ``timing_evidence``, ``model_shift``, ``intervals`` (name -> [low, high]), ``eiv_shift`` and ``units``
         (``axis``, ``input_unit``, ``mass_unit``, ``force_unit``, ``length_unit``, the logged
         ``time``/``position`` units); ``warnings`` (a list of sentences) when the identification is
         not physical, ``notices`` when there are cautions.
@@ -198,6 +213,8 @@ class Identification:
         out = {k: data[k] for k in keys}
         out["intervals"] = {k: list(v) for k, v in self.intervals.items()}
         out["eiv_shift"] = dict(self.eiv_shift)
+        out["timing_evidence"] = dict(self.timing_evidence)
+        out["model_shift"] = dict(self.model_shift)
         u = self.units
         out["units"] = {"axis": u.axis, "input_unit": u.input_unit(self.input_gain), "mass_unit": u.mass_unit,
                         "force_unit": u.force_unit, "length_unit": u.length_unit, "time": u.time,
@@ -243,36 +260,7 @@ class Identification:
 
     # -- display ---------------------------------------------------------------------------------
     def _rows(self) -> list[tuple[str, str]]:
-        u = self.units
-
-        def pm(name, digits=5):
-            value, std = getattr(self, name), getattr(self, name + "_std")
-            unit = u.si(name.split("_")[0])
-            text = f"{value:.{digits}g} ± {std:.2g} {unit}"
-            if name in self.intervals:
-                lo, hi = self.intervals[name]
-                text += f"  [95 %: {lo:.{digits}g} to {hi:.{digits}g}]"
-            if name in self.fixed:
-                text += "  (fixed)"
-            if name in self.at_bound:
-                text += f"  (at its {self.at_bound[name]} bound)"
-            return text
-
-        names = ["m", "sigma", "Cf", "offset"] + (list(ASYM) if self.model == "asymmetric" else [])
-        names += ["Fs", "vs"] if self.stribeck else []
-        rows = [("model", self.model + (" + Stribeck" if self.stribeck else "")), ("source", self.source or "-"),
-                ("units", u.describe(self.input_gain) + f"; input gain {self.input_gain:g} "
-                 f"{u.force_unit}/{u.input_unit(self.input_gain)}")]
-        rows += [(n, pm(n)) for n in names]
-        rows += [("s", "-" if self.s is None else f"{self.s:.5g} 1/{u.length_unit}"), ("s note", self.s_note),
-                 ("selection", self.selection or "-"), ("intervals", self.interval_method or "-"),
-                 ("NRMSE", f"{self.nrmse_percent:.3g} %"), ("condition number", f"{self.condition_number:.4g}"),
-                 ("rows in the fit", f"{self.samples} (|v| > {self.min_speed:.3g} {u.si('speed')}"
-                  + (f", {self.window}" if self.window else "") + ")"),
-                 ("filter", f"Butterworth {FILTER_ORDER}th order {self.filter_hz:.4g} Hz, zero phase ({self.filter_rule})"),
-                 ("decimation", f"{self.decimation} (sample time {self.sample_time:g} s)")]
-        rows += [("WARNING", w) for w in self.warnings] + [("caution", w) for w in self.notices]
-        return rows
+        return rows(self)
 
     def __str__(self) -> str:
         rows = self._rows()
@@ -291,7 +279,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
              decimation: int | None = None, presliding_window: float = PRESLIDING_WINDOW, stribeck: str = "auto",
              fix: dict | None = None, bounds: dict | None = None, min_speed: float | None = None,
              window: tuple[float, float] | None = None, n_boot: int = N_BOOT, seed: int = 0,
-             input_timing: str = "sample") -> Identification:
+             input_timing: str = "auto", delay_samples: int | None = None) -> Identification:
     """Fit ``u = m a + sigma v + Cf sign(v) + offset`` (+ a Stribeck term) to a trace, within bounds.
 
     Parameters
@@ -303,7 +291,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     filter_hz : float, optional
         Cut-off [Hz] of the 4th-order zero-phase Butterworth low-pass. Default: from the record,
         one octave above where the position's spectrum meets its noise floor, at most a tenth of
-        the sampling rate (the benchmark's 100 Hz at 1 kHz): :func:`obsdesign.data.cutoff.noise_cutoff`.
+        the sampling rate (the benchmark's 100 Hz at 1 kHz): :func:`obsdesign.data.cutoff.noise_cutoff`;
+        and at least an octave above the force's bandwidth (:func:`obsdesign.data.cutoff.force_bandwidth`).
     decimation : int, optional
         Decimation factor, default ``round(fs / filter_hz)`` (the benchmark's 10 at 100 Hz and
         1 kHz): the decimation filter (0.4 ``filter_hz``) then band-limits the rows below the
@@ -327,12 +316,17 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
         Bootstrap replicates of the intervals, at most 100,000 (0: intervals of 1.96 standard errors).
     seed : int
         Seed of the bootstrap.
-    input_timing : {'sample', 'hold'}
+    input_timing : {'auto', 'sample', 'hold'}
         ``hold``: the input logged at sample ``n`` is held until ``n + 1`` (a sampled controller's
         output, zero-order hold, as in :func:`obsdesign.simulate`); the second-difference
         acceleration at ``n`` then corresponds exactly to ``(u[n-1] + u[n]) / 2``, which is used. ``sample``
-        (default, the EMPS benchmark's IDIM-LS): the input as logged. On a held input, ``sample``
+        (the EMPS benchmark's IDIM-LS): the input as logged. On a held input, ``sample``
         biases the viscous coefficient (-1 % open loop, -3 % closed loop in the coverage check).
+        ``auto`` (default): found from the data with the delay (:mod:`obsdesign.data.timing`).
+    delay_samples : int, optional
+        Samples (0 to 50) the position is logged after the input it answers to; default: found
+        from the data among 0 to 3 (``MAX_DELAY``). The fit pairs
+        ``position[n + d]`` with ``force[n]``.
 
     Returns
     -------
@@ -408,23 +402,28 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     dt = trace.sample_time
     fs = 1.0 / dt
     position, force, span = time_window(trace, window)
-    filter_hz, filter_rule, q = choose_filter(position, dt, filter_hz, decimation)
+    filter_hz, filter_rule, q = choose_filter(position, dt, filter_hz, decimation, force=force)
     presliding_window = positive_number("presliding_window", presliding_window, 0.0, trace.units.length_unit)
     if min_speed is not None:
         min_speed = positive_number("min_speed", min_speed, 0.0, trace.units.si("speed"))
-    if input_timing not in INPUT_TIMINGS:
+    if not isinstance(input_timing, str) or input_timing not in INPUT_TIMINGS:
         raise ValueError(f"input_timing: expected one of {', '.join(map(repr, INPUT_TIMINGS))}, found {input_timing!r}")
-    if input_timing == "hold":
-        force = np.concatenate([force[:1], 0.5 * (force[1:] + force[:-1])])
-    n = position.size
+    delay_samples = None if delay_samples is None else check_delay(delay_samples, check_int("delay_samples",
+                                                                                           delay_samples, 0))
     force_range = float(np.ptp(force))
     if not force_range > 0.0:
         raise ValueError(f"input: the record has constant input ({float(force[0]):g} N in every sample of "
                          f"{trace.source!r}); nothing to identify: the fit needs a force that varies")
     border = int(math.ceil(5.0 * fs / filter_hz))
-    if n - 2 * border < 20 * q:
-        raise ValueError(f"trace: expected at least {2 * border + 20 * q} samples for filter_hz = {filter_hz:g} Hz "
-                         f"and decimation {q}, found {n}")
+    top = MAX_DELAY if delay_samples is None else delay_samples
+    if position.size - top - 2 * border < 20 * q:
+        raise ValueError(f"trace: expected at least {2 * border + 20 * q + top} samples for filter_hz = {filter_hz:g} "
+                         f"Hz, decimation {q} and a delay of up to {top} samples, found {position.size}")
+    found = find_timing(position, force, dt=dt, filter_hz=filter_hz, decimation=q,
+                        timing=None if input_timing == "auto" else input_timing, delay=delay_samples,
+                        min_speed=min_speed)
+    position, force = aligned(position, force, found.timing, found.delay)
+    n = position.size
 
     sos = signal.butter(FILTER_ORDER, filter_hz, fs=fs, output="sos")
     x_f = signal.sosfiltfilt(sos, position)
@@ -467,14 +466,11 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     est = estimate(cols, y, model=model, stribeck=stribeck, fix=fix, bounds=bounds, vs_range=vs_range,
                    noise_var=noise_var, n_boot=n_boot, seed=seed)
     values, std = est["values"], est["std"]
-    result = {k: float(values[k]) for k in ("m", "sigma", "Cf", "offset")}
-    result.update({f"{k}_std": float(std.get(k, 0.0)) for k in ("m", "sigma", "Cf", "offset")})
-    if model == "asymmetric":
-        result.update({k: float(values[k]) for k in ASYM})
-        result.update({f"{k}_std": float(std.get(k, 0.0)) for k in ASYM})
-    if est["stribeck"]:
-        result.update(Fs=float(values["Fs"]), vs=float(values["vs"]), Fs_std=float(std.get("Fs", 0.0)),
-                      vs_std=float(std.get("vs", 0.0)))
+    model_shift = _model_shift(est, cols, y, threshold, model=model, fix=fix, bounds=bounds, vs_range=vs_range,
+                               noise_var=noise_var)
+    intervals = widened(est["intervals"], values, model_shift)
+    shown = ("m", "sigma", "Cf", "offset") + (ASYM if model == "asymmetric" else ()) + (("Fs", "vs") if est["stribeck"] else ())
+    result = {k: float(values[k]) for k in shown} | {f"{k}_std": float(std.get(k, 0.0)) for k in shown}
     notes = implausible({k: (None if k in est["at_bound"] else v) for k, v in result.items()}, trace.input_gain)
     for note in notes:
         warnings.warn(note, stacklevel=2)
@@ -482,7 +478,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     noise = math.sqrt(max(0.0, float(np.mean((position - x_f)[keep] ** 2)) - quantum**2 / 12.0))
     s, note = fit_presliding(x=position[keep], x_f=x_f[keep], v=v[keep], a=a[keep], u_f=u_f[keep], dt=dt,
                              m=result["m"], sigma=result["sigma"], Cf=result["Cf"], offset=result["offset"],
-                             rows=DEFAULT_DECIMATION if decimation is None else q, window=presliding_window)
+                             rows=DEFAULT_DECIMATION if decimation is None else q, window=presliding_window,
+                             length_unit=trace.units.length_unit)
     notices = trace.warnings + check_plausible(trace.units, mass=result["m"]) + cautions(
         est, cols, noise_var, trace.units, filter_hz)
     return Identification(model=model, **result, nrmse_percent=est["nrmse"], condition_number=est["condition_number"],
@@ -491,9 +488,12 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                           noise_rms=noise, quantization=quantum,
                           reversals=int(_reversals(v, REVERSAL_THRESHOLD * float(np.max(np.abs(v)))).size),
                           source=trace.source, warnings=notes, notices=notices, stribeck=est["stribeck"], selection=est["selection"],
-                          intervals=est["intervals"], eiv_shift=est["eiv_shift"], at_bound=est["at_bound"],
-                          fixed=tuple(sorted(fix)), min_speed=float(threshold), window=span,
+                          intervals=intervals, eiv_shift=est["eiv_shift"], model_shift=model_shift,
+                          at_bound=est["at_bound"], fixed=tuple(sorted(fix)), min_speed=float(threshold), window=span,
                           interval_method=(f"moving-block bootstrap, {n_boot} replicates, blocks of {est['block_length']} "
                                            "rows, " if n_boot else "1.96 standard errors, ") + "widened by the "
-                          "errors-in-variables shift" + (f"; {NO_INTERVAL_REASON}" if est["stribeck"] and not {"Fs", "vs"} <= set(fix) else ""),
-                          units=trace.units)
+                          "errors-in-variables shift" + (f" and by the model-error shift ({MODEL_SHIFT_FACTOR:g} x the "
+                                                         "min speed)" if model_shift else "")
+                          + (f"; {NO_INTERVAL_REASON}" if est["stribeck"] and not {"Fs", "vs"} <= set(fix) else ""),
+                          units=trace.units, input_timing=found.timing, delay_samples=found.delay,
+                          timing_note=found.note, timing_evidence=found.evidence)

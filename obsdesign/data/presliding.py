@@ -62,7 +62,7 @@ def _reversals(v: np.ndarray, threshold: float) -> np.ndarray:
 
 def fit_presliding(*, x: np.ndarray, x_f: np.ndarray, v: np.ndarray, a: np.ndarray, u_f: np.ndarray, dt: float,
                    m: float, sigma: float, Cf: float, offset: float, rows: int,
-                   window: float) -> tuple[float | None, str]:
+                   window: float, length_unit: str = "m") -> tuple[float | None, str]:
     """``(s, note)``: ``s`` [1/m] fitted from post-reversal segments, or ``None`` and the reason.
 
     Parameters
@@ -77,6 +77,8 @@ def fit_presliding(*, x: np.ndarray, x_f: np.ndarray, v: np.ndarray, a: np.ndarr
         Indices of the samples the fit may use.
     window : float
         Travel after a reversal [m] that counts as pre-sliding.
+    length_unit : str
+        The axis's length unit in the note (``rad`` on a rotary axis).
 
     A reversal resolves pre-sliding when the filtered position stays within ``window`` [m]
     of the reversal point for at least ``MIN_ROWS`` rows of the identification grid
@@ -109,7 +111,7 @@ def fit_presliding(*, x: np.ndarray, x_f: np.ndarray, v: np.ndarray, a: np.ndarr
     if n_rev < MIN_REVERSALS or len(segments) < MIN_REVERSALS:
         return None, (
             f"not identifiable from these data: {n_rev} velocity {plural}, {len(segments)} of them dwelling in "
-            f"the pre-sliding window (|x - x_r| <= {window:g} m for at least {need} samples = {need * dt:g} s, "
+            f"the pre-sliding window (|x - x_r| <= {window:g} {length_unit} for at least {need} samples = {need * dt:g} s, "
             f"{MIN_ROWS} rows of the fit; the longest stays {longest} samples); at least {MIN_REVERSALS} are "
             f"needed, so the record shows gross sliding, not pre-sliding")
     from scipy.optimize import minimize_scalar
@@ -130,4 +132,4 @@ def fit_presliding(*, x: np.ndarray, x_f: np.ndarray, v: np.ndarray, a: np.ndarr
     if best.x - lo < 1e-2 or hi - best.x < 1e-2:
         return None, (f"not identifiable from these data: the fit over {len(segments)} post-reversal segments "
                       f"ends at the search bound s = {s:.3g} 1/m (search {math.exp(lo):.3g} to {math.exp(hi):.3g})")
-    return s, f"fitted from {len(segments)} post-reversal segments of {n_rev} {plural} (window {window:g} m)"
+    return s, f"fitted from {len(segments)} post-reversal segments of {n_rev} {plural} (window {window:g} {length_unit})"

@@ -17,6 +17,10 @@ observer           variant ``static``, ``rho`` = 4, ``dt`` of the trace,
                    ``omega_co = 2 pi f_s / 10`` (a fifth of the Nyquist frequency)
 sensor             ``noise_rms`` and ``quantization`` estimated from the trace,
                    white noise up to the Nyquist frequency
+compensation       with the Stribeck term kept: ``ff_stribeck = Fs - Cf`` and ``ff_stribeck_velocity = vs``
+                   (the feed-forward's curve; the simulated plant keeps the paper's friction)
+hardware.delay_samples the samples the position is logged after the input it answers to, found from the
+                   log or given (:mod:`obsdesign.data.timing`): the loop's delay
 pid                ``tau = m / sigma`` (so ``H = phi / (s (tau s + 1))`` with ``phi = K tau / m`` is
                    ``K / (m s^2 + sigma s)``), phase margin 60 deg, ``max_S`` placing the
                    crossover ``omega_c = k phi / sin(Phi)`` at a tenth of the Nyquist frequency
@@ -25,12 +29,15 @@ pid                ``tau = m / sigma`` (so ``H = phi / (s (tau s + 1))`` with ``
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
+from ..compensation import CompensationSpec
 from ..params import Config, FrictionParams, ObserverSpec, PIDSpec, PlantParams, SensorSpec
 from ..provenance import WRITTEN_AS
 
-__all__ = ["config_from", "design_rules", "PHASE_MARGIN_DEG", "FASTEST_POLE_DT", "U_MAX_MARGIN"]
+__all__ = ["config_from", "design_rules", "PHASE_MARGIN_DEG", "FASTEST_POLE_DT", "U_MAX_MARGIN", "DELAY_KEY",
+           "with_drive_delay"]
 
 #: Phase margin [deg] of the PID rule.
 PHASE_MARGIN_DEG = 60.0
@@ -38,6 +45,26 @@ PHASE_MARGIN_DEG = 60.0
 FASTEST_POLE_DT = 0.2
 #: Margin on the largest logged input for the actuator limit.
 U_MAX_MARGIN = 1.2
+#: Where a config keeps the drive's delay [samples] (the one place, with :func:`with_drive_delay`).
+DELAY_KEY = "hardware.delay_samples"
+
+
+def with_drive_delay(cfg: Config, delay: int) -> Config:
+    """``cfg`` with the drive's delay [samples] at :data:`DELAY_KEY`, the one place a config keeps it.
+
+    Parameters
+    ----------
+    cfg : Config
+    delay : int
+        Samples from the input to the measured position (the loop's delay).
+
+    Examples
+    --------
+    >>> from obsdesign import load_preset
+    >>> with_drive_delay(load_preset("vcm"), 2).hardware.delay_samples
+    2
+    """
+    return dataclasses.replace(cfg, hardware=dataclasses.replace(cfg.hardware, delay_samples=int(delay)))
 
 
 def _positive(name: str, value: float, why: str, ident=None) -> float:
@@ -129,6 +156,7 @@ def _build(ident, *, name, K, u_max, rho, presliding_window):
     unit_in = units.input_unit(ident.input_gain)
     F, L, M = units.force_unit, units.length_unit, units.mass_unit
     dt = ident.sample_time
+    delay = int(getattr(ident, "delay_samples", 0))
     m = _positive("m", ident.m, "the mass must be positive", ident)
     sigma = _positive("sigma", ident.sigma, "the viscous coefficient must be positive", ident)
     Cf = _positive("Cf", ident.Cf, "the Coulomb level must be positive", ident)
@@ -181,7 +209,17 @@ def _build(ident, *, name, K, u_max, rho, presliding_window):
         ("pid.tau", tau, "s", "m / sigma"),
         ("pid.phase_margin_deg", PHASE_MARGIN_DEG, "deg", "the PID rule"),
         ("pid.max_S", max_S, f"{L}/{unit_in}", "crossover k phi / sin(Phi) at a tenth of the Nyquist frequency"),
+        (DELAY_KEY, delay, "samples", f"the log's delay from input to position ({_delay_rule(ident)})"),
     ]
+    compensation = CompensationSpec()
+    Fs, vs = getattr(ident, "Fs", None), getattr(ident, "vs", None)
+    if getattr(ident, "stribeck", False) and Fs is not None and vs is not None:
+        drop = max(Fs - Cf, 0.0)
+        compensation = CompensationSpec(ff_stribeck=drop, ff_stribeck_velocity=vs)
+        rules += [("compensation.ff_stribeck", drop, F, f"{src}: Fs - Cf, the Stribeck drop of the feed-forward"),
+                  ("compensation.ff_stribeck_velocity", vs, f"{L}/s", f"{src}: the Stribeck speed vs")]
+        # the simulated plant keeps the paper's friction (no Stribeck term): a LuGre plant from these levels with
+        # default bristle constants integrated to NaN on a rotary axis of 2.5e-3 kg m^2
     cfg = Config(
         name=name,
         plant=PlantParams(m=m, K=gain, G=ident.offset, u_max=u_max),
@@ -192,5 +230,14 @@ def _build(ident, *, name, K, u_max, rho, presliding_window):
         sources={key: (f"{rule} [{unit}]" if unit else rule) + f"{WRITTEN_AS}{value!r}"
                  for key, value, unit, rule in rules},
         axis=units.axis_spec(ident.input_gain),
+        compensation=compensation,
     )
-    return cfg, rules
+    return with_drive_delay(cfg, delay), rules
+
+
+def _delay_rule(ident) -> str:
+    note = getattr(ident, "timing_note", "")
+    if not note:
+        return "not examined"
+    return "given" if note.endswith("(given)") or "delay given" in note else "found from the record"
+
