@@ -42,7 +42,8 @@ import math
 from dataclasses import dataclass
 
 from .._display import ResultDisplay
-from .._validate import Choice, check_integer
+from .._memo import memo
+from .._validate import MAX_DELAY_SAMPLES, Choice, check_integer
 from ..params import Config
 from .pid import pid_gains
 from .sampled_loop import _margins, discrete_peak, discrete_pid
@@ -76,14 +77,17 @@ def simulated_plant(cfg: Config, *, regime: str = "sliding"):
     """
     import control as ct
 
-    regime = Choice(REGIMES).check("regime", regime)
+    return ct.tf(*_plant_coefficients(cfg, Choice(REGIMES).check("regime", regime)))
+
+
+def _plant_coefficients(cfg: Config, regime: str) -> tuple[list[float], list[float]]:
+    """Numerator and denominator of :func:`simulated_plant` (NumPy-free: the memo's key)."""
     pl, fr = cfg.plant, cfg.friction
     k = fr.kappa if regime == "rest" else 0.0
     sigma = _viscous(cfg)
     if fr.beta:  # Fv = sigma v / (beta s + 1): m s^2 (beta s + 1) + sigma s + k (beta s + 1)
-        den = [pl.m * fr.beta, pl.m, sigma + k * fr.beta, k]
-        return ct.tf([pl.K * fr.beta, pl.K], den)
-    return ct.tf([pl.K], [pl.m, sigma, k])
+        return [pl.K * fr.beta, pl.K], [pl.m * fr.beta, pl.m, sigma + k * fr.beta, k]
+    return [pl.K], [pl.m, sigma, k]
 
 
 def _viscous(cfg: Config) -> float:
@@ -191,7 +195,7 @@ def plant_loop(cfg: Config, *, regime: str = "sliding", delay_samples: int | Non
     TypeError
         ``cfg`` is not a Config.
     ValueError
-        An unknown regime, or ``delay_samples`` not an integer >= 0.
+        An unknown regime, or ``delay_samples`` not an integer in [0, 10000].
 
     Examples
     --------
@@ -201,27 +205,19 @@ def plant_loop(cfg: Config, *, regime: str = "sliding", delay_samples: int | Non
     ...
     ValueError: regime: expected one of 'sliding', 'rest', found 'moving'
     """
-    import control as ct
-    import numpy as np
-
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
     regime = Choice(REGIMES).check("regime", regime)
-    d = cfg.hardware.delay_samples if delay_samples is None else check_integer("delay_samples", delay_samples, minimum=0)
+    d = cfg.hardware.delay_samples if delay_samples is None else check_integer("delay_samples", delay_samples, minimum=0,
+                                                                                      maximum=MAX_DELAY_SAMPLES)
     dt = cfg.observer.dt
     _, _, kp, ki, kd = pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
                                  phase_margin_deg=cfg.pid.phase_margin_deg)
-    C = discrete_pid(kp=kp, ki=ki, kd=kd, tau_d=kd / kp / cfg.pid.derivative_N, dt=dt)
-    H = ct.c2d(simulated_plant(cfg, regime=regime), dt, "zoh")
-    L = C * ct.tf([1.0], [1.0] + [0.0] * d, dt) * H
-    gm, pm, wgc, _, dm = _margins(L)
-    one = ct.tf([1.0], [1.0], dt)
-    S, T = ct.feedback(one, L), ct.feedback(L, one)
-    num, den = (np.atleast_1d(np.squeeze(x)) for x in ct.tfdata(L))
-    stable = bool(max(abs(np.roots(np.polyadd(den, num)))) < 1.0)
-    w_low = (wgc if math.isfinite(wgc) and wgc > 0 else 1.0) * 1e-3
-    max_S, _ = discrete_peak(S, dt, w_low) if stable else (math.inf, math.nan)
-    max_T, _ = discrete_peak(T, dt, w_low) if stable else (math.inf, math.nan)
+    num, den = _plant_coefficients(cfg, regime)
+    args = (kp, ki, kd, kd / kp / cfg.pid.derivative_N, dt, d, tuple(num), tuple(den))
+    # python-control's numbers kept on disk like the sampled loop's (a warm `loop` imports no python-control);
+    # no cheap NumPy re-verification of a ZOH of this plant: a kept entry rests on the memo's signature
+    gm, pm, wgc, dm, max_S, max_T, stable = memo("plant_loop", args, lambda: _numbers(*args), valid=_valid)
     notes = []
     pf = cfg.plant_friction
     if pf is not None and pf.model != "paper":
@@ -232,6 +228,31 @@ def plant_loop(cfg: Config, *, regime: str = "sliding", delay_samples: int | Non
                      gain_margin_db=20.0 * math.log10(gm) if math.isfinite(gm) else math.inf,
                      phase_margin_deg=pm, crossover_rad_s=wgc, delay_margin_s=dm, delay_margin_samples=dm / dt,
                      max_S=max_S, max_T=max_T, stable=stable, note="; ".join(notes))
+
+
+def _valid(value) -> bool:
+    """The schema of a kept :func:`_numbers`: six floats and a bool."""
+    return (isinstance(value, list) and len(value) == 7 and all(isinstance(x, float) for x in value[:6])
+            and isinstance(value[6], bool))
+
+
+def _numbers(kp, ki, kd, tau_d, dt, d, num, den) -> list:
+    """python-control's margins, peaks and stability of ``C(z) H_zoh(z) z^-d`` (what :func:`plant_loop` keeps)."""
+    import control as ct
+    import numpy as np
+
+    C = discrete_pid(kp=kp, ki=ki, kd=kd, tau_d=tau_d, dt=dt)
+    H = ct.c2d(ct.tf(list(num), list(den)), dt, "zoh")
+    L = C * ct.tf([1.0], [1.0] + [0.0] * d, dt) * H
+    gm, pm, wgc, _, dm = _margins(L)
+    one = ct.tf([1.0], [1.0], dt)
+    S, T = ct.feedback(one, L), ct.feedback(L, one)
+    lnum, lden = (np.atleast_1d(np.squeeze(x)) for x in ct.tfdata(L))
+    stable = bool(max(abs(np.roots(np.polyadd(lden, lnum)))) < 1.0)
+    w_low = (wgc if math.isfinite(wgc) and wgc > 0 else 1.0) * 1e-3
+    max_S, _ = discrete_peak(S, dt, w_low) if stable else (math.inf, math.nan)
+    max_T, _ = discrete_peak(T, dt, w_low) if stable else (math.inf, math.nan)
+    return [float(gm), float(pm), float(wgc), float(dm), float(max_S), float(max_T), stable]
 
 
 def plant_loops(cfg: Config, *, delay_samples: int | None = None) -> dict[str, PlantLoop]:
