@@ -282,3 +282,20 @@ def test_the_dt_verdicts_follow_the_dt_field(page, dt):
     assert "not recomputed for the field's dt" in driver.find_element(By.ID, "certificate").text
     driver.find_element(By.ID, "reset").click()
     assert "not recomputed" not in driver.find_element(By.ID, "certificate").text
+
+
+@pytest.mark.parametrize("mode, options", [("feedforward", {"buildup": 2e-4}), ("blend", {"buildup": 2e-4}),
+                                           ("feedforward", {"lookahead": 3})])
+def test_the_feedforward_step_follows_the_dt_field(page, mode, options):
+    """In a feed-forward mode the page rebuilds the reference's velocity and weight at the field's dt (the
+    weights around the step's edges kept from Python): its step at 2 kHz with one sample of delay is still
+    ``simulate``'s, whose ``reference_feedforward`` runs at that dt."""
+    cfg = od.load_preset("vcm").override(mode=mode, **options)
+    driver = page(cfg)
+    _type(driver, dt="0.0005", delay="1")
+    x_page = np.asarray(driver.execute_script("return lastStep.x;"))
+    loop = preview_inputs(cfg.override(dt=5e-4, delay_samples=1))
+    assert np.any(loop.reference_feedforward()[1] != 1.0)   # the weights matter in this case
+    x_sim = run(loop).x
+    assert x_page.shape == x_sim.shape and np.max(np.abs(x_sim)) > 5e-4
+    assert np.max(np.abs(x_page - x_sim)) <= FIELDS_TOLERANCE

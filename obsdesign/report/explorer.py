@@ -206,7 +206,19 @@ def _reference_inputs(loop) -> dict:
     if loop.sampled.compensation.mode == "observer":
         return {}
     v_ref, w_ff = loop.reference_feedforward()
-    return {"v_ref": [float(v) for v in v_ref], "w_ff": [float(w) for w in w_ff]}
+    out = {"v_ref": [float(v) for v in v_ref], "w_ff": [float(w) for w in w_ff]}
+    # at another dt (the page's field): the step's reference moves only on the two samples around each edge, its
+    # central difference is step / (2 dt) there, and the weight there depends on the positions alone (look-ahead
+    # in samples, build-up in metres, the pre-sliding curve): the page keeps these weights and recomputes v_ref
+    x_ref = np.asarray(loop.x_ref)
+    n_up = int(np.argmax(x_ref > 0.0))
+    n_down = n_up + int(np.argmax(x_ref[n_up:] == 0.0))
+    edges = [n_up - 1, n_up, n_down - 1, n_down]
+    rest = np.ones(len(w_ff), bool)
+    rest[edges] = False
+    if n_up >= 2 and n_down - n_up >= 2 and np.all(v_ref[rest] == 0.0) and np.all(w_ff[rest] == 1.0):
+        out["w_edges"] = [float(w_ff[i]) for i in edges]
+    return out
 
 
 def _finite(obj):
