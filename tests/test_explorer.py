@@ -341,3 +341,4 @@ def test_the_rotary_axis_in_the_fields(page, dt, delay):
     x_page = np.asarray(driver.execute_script("return lastStep.x;"))
     x_sim = run(preview_inputs(ref)).x
     assert x_page.shape == x_sim.shape and np.max(np.abs(x_page - x_sim)) <= FIELDS_TOLERANCE
+    assert "settling into 2 urad" in driver.find_element(By.ID, "stepsummary").text   # the axis's units
