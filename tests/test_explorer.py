@@ -189,3 +189,156 @@ def test_the_loop_fields_show_the_margins(page):
         "stable" if py["max_pole_magnitude"] < 1 else "unstable")
     driver.find_element(By.ID, "reset").click()
     assert driver.find_element(By.ID, "loopmargins").text == first
+
+
+def _type(driver, **fields):
+    """Type values into the loop's fields (``l-dt``, ``l-delay``, ``l-kp`` ...) as a user does."""
+    from selenium.webdriver.common.by import By
+
+    for name, value in fields.items():
+        field = driver.find_element(By.ID, f"l-{name}")
+        driver.execute_script("arguments[0].value = arguments[1]; arguments[0].dispatchEvent(new Event('input'));",
+                              field, value)
+
+
+#: Largest difference [m] between the page's step and the simulator's when the fields change the PID's
+#: exponentials (ALPHA_D, the low-pass at another dt): the browser's Math.exp may differ from libm's in
+#: the last bit; 1e-9 m is 1e-6 of the 1 mm step.
+FIELDS_TOLERANCE = 1e-9
+
+
+@pytest.mark.parametrize("dt, delay, kp_scale", [(5e-4, 1, 1.0), (2.5e-4, 2, 1.0), (None, 1, 1.5), (1e-3, 3, 0.6)])
+def test_the_step_follows_the_loop_fields(page, dt, delay, kp_scale):
+    """Typed into the fields, the sample time, the drive's delay and kp move the page's drawn step onto
+    ``simulate``'s kernel for the config with that ``dt`` and ``delay_samples`` (the delay on the plant
+    side, the drive holding G/K before the first command), with the PID gains entering the simulator's
+    own SampledController (its ``kp``, ``ki``, ``kd``, ``tau_d = kd / (kp N)`` fields)."""
+    import dataclasses
+
+    cfg = od.load_preset("vcm")
+    driver = page(cfg)
+    fields = {"delay": str(delay)}
+    ref = cfg.override(delay_samples=delay, **({} if dt is None else {"dt": dt}))
+    loop = preview_inputs(ref)
+    s = loop.sampled
+    if kp_scale != 1.0:
+        kp = round(s.kp * kp_scale, 3)
+        fields["kp"] = repr(kp)
+        loop = dataclasses.replace(loop, sampled=dataclasses.replace(s, kp=kp, tau_d=s.kd / kp / cfg.pid.derivative_N))
+    if dt is not None:
+        fields["dt"] = repr(dt)
+    _type(driver, **fields)
+    x_page = np.asarray(driver.execute_script("return lastStep.x;"))
+    x_sim = run(loop).x
+    assert x_page.shape == x_sim.shape and np.max(np.abs(x_sim)) > 5e-4
+    assert np.max(np.abs(x_page - x_sim)) <= FIELDS_TOLERANCE
+    # the delay matters: the same fields without it are another response
+    x_nodelay = run(dataclasses.replace(loop, config=loop.config.override(delay_samples=0))).x
+    assert np.max(np.abs(x_nodelay - x_sim)) > 100 * FIELDS_TOLERANCE
+
+
+def test_the_step_at_another_gain_is_the_closed_loop_of_those_gains(page):
+    """Gains the config's design rule cannot give (ki and kd halved, N 5): the page's step against the
+    simulator's kernel with those gains in its SampledController."""
+    import dataclasses
+
+    cfg = od.load_preset("vcm")
+    driver = page(cfg)
+    loop = preview_inputs(cfg)
+    s = loop.sampled
+    ki, kd, N = round(s.ki / 2, 2), round(s.kd / 2, 4), 5.0
+    _type(driver, ki=repr(ki), kd=repr(kd), N=repr(N))
+    x_page = np.asarray(driver.execute_script("return lastStep.x;"))
+    x_sim = run(dataclasses.replace(loop, sampled=dataclasses.replace(s, ki=ki, kd=kd, tau_d=kd / s.kp / N))).x
+    assert np.max(np.abs(x_page - x_sim)) <= FIELDS_TOLERANCE
+    assert np.max(np.abs(x_page - run(loop).x)) > 1e-7   # and it is not the config's step
+
+
+@pytest.mark.parametrize("dt", [1e-3, 0.01])
+def test_the_dt_verdicts_follow_the_dt_field(page, dt):
+    """The dt field moves the discrete-pole verdicts onto ``check_stability`` of the config at that dt (vcm:
+    1 ms passes, fastest pole x dt 0.61; 10 ms fails, 6.1 > 1), and the certificate says it is the config's."""
+    import warnings
+
+    from selenium.webdriver.common.by import By
+
+    cfg = od.load_preset("vcm")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)   # 'faster than the sampling' at 10 ms: the point here
+        rep = check_stability(cfg.override(dt=dt))
+    driver = page(cfg)
+    _type(driver, dt=repr(dt))
+    rows = [li for li in driver.find_elements(By.CSS_SELECTOR, "#verdicts li")]
+    (product_row,) = [li for li in rows if "fastest pole x dt" in li.text]
+    product = abs(rep.fastest_pole) * dt
+    assert float(product_row.text.split(" = ")[-1].split(" <= ")[0]) == pytest.approx(product, rel=1e-3)
+    assert ("pass" in product_row.get_attribute("class")) == (product <= 1.0)
+    (radius_row,) = [li for li in rows if "discrete poles inside unit circle" in li.text]
+    radius = float(radius_row.text.split("largest radius ")[1])
+    assert radius == pytest.approx(max(max(r) for r in rep.discrete_pole_radii.values()), rel=1e-5)
+    assert driver.find_element(By.ID, "dt").text == repr(dt)
+    assert driver.find_element(By.ID, "dtverdict").text.endswith(
+        "> 1: the observer is faster than the sampling" if product > 1 else "<= 1")
+    cert = driver.find_element(By.ID, "certificate")
+    assert "not recomputed for the field's dt" in cert.text and cert.get_attribute("class") == ""  # not green
+    driver.find_element(By.ID, "reset").click()
+    assert "not recomputed" not in driver.find_element(By.ID, "certificate").text
+
+
+@pytest.mark.parametrize("mode, options", [("feedforward", {"buildup": 2e-4}), ("blend", {"buildup": 2e-4}),
+                                           ("feedforward", {"lookahead": 3})])
+def test_the_feedforward_step_follows_the_dt_field(page, mode, options):
+    """In a feed-forward mode the page rebuilds the reference's velocity and weight at the field's dt (the
+    weights around the step's edges kept from Python): its step at 2 kHz with one sample of delay is still
+    ``simulate``'s, whose ``reference_feedforward`` runs at that dt."""
+    cfg = od.load_preset("vcm").override(mode=mode, **options)
+    driver = page(cfg)
+    _type(driver, dt="0.0005", delay="1")
+    x_page = np.asarray(driver.execute_script("return lastStep.x;"))
+    loop = preview_inputs(cfg.override(dt=5e-4, delay_samples=1))
+    assert np.any(loop.reference_feedforward()[1] != 1.0)   # the weights matter in this case
+    x_sim = run(loop).x
+    assert x_page.shape == x_sim.shape and np.max(np.abs(x_sim)) > 5e-4
+    assert np.max(np.abs(x_page - x_sim)) <= FIELDS_TOLERANCE
+
+
+def _rotary_axis():
+    """The 4 kHz rotary axis of docs/delay.md (inertia 2e-4 kg m^2, 0.1 N m/A, the PID at 200 Hz, 2^20 counts
+    per revolution): data the explorer was not written against."""
+    import dataclasses
+    import math
+
+    from obsdesign.axis import AxisSpec
+
+    J, sigma, K, dt, wc = 2.0e-4, 2.0e-3, 0.1, 2.5e-4, 2 * math.pi * 200
+    axis = od.load_preset("vcm").override(
+        m=J, sigma=sigma, K=K, G=0.0, u_max=8.0, Cf=0.02, s=2000.0, kappa=100.0, dt=dt, tau=J / sigma,
+        max_S=K / sigma / (wc * math.sin(math.radians(60.0))), quantization=2 * math.pi / 2**20)
+    return dataclasses.replace(axis, name="rotary-4k", axis=AxisSpec(kind="rotary", input="A"), sources={})
+
+
+@pytest.mark.parametrize("dt, delay", [(None, 1), (None, 2), (1e-4, 3)])
+def test_the_rotary_axis_in_the_fields(page, dt, delay):
+    """The rotary axis, fields typed in: margins as ``sampled_loop`` (python-control) and the step as ``simulate``.
+    At 10 kHz with three samples the phase is within 1e-5 rad of -180 deg at low frequencies; the page's margins
+    once took a rounding error there for a phase crossover (gain margin -207.8 dB at 0.011 rad/s against
+    python-control's 7.55 dB at 2752 rad/s): the page now evaluates L from its factors."""
+    from selenium.webdriver.common.by import By
+
+    from obsdesign.design.sampled_loop import sampled_loop
+
+    axis = _rotary_axis()
+    ref = axis.override(delay_samples=delay, **({} if dt is None else {"dt": dt}))
+    sl = sampled_loop(ref)
+    driver = page(axis)
+    _type(driver, delay=str(delay), **({} if dt is None else {"dt": repr(dt)}))
+    text = driver.find_element(By.ID, "loopmargins").text
+    gm = float(text.split("gain margin ")[1].split(" dB")[0])
+    wpc = float(text.split(" dB at ")[1].split(" rad/s")[0])
+    pm = float(text.split("phase margin ")[1].split(" deg")[0])
+    assert abs(gm - sl.gain_margin_db) <= 0.05 and wpc == pytest.approx(sl.phase_crossover_rad_s, rel=1e-3)
+    assert abs(pm - sl.phase_margin_deg) <= 0.1
+    x_page = np.asarray(driver.execute_script("return lastStep.x;"))
+    x_sim = run(preview_inputs(ref)).x
+    assert x_page.shape == x_sim.shape and np.max(np.abs(x_page - x_sim)) <= FIELDS_TOLERANCE
+    assert "settling into 2 urad" in driver.find_element(By.ID, "stepsummary").text   # the axis's units

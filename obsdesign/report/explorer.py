@@ -15,12 +15,18 @@ Everything the page computes comes from the package's own generated code, nothin
   ``js``) with the observer constants of the sliders, on a plant model in the page that repeats the
   simulator's physical paper plant (pre-sliding Coulomb and viscous friction, with the lag for
   ``beta > 0``; 10 Heun substeps per sample with the input held; the encoder quantization), without
-  random noise. The PID stays the config's design; ``m`` moves the observer's and the plant's mass.
+  random noise. ``m`` moves the observer's and the plant's mass.
 
 * the loop that runs: fields for the sample time, the drive's delay in samples and the PID gains start at
   :func:`obsdesign.design.sampled_loop.sampled_loop`'s values; the page computes the margins, crossover and
   largest closed-loop pole of the same discrete loop ``L(z) = C(z) H_zoh(z) z^-d`` (tests/test_explorer.py
-  compares them with python-control).
+  compares them with python-control). The live step follows the fields too: the controller's ``DT``,
+  ``KP``, ``KI``, ``KD``, ``ALPHA_D = exp(-dt kp N / kd)`` and the low-pass ``LP_*`` (the generated
+  ``coefficients`` of eq:3:4:5 at the field's dt), the step's samples and substeps
+  (:func:`obsdesign.sim.numerics.substeps_for`'s rule on the config's fastest plant rate) at that dt, and the
+  drive's delay on the plant side, as :func:`obsdesign.sim.kernel.run_loop` applies it (the command of sample
+  ``n`` acts from ``n + d``, the drive holding the saturated ``G / K`` before); the controller holds no delay.
+  The dt verdicts follow the dt field; the certificate stays the config's (the page says so for another dt).
 
 :func:`explorer_context` gathers the numbers; :class:`Explorer` shows the explorer in a notebook.
 """
@@ -43,6 +49,8 @@ CERTIFICATE_RHOS = 9
 PREVIEW_DURATION = 1.0
 #: Most samples of the live step (a coarser duration for a fast sample rate).
 PREVIEW_SAMPLES = 12_000
+#: Heun substeps per sample the live step asks for (``prepare``'s default; more where the plant needs them).
+PREVIEW_SUBSTEPS = 10
 
 
 def explorer_params(cfg: Config) -> list[dict]:
@@ -94,7 +102,7 @@ def preview_inputs(cfg: Config):
     quiet = cfg.override(noise_rms=0.0)
     duration = min(PREVIEW_DURATION, PREVIEW_SAMPLES * cfg.observer.dt)
     spec = Positioning(step_size=1e-3, step_up=0.05 * duration, step_down=0.55 * duration)
-    return prepare(quiet, spec, duration=duration)
+    return prepare(quiet, spec, duration=duration, substeps=PREVIEW_SUBSTEPS)
 
 
 def _controller_js(loop) -> tuple[str, dict]:
@@ -103,7 +111,8 @@ def _controller_js(loop) -> tuple[str, dict]:
     text = controller_files(loop.sampled, "js")["obsdesign_controller.mjs"]
     text = re.sub(r"^export ", "", text, flags=re.M)
     return ("const CTRL = (function () {\n" + text +
-            "return {Controller: Controller, CONSTANTS: CONSTANTS, coulombN: coulombN, track: track};\n})();\n",
+            "return {Controller: Controller, CONSTANTS: CONSTANTS, coulombN: coulombN, track: track,\n"
+            "        coefficients: typeof coefficients === 'undefined' ? null : coefficients};\n})();\n",
             controller_constants(loop.sampled))
 
 
@@ -139,6 +148,7 @@ def explorer_context(cfg: Config, certificate=None) -> dict:
     from ..design.certificate import certify
     from ..export.codegen import js_module
     from ..sim import kernel
+    from ..sim.numerics import MAX_STEP_RATE, fastest_rate
 
     variant = cfg.observer.variant
     loop = preview_inputs(cfg)
@@ -178,6 +188,11 @@ def explorer_context(cfg: Config, certificate=None) -> dict:
             "n": int(loop.n_samples), "n_up": n_up, "n_down": n_up + int(np.argmax(x_ref[n_up:] == 0.0)), "step": 1e-3,
             "n_sub": int(plant.n_sub), "K": float(plant.K), "G": float(plant.G), **levels,
             "quantization": float(loop.quantization), "constants": consts, "paper_plant": paper_plant,
+            # what the page needs to lay the step out at another dt (the fields): prepare's rules, the drive's
+            # hold before the first command (PlantArgs.delay_init) and the low-pass cutoff
+            "duration": PREVIEW_DURATION, "max_samples": PREVIEW_SAMPLES, "substeps": PREVIEW_SUBSTEPS,
+            "rate": fastest_rate(cfg)[1], "max_step_rate": MAX_STEP_RATE, "delay_init": float(plant.delay_init),
+            "omega_co": cfg.observer.omega_co,
             **_reference_inputs(loop),
         },
     }
@@ -191,7 +206,19 @@ def _reference_inputs(loop) -> dict:
     if loop.sampled.compensation.mode == "observer":
         return {}
     v_ref, w_ff = loop.reference_feedforward()
-    return {"v_ref": [float(v) for v in v_ref], "w_ff": [float(w) for w in w_ff]}
+    out = {"v_ref": [float(v) for v in v_ref], "w_ff": [float(w) for w in w_ff]}
+    # at another dt (the page's field): the step's reference moves only on the two samples around each edge, its
+    # central difference is step / (2 dt) there, and the weight there depends on the positions alone (look-ahead
+    # in samples, build-up in metres, the pre-sliding curve): the page keeps these weights and recomputes v_ref
+    x_ref = np.asarray(loop.x_ref)
+    n_up = int(np.argmax(x_ref > 0.0))
+    n_down = n_up + int(np.argmax(x_ref[n_up:] == 0.0))
+    edges = [n_up - 1, n_up, n_down - 1, n_down]
+    rest = np.ones(len(w_ff), bool)
+    rest[edges] = False
+    if n_up >= 2 and n_down - n_up >= 2 and np.all(v_ref[rest] == 0.0) and np.all(w_ff[rest] == 1.0):
+        out["w_edges"] = [float(w_ff[i]) for i in edges]
+    return out
 
 
 def _finite(obj):
