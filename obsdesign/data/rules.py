@@ -19,8 +19,8 @@ sensor             ``noise_rms`` and ``quantization`` estimated from the trace,
                    white noise up to the Nyquist frequency
 compensation       with the Stribeck term kept: ``ff_stribeck = Fs - Cf`` and ``ff_stribeck_velocity = vs``
                    (the feed-forward's curve; the simulated plant keeps the paper's friction)
-hardware.delay_samples the samples the position is logged after the input it answers to, found from the
-                   log or given (:mod:`obsdesign.data.timing`): the loop's delay
+hardware           ``delay_samples``: the samples the position is logged after the input it answers to,
+                   found from the log or given (:mod:`obsdesign.data.timing`): the loop's delay
 pid                ``tau = m / sigma`` (so ``H = phi / (s (tau s + 1))`` with ``phi = K tau / m`` is
                    ``K / (m s^2 + sigma s)``), phase margin 60 deg, ``max_S`` placing the
                    crossover ``omega_c = k phi / sin(Phi)`` at a tenth of the Nyquist frequency
