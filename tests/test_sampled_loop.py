@@ -318,3 +318,29 @@ def test_figure_shows_the_sampled_loop_beside_the_continuous_one():
     assert any("sampled (ZOH, discrete PID N=10, delay 1)" in x and "PM 22.8 deg" in x for x in labels)
     assert any(x.startswith("L(exp(jw dt)) sampled") for x in labels)
     assert any("poles at s = ln(z)/dt" in x for x in labels)
+
+
+@pytest.mark.parametrize("factor", [40.0, 45.0, 50.0])
+def test_a_crossover_python_control_misses_is_found_on_the_loop_itself(factor):
+    # vcm at 1 kHz with one sample of delay and kp (and its derivative filter) raised: python-control's
+    # stability_margins reported no gain crossover here (an 'infinite' phase margin, also for the unstable
+    # loops); the margin must be that of L itself, and its sign must agree with the closed-loop poles
+    import control as ct
+
+    from obsdesign.design import sampled_loop as sl
+    from obsdesign.design.pid import pid_gains
+
+    cfg = od.load_preset("vcm").override(dt=1e-3, delay_samples=1)
+    _, _, kp, ki, kd = pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
+                                 phase_margin_deg=cfg.pid.phase_margin_deg)
+    args = (kp * factor, ki, kd, kd / (kp * factor) / 10.0, 1e-3, cfg.phi, cfg.pid.tau, 1)
+    gm, pm, wgc, wpc, dm, *_ = numbers = sl._numbers(*args)
+    rmax = numbers[13]
+    assert math.isfinite(pm) and 0.0 < wgc < math.pi / 1e-3
+    L = sl._systems(*args)["L"]
+    resp = ct.frequency_response(L, [wgc])  # python-control's own evaluation of L at the crossover found
+    mag, phase = float(np.squeeze(resp.magnitude)), float(np.squeeze(resp.phase))
+    assert abs(mag - 1.0) < 1e-9
+    assert abs(((180.0 + math.degrees(phase) + 180.0) % 360.0 - 180.0) - pm) < 1e-6
+    assert (pm < 0.0) == (rmax > 1.0) == (gm < 1.0)
+    assert sl._verify(args, numbers) is None
