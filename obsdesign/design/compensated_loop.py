@@ -88,11 +88,12 @@ def _pid_and_plant(phi, tau, max_S, phase_margin_deg, derivative_N, dt):
     """The kernel's discrete PID and the ZOH plant of :mod:`obsdesign.design.sampled_loop`, as state space."""
     import control as ct
 
-    from .pid import pid_gains
+    from .pid import sampled_pid_gains
     from .sampled_loop import discrete_pid, zoh_plant
 
-    _, _, kp, ki, kd = pid_gains(phi=phi, tau=tau, max_S=max_S, phase_margin_deg=phase_margin_deg)
-    return (ct.ss(discrete_pid(kp=kp, ki=ki, kd=kd, tau_d=kd / kp / derivative_N, dt=dt)),
+    kp, ki, kd, tau_d = sampled_pid_gains(phi=phi, tau=tau, max_S=max_S, phase_margin_deg=phase_margin_deg,
+                                          derivative_N=derivative_N)
+    return (ct.ss(discrete_pid(kp=kp, ki=ki, kd=kd, tau_d=tau_d, dt=dt)),
             ct.ss(zoh_plant(phi=phi, tau=tau, dt=dt)))
 
 

@@ -33,7 +33,7 @@ from ..params import Config
 if TYPE_CHECKING:
     import control as ct
 
-__all__ = ["PIDDesign", "design_pid", "pid_gains", "pid_from_config", "pid_from_gains", "peak_magnitude",
+__all__ = ["PIDDesign", "design_pid", "pid_gains", "sampled_pid_gains", "pid_from_config", "pid_from_gains", "peak_magnitude",
            "lazy_system", "kept_response", "loop_polynomials", "check_margins", "check_peak"]
 
 
@@ -432,6 +432,25 @@ def pid_gains(*, phi: float, tau: float, max_S: float, phase_margin_deg: float) 
     t2 = math.tan(math.radians(pm)) ** 2
     T_I = t2 / (k * phi * math.sqrt(1.0 + t2))  # eq:pidTime
     return k, T_I, k * (T_I + tau) / T_I, k / T_I, k * tau  # eq:PIDparams
+
+
+def sampled_pid_gains(*, phi: float, tau: float, max_S: float, phase_margin_deg: float,
+                      derivative_N: float) -> tuple[float, float, float, float]:
+    """``(kp, ki, kd, tau_d)`` as the sampled controller runs them: :func:`pid_gains` and the one definition of
+    the derivative filter's ``tau_d = kd / (kp N)``.
+
+    Parameters
+    ----------
+    phi, tau, max_S, phase_margin_deg, derivative_N : float
+        As in :func:`pid_gains`; ``derivative_N``: the filter's ``N`` (``pid.derivative_N``).
+
+    >>> kp, ki, kd, tau_d = sampled_pid_gains(phi=0.0407, tau=0.006675, max_S=1/400, phase_margin_deg=60.0,
+    ...                                       derivative_N=10.0)
+    >>> abs(tau_d - 400.0 * 0.006675 / kp / 10.0) < 1e-15   # kd = k tau with k = 1 / max_S
+    True
+    """
+    _, _, kp, ki, kd = pid_gains(phi=phi, tau=tau, max_S=max_S, phase_margin_deg=phase_margin_deg)
+    return kp, ki, kd, kd / kp / derivative_N
 
 
 def pid_from_config(cfg: Config) -> PIDDesign:

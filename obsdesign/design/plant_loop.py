@@ -45,8 +45,9 @@ from .._display import ResultDisplay
 from .._memo import memo
 from .._validate import MAX_DELAY_SAMPLES, Choice, check_integer
 from ..params import Config
-from .pid import pid_gains
-from .sampled_loop import _margins, discrete_peak, discrete_pid
+from .pid import sampled_pid_gains
+from .margins import closed_loop, loop_margins
+from .sampled_loop import discrete_peak, discrete_pid
 
 __all__ = ["PlantLoop", "plant_loop", "plant_loops", "simulated_plant", "REGIMES"]
 
@@ -211,10 +212,11 @@ def plant_loop(cfg: Config, *, regime: str = "sliding", delay_samples: int | Non
     d = cfg.hardware.delay_samples if delay_samples is None else check_integer("delay_samples", delay_samples, minimum=0,
                                                                                       maximum=MAX_DELAY_SAMPLES)
     dt = cfg.observer.dt
-    _, _, kp, ki, kd = pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
-                                 phase_margin_deg=cfg.pid.phase_margin_deg)
+    kp, ki, kd, tau_d = sampled_pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
+                                          phase_margin_deg=cfg.pid.phase_margin_deg,
+                                          derivative_N=cfg.pid.derivative_N)
     num, den = _plant_coefficients(cfg, regime)
-    args = (kp, ki, kd, kd / kp / cfg.pid.derivative_N, dt, d, tuple(num), tuple(den))
+    args = (kp, ki, kd, tau_d, dt, d, tuple(num), tuple(den))
     # python-control's numbers kept on disk like the sampled loop's (a warm `loop` imports no python-control);
     # no cheap NumPy re-verification of a ZOH of this plant: a kept entry rests on the memo's signature
     gm, pm, wgc, dm, max_S, max_T, stable = memo("plant_loop", args, lambda: _numbers(*args), valid=_valid)
@@ -241,12 +243,10 @@ def _numbers(kp, ki, kd, tau_d, dt, d, num, den) -> list:
     import control as ct
     import numpy as np
 
-    C = discrete_pid(kp=kp, ki=ki, kd=kd, tau_d=tau_d, dt=dt)
-    H = ct.c2d(ct.tf(list(num), list(den)), dt, "zoh")
-    L = C * ct.tf([1.0], [1.0] + [0.0] * d, dt) * H
-    gm, pm, wgc, _, dm = _margins(L)
-    one = ct.tf([1.0], [1.0], dt)
-    S, T = ct.feedback(one, L), ct.feedback(L, one)
+    sys = closed_loop(discrete_pid(kp=kp, ki=ki, kd=kd, tau_d=tau_d, dt=dt),
+                      ct.c2d(ct.tf(list(num), list(den)), dt, "zoh"), d)
+    L, S, T = sys["L"], sys["S"], sys["T"]
+    gm, pm, wgc, _, dm = loop_margins(L)
     lnum, lden = (np.atleast_1d(np.squeeze(x)) for x in ct.tfdata(L))
     stable = bool(max(abs(np.roots(np.polyadd(lden, lnum)))) < 1.0)
     w_low = (wgc if math.isfinite(wgc) and wgc > 0 else 1.0) * 1e-3

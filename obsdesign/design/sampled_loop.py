@@ -48,12 +48,13 @@ from .._display import ResultDisplay
 from .._memo import list_of, memo
 from .._validate import MAX_DELAY_SAMPLES, POSITIVE, check_integer
 from ..params import Config
-from .pid import lazy_system, pid_gains
+from .margins import closed_loop, loop_margins as _margins
+from .pid import lazy_system, sampled_pid_gains
 
 if TYPE_CHECKING:
     import control as ct
 
-__all__ = ["gain_crossovers", "SampledLoop", "sampled_loop", "discrete_pid", "zoh_plant", "discrete_peak"]
+__all__ = ["SampledLoop", "sampled_loop", "discrete_pid", "zoh_plant", "discrete_peak"]
 
 
 def discrete_pid(*, kp: float, ki: float, kd: float, tau_d: float, dt: float) -> ct.TransferFunction:
@@ -281,90 +282,6 @@ class SampledLoop(ResultDisplay):
         ]
 
 
-def _margins(L: ct.TransferFunction) -> tuple[float, float, float, float, float]:
-    """``(gm, pm_deg, w_gc, w_pc, delay margin [s])`` of a discrete loop.
-
-    python-control's ``stability_margins``; where it finds no gain crossover although ``|L|`` crosses 1
-    below the Nyquist frequency (seen on high-gain PID loops: an "infinite" phase margin printed for a loop
-    with a crossover, stable or not), the crossovers are found on ``|L(exp(j w dt))|`` itself
-    (:func:`gain_crossovers`) and the smallest phase margin among them is reported.
-    """
-    import control as ct
-
-    with warnings.catch_warnings():  # its 'frd' fallback refines on the exact response: accurate here
-        warnings.filterwarnings("ignore", message="stability_margins: Falling back")
-        gm, pm, _, wpc, wgc, _ = ct.stability_margins(L)
-        _, pms, _, _, wgcs, _ = ct.stability_margins(L, returnall=True)
-    if not (math.isfinite(wgc) and wgc > 0):
-        num, den = (np.atleast_1d(np.squeeze(x)) for x in ct.tfdata(L))
-        found = gain_crossovers(num, den, float(L.dt))
-        if found:
-            pm, wgc = min(found)
-            pms, wgcs = [p for p, _ in found], [w for _, w in found]
-    dms = [math.radians(float(p)) / float(w) for p, w in zip(np.atleast_1d(pms), np.atleast_1d(wgcs)) if w > 0]
-    dm = max(0.0, min(dms)) if dms else math.inf
-    return float(gm), float(pm), float(wgc), float(wpc), dm
-
-
-def gain_crossovers(num, den, dt: float, points: int = 20001) -> list[tuple[float, float]]:
-    """The gain crossovers of the discrete loop ``L(z) = num(z) / den(z)``: ``(phase margin [deg], w [rad/s])``.
-
-    ``|L(exp(j w dt))| - 1`` changes sign between neighbours of a log grid from ``1e-6 pi/dt`` to the Nyquist
-    frequency ``pi/dt``; each bracket is bisected to the float resolution of ``w``; the phase margin is
-    ``180 deg + arg L`` wrapped into (-180, 180].
-
-    Parameters
-    ----------
-    num, den : array_like
-        Coefficients in ``z``, highest power first.
-    dt : float
-        Sample time [s].
-    points : int
-        Grid points.
-
-    Returns
-    -------
-    list of (float, float)
-        One pair per crossover, in increasing ``w`` (empty: ``|L|`` does not cross 1).
-
-    Examples
-    --------
-    An integrator with one sample of delay, ``L = 0.2 / ((z - 1) z)`` at ``dt = 0.1``: ``|z - 1| = 0.2`` at
-    ``w = (2/dt) asin(0.1)``, where ``arg L = -(90 deg + 1.5 w dt)``:
-
-    >>> [(p, w)] = gain_crossovers([0.2], [1.0, -1.0, 0.0], 0.1)
-    >>> w_c = 20.0 * math.asin(0.1)
-    >>> abs(w - w_c) < 1e-12, abs(p - (90.0 - math.degrees(1.5 * w_c * 0.1))) < 1e-9
-    (True, True)
-    """
-    num, den = np.asarray(num, dtype=float), np.asarray(den, dtype=float)
-    w_nyq = math.pi / dt
-
-    def L(w):
-        z = np.exp(1j * np.asarray(w) * dt)
-        return np.polyval(num, z) / np.polyval(den, z)
-
-    w = np.logspace(math.log10(w_nyq) - 6.0, math.log10(w_nyq), points)
-    w[-1] = w_nyq
-    excess = np.abs(L(w)) - 1.0
-    found = []
-    for i in np.flatnonzero(np.sign(excess[:-1]) * np.sign(excess[1:]) < 0):
-        lo, hi = float(w[i]), float(w[i + 1])
-        up = excess[i] > 0
-        for _ in range(200):
-            mid = 0.5 * (lo + hi)
-            if mid in (lo, hi):
-                break
-            if (abs(L(mid)) - 1.0 > 0) == up:
-                lo = mid
-            else:
-                hi = mid
-        wc = 0.5 * (lo + hi)
-        pm = (180.0 + math.degrees(float(np.angle(L(wc)))) + 180.0) % 360.0 - 180.0
-        found.append((pm, wc))
-    return found
-
-
 def sampled_loop(cfg: Config, *, delay_samples: int | None = None) -> SampledLoop:
     """Analyse the sampled loop of the config's PID as the kernel runs it (module docstring).
 
@@ -399,9 +316,8 @@ def sampled_loop(cfg: Config, *, delay_samples: int | None = None) -> SampledLoo
     d = cfg.hardware.delay_samples if delay_samples is None else check_integer("delay_samples", delay_samples, minimum=0,
                                                                                       maximum=MAX_DELAY_SAMPLES)
     dt, N = cfg.observer.dt, cfg.pid.derivative_N
-    _, _, kp, ki, kd = pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
-                                 phase_margin_deg=cfg.pid.phase_margin_deg)
-    tau_d = kd / kp / N  # as obsdesign.sampled.controller.sampled_controller
+    kp, ki, kd, tau_d = sampled_pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
+                                          phase_margin_deg=cfg.pid.phase_margin_deg, derivative_N=N)
     args = (kp, ki, kd, tau_d, dt, cfg.phi, cfg.pid.tau, d)
     numbers = memo("sampled_loop", args, lambda: _numbers(*args), valid=list_of(17),
                    verify=lambda value: _verify(args, value))
@@ -417,15 +333,8 @@ def sampled_loop(cfg: Config, *, delay_samples: int | None = None) -> SampledLoo
 
 
 def _systems(kp, ki, kd, tau_d, dt, phi, tau, d) -> dict:
-    import control as ct
-
     C = discrete_pid(kp=kp, ki=ki, kd=kd, tau_d=tau_d, dt=dt)
-    H = zoh_plant(phi=phi, tau=tau, dt=dt)
-    Cd = C * ct.tf([1.0], [1.0] + [0.0] * d, dt)  # C z^-d
-    L = Cd * H
-    one = ct.tf([1.0], [1.0], dt)
-    return {"C": C, "H": H, "L": L, "S": ct.feedback(one, L), "T": ct.feedback(L, one), "PS": ct.feedback(H, Cd),
-            "CS": ct.feedback(Cd, H)}
+    return closed_loop(C, zoh_plant(phi=phi, tau=tau, dt=dt), d)
 
 
 def _loop_polynomials(kp, ki, kd, tau_d, dt, phi, tau, d) -> tuple:
