@@ -15,6 +15,8 @@ Examples
 ('N m s/rad', 'kg m^2', 'rad/A', 'urad')
 >>> rot.label("kappa [N/m]"), rot.label("omega_co [rad/s]")
 ('kappa [N m/rad]', 'omega_co [rad/s]')
+>>> rot.words("actuator force constant"), rot.words("actuator voltage limit (saturation)")
+('actuator torque constant', 'actuator current limit (saturation)')
 >>> AxisSpec().unit("N s/m")
 'N s/m'
 >>> AxisSpec(kind="rotary", input="N m").unit("m/V")
@@ -27,19 +29,24 @@ ValueError: axis.kind: expected one of 'linear', 'rotary', found 'angular'
 
 from __future__ import annotations
 
-import dataclasses
 import re
 from dataclasses import dataclass
 from typing import Any, Mapping
 
 from ._validate import Choice, document_fields, param_field, validate_fields
 
-__all__ = ["AxisSpec", "AxisWords", "AXIS_KINDS", "INPUT_UNITS", "LINEAR"]
+__all__ = ["AxisSpec", "AxisWords", "AXIS_KINDS", "INPUT_UNITS", "INPUT_WORDS", "LINEAR"]
 
 #: Kinds of axis.
 AXIS_KINDS = ("linear", "rotary")
 #: Units of the actuator command; ``N`` and ``N m`` are force and torque themselves.
 INPUT_UNITS = ("V", "A", "N", "N m")
+#: What a command in each input unit is (the package's texts say ``voltage``: the linear form, driven in V).
+INPUT_WORDS = {"V": "voltage", "A": "current", "N": "force", "N m": "torque"}
+#: Linear words of the texts and their rotary counterparts (inertia for mass, torque for force).
+_ROTARY_WORDS = {"moving mass": "inertia", "mass": "inertia", "masses": "inertias", "force": "torque",
+                 "forces": "torques"}
+_TEXT_WORD = re.compile(r"\b(moving mass|masses|mass|forces|force|voltage)\b", re.IGNORECASE)
 #: Linear unit words and their rotary counterparts (inertia for mass, torque for force, angle for length).
 _ROTARY = {"kg": "kg m^2", "N": "N m", "m": "rad", "mm": "mrad", "um": "urad", "nm": "nrad"}
 #: Every word a printed unit is made of; a bracket holding another word is text, left alone.
@@ -157,8 +164,35 @@ class AxisSpec(AxisWords):
 
         return _WORD.sub(swap, text)
 
+    def words(self, text: str) -> str:
+        """``text``, a label or sentence written for a linear axis driven in V, in this axis's words.
+
+        On a rotary axis mass becomes inertia and force torque; ``voltage`` becomes what the command
+        is (:data:`INPUT_WORDS`: current, force, torque). The first letter keeps its case; units are
+        :meth:`label`'s.
+
+        Examples
+        --------
+        >>> AxisSpec(kind="rotary", input="A").words("Moving mass and known load force")
+        'Inertia and known load torque'
+        >>> AxisSpec(kind="linear", input="A").words("actuator voltage limit, force constant")
+        'actuator current limit, force constant'
+        """
+        if self.kind == "linear" and self.input == "V":
+            return text
+        table = dict(_ROTARY_WORDS) if self.rotary else {}
+        table["voltage"] = INPUT_WORDS[self.input]
+
+        def swap(match: re.Match) -> str:
+            word = match.group(0)
+            new = table.get(word.lower(), word)
+            return new[:1].upper() + new[1:] if word[:1].isupper() else new
+
+        return _TEXT_WORD.sub(swap, text)
+
     def label(self, text: str) -> str:
-        """``text`` with each bracketed unit (``'kappa [N/m]'``) written for this axis.
+        """``text`` with each bracketed unit (``'kappa [N/m]'``) and its words (:meth:`words`) written
+        for this axis.
 
         A bracket holding a word that is no unit (``'[95 %: 1 to 2]'``) is left as it is.
 
@@ -166,9 +200,12 @@ class AxisSpec(AxisWords):
         --------
         >>> AxisSpec(kind="rotary", input="A").label("max |PS| [m/V] ([dB]) [95 %: a to b]")
         'max |PS| [rad/A] ([dB]) [95 %: a to b]'
+        >>> AxisSpec(kind="rotary", input="A").label("friction force [N]")
+        'friction torque [N m]'
         """
         if self.kind == "linear" and self.input == "V":
             return text
+        text = self.words(text)
 
         def swap(match: re.Match) -> str:
             inner = match.group(1)
@@ -200,12 +237,17 @@ class AxisSpec(AxisWords):
         return section_from_table(cls, table)
 
     def toml_lines(self) -> list[str]:
-        """The ``[axis]`` table as TOML lines (a blank line first), each key with its meaning."""
+        """The ``[axis]`` table as TOML lines (a blank line first), each key with its meaning in this axis's words.
+
+        >>> AxisSpec(kind="rotary", input="A").toml_lines()[2]
+        'kind = "rotary"  # rotary axis (inertia kg m^2, torque N m, angle rad)'
+        """
         from ._format import toml_value
 
-        meta = {f.name: f.metadata for f in dataclasses.fields(self)}
+        docs = {"kind": self.describe().partition(", command")[0],  # this axis's units only
+                "input": f"unit of the actuator command (plant.K turns it into {self.force_word})"}
         return ["", "[axis]  # the units of every value below (docs/measured-data.md#units-delimiters-comments)"] + [
-            f"{k} = {toml_value(v)}  # {meta[k]['doc']}" for k, v in self.to_dict().items()]
+            f"{k} = {toml_value(v)}  # {docs[k]}" for k, v in self.to_dict().items()]
 
 
 #: The axis of a config without ``[axis]``: linear, driven in V (the presets).

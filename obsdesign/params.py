@@ -368,7 +368,8 @@ class Config:
             meta = {f.name: f.metadata for f in dataclasses.fields(section)}
             lines += ["", f"[{key}]"]
             for name, value in table.items():
-                lines.append(f"{name} = {toml_value(value)}  # [{unit(meta[name]['unit'])}] {meta[name]['doc']}")
+                lines.append(f"{name} = {toml_value(value)}  # [{unit(meta[name]['unit'])}] "
+                             f"{self.units.words(meta[name]['doc'])}")
         return "\n".join(lines + self.extra_tables_toml()) + "\n"
 
     def axis_toml(self) -> list[str]:
@@ -412,7 +413,8 @@ class Config:
             for f in dataclasses.fields(section):
                 value = getattr(section, f.name)
                 default = f.default is not dataclasses.MISSING and value == f.default
-                rows.append(FieldRow(f"{key}.{f.name}", value, self.units.unit(f.metadata["unit"]), f.metadata["doc"],
+                rows.append(FieldRow(f"{key}.{f.name}", value, self.units.unit(f.metadata["unit"]),
+                                     self.units.words(f.metadata["doc"]),
                                      default))
         return rows
 

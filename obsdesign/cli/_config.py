@@ -56,7 +56,7 @@ def config_toml(cfg, *, label: str | None = None) -> str:
         lines += ["", f"[{key}]"]
         for f in dataclasses.fields(section):
             value = getattr(section, f.name)
-            unit, doc = cfg.units.unit(f.metadata["unit"]), f.metadata["doc"]
+            unit, doc = cfg.units.unit(f.metadata["unit"]), cfg.units.words(f.metadata["doc"])
             if value is None:
                 lines.append(f"# {f.name} = ...  # [{unit}] {doc} (not set)")
             else:

@@ -12,7 +12,8 @@ from ._dynamic import add_refine_flags, refine_from_args
 from ._common import (FINITE_ARG, INPUT_FILE, POSITIVE_ARG, UsageError, check_output_file, emit,
                       integer, print_warnings)
 
-__all__ = ["add_commands", "add_trace_flags", "load_trace_args"]
+__all__ = ["add_commands", "add_trace_flags", "load_trace_args", "add_encoder_flags", "encoder_resolution",
+           "MAX_COUNTS_PER_REV"]
 
 
 def _unit(role: str):
@@ -43,6 +44,24 @@ _FLAGS = {"time_unit": "--time-unit", "position_unit": "--position-unit", "input
           "decimal": "--decimal"}
 
 
+#: Largest ``--counts-per-rev`` (2^40: beyond any encoder; a documented ceiling).
+MAX_COUNTS_PER_REV = 2**40
+
+
+def add_encoder_flags(p: argparse.ArgumentParser, resolution_help: str, counts_help: str, **kwargs) -> None:
+    """``--resolution R`` or ``--counts-per-rev N`` (one of them; read by :func:`encoder_resolution`)."""
+    group = p.add_mutually_exclusive_group()
+    group.add_argument("--resolution", type=POSITIVE_ARG, metavar="R", help=resolution_help, **kwargs)
+    group.add_argument("--counts-per-rev", type=integer(1, MAX_COUNTS_PER_REV), metavar="N", help=counts_help)
+
+
+def encoder_resolution(args: argparse.Namespace) -> float | None:
+    """The size of one count [m or rad]: ``--resolution``, or ``2 pi / --counts-per-rev`` rad."""
+    import math
+
+    return 2.0 * math.pi / args.counts_per_rev if args.counts_per_rev is not None else args.resolution
+
+
 def add_trace_flags(p: argparse.ArgumentParser, *, required: bool = True) -> None:
     """``--position NAME --input NAME [--time NAME] [--sample-time DT] [--input-gain G]`` and the unit flags."""
     p.add_argument("--position", required=required, metavar="NAME",
@@ -64,8 +83,9 @@ def add_trace_flags(p: argparse.ArgumentParser, *, required: bool = True) -> Non
                         "axis), or %% of --rated (default: the file's, else N with gain 1, else V)")
     p.add_argument("--rated", nargs=2, metavar=("VALUE", "UNIT"),
                    help="the rated current or torque an input in %% is a fraction of (e.g. --rated 2.5 A)")
-    p.add_argument("--resolution", type=POSITIVE_ARG, metavar="R",
-                   help="size of one encoder count [m, or rad with --rotary] (with a position in counts)")
+    add_encoder_flags(p, "size of one encoder count [m, or rad with --rotary] (with a position in counts)",
+                      "encoder counts per revolution of a rotary axis, 1 to 2^40: --resolution 2 pi / N rad, "
+                      "--rotary and, unless given, --position-unit counts")
     p.add_argument("--rotary", action="store_true",
                    help="a rotary axis with the position in counts (an angle or a torque implies it)")
     p.add_argument("--delimiter", type=_delimiter, metavar="D",
@@ -84,16 +104,27 @@ def load_trace_args(args: argparse.Namespace, path: str):
             check_sample_time("--sample-time", args.sample_time, "the flag")
         except ValueError as e:
             raise UsageError(f"obsdesign {args.command}: argument {e}") from None
+    per_rev = args.counts_per_rev is not None  # a rotary encoder in counts
+    if per_rev and args.position_unit is not None:
+        from ..data.units import unit_kind
+
+        if unit_kind(args.position_unit, "position") != "count":
+            raise UsageError(f"obsdesign {args.command}: argument --counts-per-rev: expected a position in counts "
+                             f"(--position-unit counts, the default with this flag), found --position-unit "
+                             f"{args.position_unit!r}")
     try:
         return load_trace(path, position=args.position, input=args.input, time=args.time,
                           sample_time=args.sample_time, input_gain=args.input_gain, time_unit=args.time_unit,
-                          position_unit=args.position_unit, input_unit=args.input_unit, resolution=args.resolution,
-                          rotary=args.rotary, rated=None if args.rated is None else " ".join(args.rated),
+                          position_unit=args.position_unit or ("counts" if per_rev else None),
+                          input_unit=args.input_unit, resolution=encoder_resolution(args),
+                          rotary=args.rotary or per_rev, rated=None if args.rated is None else " ".join(args.rated),
                           delimiter=args.delimiter, decimal=args.decimal)
     except MissingExtra as e:
         raise UsageError(f"obsdesign {args.command}: {e}") from None
     except ValueError as e:
         param, _, rest = str(e).partition(": ")
+        if per_rev and param in ("resolution", "rotary", "position_unit"):
+            raise UsageError(f"obsdesign {args.command}: argument --counts-per-rev: {rest}") from None
         if param in _FLAGS:
             raise UsageError(f"obsdesign {args.command}: argument {_FLAGS[param]}: {rest}") from None
         if param == "time, sample_time" and args.time is None and args.sample_time is None:

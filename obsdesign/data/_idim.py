@@ -76,24 +76,26 @@ def ols(X: np.ndarray, y: np.ndarray, names: tuple[str, ...]) -> tuple[np.ndarra
     return theta, cov, resid, cond
 
 
-def implausible(result: dict, input_gain: float) -> tuple[str, ...]:
-    """Sentences naming each identified m, sigma, Cf (and per-direction level) <= 0 with its likely cause."""
-    names = {"m": ("mass", "kg"), "sigma": ("viscous coefficient", "N s/m"), "Cf": ("Coulomb level", "N"),
-             "sigma_pos": ("viscous coefficient for v > 0", "N s/m"),
-             "sigma_neg": ("viscous coefficient for v < 0", "N s/m"),
-             "Cf_pos": ("Coulomb level for v > 0", "N"), "Cf_neg": ("Coulomb level for v < 0", "N")}
+def implausible(result: dict, input_gain: float, units) -> tuple[str, ...]:
+    """Sentences naming each identified m, sigma, Cf (and per-direction level) <= 0 with its likely cause
+    (in the words and units of ``units``, the log's :class:`~obsdesign.data.units.Units`)."""
+    M, F, L = units.mass_unit, units.force_unit, units.length_unit
+    names = {"m": (units.mass_word, M), "sigma": ("viscous coefficient", f"{F} s/{L}"), "Cf": ("Coulomb level", F),
+             "sigma_pos": ("viscous coefficient for v > 0", f"{F} s/{L}"),
+             "sigma_neg": ("viscous coefficient for v < 0", f"{F} s/{L}"),
+             "Cf_pos": ("Coulomb level for v > 0", F), "Cf_neg": ("Coulomb level for v < 0", F)}
     bad = [k for k in names if result.get(k) is not None and not result[k] > 0]
     if not bad:
         return ()
     if input_gain < 0:
-        cause = (f"the input gain is negative (input_gain = {input_gain:g}): check its sign; a force that opposes "
-                 "the logged input gives a negative mass")
+        cause = (f"the input gain is negative (input_gain = {input_gain:g}): check its sign; a "
+                 f"{units.force_word} that opposes the logged input gives a negative {units.mass_word}")
     elif result["m"] <= 0 and result["sigma"] <= 0 and result["Cf"] <= 0:
         cause = ("every term is negative: the input acts against the position, so check the sign of the input "
                  "gain (or of the position column)")
     else:
         cause = ("check that the position and input columns are not swapped, the sign of the input gain, and the "
-                 "units (position in m, time in s, input times the gain in N)")
+                 f"units (position in {L}, time in s, input times the gain in {F})")
     found = ", ".join(f"{k} = {result[k]:.4g} {names[k][1]}" for k in bad)
     return (f"identify: not physical: expected a positive {names[bad[0]][0]}, found {found}; {cause}",)
 

@@ -412,8 +412,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                                                                                            delay_samples, 0))
     force_range = float(np.ptp(force))
     if not force_range > 0.0:
-        raise ValueError(f"input: the record has constant input ({float(force[0]):g} N in every sample of "
-                         f"{trace.source!r}); nothing to identify: the fit needs a force that varies")
+        raise ValueError(f"input: the record has constant input ({float(force[0]):g} {trace.units.force_unit} in "
+                         f"every sample of {trace.source!r}); nothing to identify: the fit needs a force that varies")
     border = int(math.ceil(5.0 * fs / filter_hz))
     top = MAX_DELAY if delay_samples is None else delay_samples
     if position.size - top - 2 * border < 20 * q:
@@ -471,7 +471,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     intervals = widened(est["intervals"], values, model_shift)
     shown = ("m", "sigma", "Cf", "offset") + (ASYM if model == "asymmetric" else ()) + (("Fs", "vs") if est["stribeck"] else ())
     result = {k: float(values[k]) for k in shown} | {f"{k}_std": float(std.get(k, 0.0)) for k in shown}
-    notes = implausible({k: (None if k in est["at_bound"] else v) for k, v in result.items()}, trace.input_gain)
+    notes = implausible({k: (None if k in est["at_bound"] else v) for k, v in result.items()}, trace.input_gain,
+                        trace.units)
     for note in notes:
         warnings.warn(note, stacklevel=2)
     quantum = quantization(position)
@@ -480,7 +481,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                              m=result["m"], sigma=result["sigma"], Cf=result["Cf"], offset=result["offset"],
                              rows=DEFAULT_DECIMATION if decimation is None else q, window=presliding_window,
                              length_unit=trace.units.length_unit)
-    notices = trace.warnings + check_plausible(trace.units, mass=result["m"]) + cautions(
+    notices = trace.warnings + trace.units.gain_note(trace.input_gain) + check_plausible(
+        trace.units, mass=result["m"]) + cautions(
         est, cols, noise_var, trace.units, filter_hz)
     return Identification(model=model, **result, nrmse_percent=est["nrmse"], condition_number=est["condition_number"],
                           samples=int(y.size), s=s, s_note=note, sample_time=dt, filter_hz=float(filter_hz),

@@ -202,13 +202,14 @@ class Observation(ResultDisplay):
         return f"observation: {self.source}"
 
     def _rows(self) -> list[tuple[str, object]]:
-        s = self.summary()
-        return [("config", self.config.name), ("variant", self.config.observer.variant),
+        s, label = self.summary(), self.config.units.label  # the units of the config's axis
+        rows = [("config", self.config.name), ("variant", self.config.observer.variant),
                 ("stiffness schedule", self.stiffness_schedule), ("samples", s["samples"]),
                 ("sample time [s]", s["sample_time"]), ("duration [s]", s["duration"]),
                 ("reversals", s["reversals"]), ("load G fed forward [N]", float(self.config.plant.G)),
                 ("rms v_hat [m/s]", s["rms_v_hat"]), ("rms f_hat [N]", s["rms_f_hat"]),
                 ("rms f_hat filtered [N]", s["rms_f_hat_filtered"])]
+        return [(label(name), value) for name, value in rows]
 
 
 def _matching_config(cfg: Config, trace: Trace) -> Config:

@@ -186,10 +186,14 @@ def _build(ident, *, name, K, u_max, rho, presliding_window):
     omega_co = 2.0 * math.pi * nyquist / 5.0
     src = f"identified from {ident.source or 'a record'}"
     axis = f"{units.axis} axis"
+    per_gain = K is None and units.gain_unknown(ident.input_gain)  # m/K, Cf/K: see Units.gain_note
+    per = f"; per {F}/{unit_in} of an unknown {units.force_word} constant K (m/K, Cf/K), not physical" if per_gain else ""
     rules = [
-        ("plant.m", m, M, f"{src} ({'inertia of a rotary' if units.rotary else 'mass of a linear'} axis)"),
-        ("plant.K", gain, f"{F}/{unit_in}", f"the input gain ({'given' if K is not None else '|input_gain|'}); "
-         f"input logged in {unit_in}, {axis}"),
+        ("plant.m", m, M, f"{src} ({'inertia of a rotary' if units.rotary else 'mass of a linear'} axis{per})"),
+        ("plant.K", gain, f"{F}/{unit_in}", f"NOT measured: 1 (no input gain given), so every {units.force_word} "
+         f"here is in {unit_in} (m/K, sigma/K, Cf/K, G/K): the loop and the compensation in {unit_in} are right, the "
+         f"{F} and {M} values are not physical; input logged in {unit_in}, {axis}" if per_gain else
+         f"the input gain ({'given' if K is not None else '|input_gain|'}); input logged in {unit_in}, {axis}"),
         ("plant.G", ident.offset, F, f"{src}: the offset, a constant load"),
         ("plant.u_max", u_max, unit_in, u_max_rule),
         ("friction.Cf", Cf, F, src + (" (mean of the two directions)" if ident.model == "asymmetric" else "")),

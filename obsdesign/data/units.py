@@ -377,6 +377,29 @@ class Units(AxisWords):
         kind = ("rotary axis (inertia kg m^2, torque N m)" if self.rotary else "linear axis (mass kg, force N)")
         return f"time {self.time}, position {pos}, input {text_in}; {kind}"
 
+    def gain_unknown(self, gain: float) -> bool:
+        """Whether the input is a current or voltage taken at the default gain 1 (no torque or force constant
+        given): the identified values are then per that unknown constant (``m/K``, ``Cf/K``)."""
+        return gain == 1.0 and self.input_unit(gain) in ("A", "V")
+
+    def gain_note(self, gain: float) -> tuple[str, ...]:
+        """One sentence when :meth:`gain_unknown`: what the identified numbers then are, and what to give.
+
+        >>> Units(position="rad", input="A").gain_note(1.0)[0][:96]
+        'input gain 1 N m/A (the default; --input-gain not given?): every torque is in A times an unknown'
+        >>> Units(position="rad", input="A").gain_note(0.1)
+        ()
+        """
+        if not self.gain_unknown(gain):
+            return ()
+        unit_in, F, M = self.input_unit(gain), self.force_unit, self.mass_unit
+        word = AxisSpec(kind=self.axis, input=unit_in).words("force")
+        return (f"input gain 1 {F}/{unit_in} (the default; --input-gain not given?): every {word} is in "
+                f"{unit_in} times an unknown {word} constant K, so m, sigma, Cf and offset are m/K, sigma/K, Cf/K and "
+                f"offset/K ({M} and {F} per {F}/{unit_in}; Cf/K is the {unit_in} that overcomes the Coulomb level): "
+                f"right for the loop and the compensation in {unit_in}, not physical; give the {word} constant "
+                f"with --input-gain K [{F}/{unit_in}]",)
+
     def si(self, name: str) -> str:
         """SI unit of an identified quantity ``m, sigma, Cf, offset, Fs, vs, speed, length``."""
         L, F = self.length_unit, self.force_unit
