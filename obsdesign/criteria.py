@@ -110,12 +110,13 @@ def judge_design(cfg, *, sampled_loop, experiments, noise, stability) -> tuple[C
     if e_obs is None or e_pid is None:
         add("tracking_ratio", "a tracking run diverged", False)
     else:
-        add("tracking_ratio", f"{e_obs:.4g} m against {e_pid:.4g} m (ratio {e_obs / e_pid:.3g})",
+        L = cfg.units.length_unit
+        add("tracking_ratio", f"{e_obs:.4g} {L} against {e_pid:.4g} {L} (ratio {e_obs / e_pid:.3g})",
             e_obs < THRESHOLDS["tracking_ratio"][0] * e_pid)
-    cf = cfg.friction.Cf
-    add("noise_fraction", f"{noise.rms_filtered:.4g} N = {noise.rms_filtered / cf:.3g} Cf",
+    cf, F = cfg.friction.Cf, cfg.units.force_unit  # the units of the config's axis
+    add("noise_fraction", f"{noise.rms_filtered:.4g} {F} = {noise.rms_filtered / cf:.3g} Cf",
         noise.rms_filtered <= THRESHOLDS["noise_fraction"][0] * cf)
     err = experiments.tracking["pid+observer"].get("observer_rms_error_f")
-    add("estimate_fraction", "diverged" if err is None else f"{err:.4g} N = {err / cf:.3g} Cf",
+    add("estimate_fraction", "diverged" if err is None else f"{err:.4g} {F} = {err / cf:.3g} Cf",
         err is not None and err <= THRESHOLDS["estimate_fraction"][0] * cf)
     return tuple(out)

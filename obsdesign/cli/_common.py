@@ -16,7 +16,8 @@ from ..provenance import load_config
 
 __all__ = ["print_warnings", "UsageError", "Parser", "number", "POSITIVE_ARG", "NONNEGATIVE_ARG", "FINITE_ARG", "PHASE_ARG",
            "integer", "workers_arg", "nonempty", "INPUT_FILE", "INPUT_DIR", "add_config_flags", "add_design_flags",
-           "load", "emit", "check_output_file", "check_output_dir", "check_samples", "MAX_SAMPLES", "check_runs", "finite_design", "warn_unstable"]
+           "load", "emit", "check_output_file", "check_output_dir", "check_samples", "MAX_SAMPLES", "check_runs", "finite_design", "warn_unstable",
+           "add_encoder_flags", "encoder_resolution", "MAX_COUNTS_PER_REV"]
 
 #: Most samples one ``simulate`` run may hold (about 13 GB of trace arrays at 16 doubles per sample).
 MAX_SAMPLES = 10**8
@@ -385,3 +386,21 @@ def _available_memory() -> float | None:
     except (OSError, ValueError, IndexError):
         pass
     return None
+
+
+#: Largest ``--counts-per-rev`` (2^40: beyond any encoder; a documented ceiling).
+MAX_COUNTS_PER_REV = 2**40
+
+
+def add_encoder_flags(p: argparse.ArgumentParser, resolution_help: str, counts_help: str, **kwargs) -> None:
+    """``--resolution R`` or ``--counts-per-rev N`` (one of them; read by :func:`encoder_resolution`)."""
+    group = p.add_mutually_exclusive_group()
+    group.add_argument("--resolution", type=POSITIVE_ARG, metavar="R", help=resolution_help, **kwargs)
+    group.add_argument("--counts-per-rev", type=integer(1, MAX_COUNTS_PER_REV), metavar="N", help=counts_help)
+
+
+def encoder_resolution(args: argparse.Namespace) -> float | None:
+    """The size of one count [m or rad]: ``--resolution``, or ``2 pi / --counts-per-rev`` rad."""
+    import math
+
+    return 2.0 * math.pi / args.counts_per_rev if args.counts_per_rev is not None else args.resolution

@@ -9,11 +9,10 @@ from .._validate import MAX_BOOTSTRAP
 from ..params import preset_names
 from ..sampled.choices import SCHEDULES
 from ._dynamic import add_refine_flags, refine_from_args
-from ._common import (FINITE_ARG, INPUT_FILE, POSITIVE_ARG, UsageError, check_output_file, emit,
-                      integer, print_warnings)
+from ._common import (FINITE_ARG, INPUT_FILE, POSITIVE_ARG, UsageError, add_encoder_flags, check_output_file, emit,
+                      encoder_resolution, integer, print_warnings)
 
-__all__ = ["add_commands", "add_trace_flags", "load_trace_args", "add_encoder_flags", "encoder_resolution",
-           "MAX_COUNTS_PER_REV"]
+__all__ = ["add_commands", "add_trace_flags", "load_trace_args"]
 
 
 def _unit(role: str):
@@ -42,24 +41,6 @@ def _delimiter(text: str) -> str:
 _FLAGS = {"time_unit": "--time-unit", "position_unit": "--position-unit", "input_unit": "--input-unit",
           "rated": "--rated", "resolution": "--resolution", "rotary": "--rotary", "delimiter": "--delimiter",
           "decimal": "--decimal"}
-
-
-#: Largest ``--counts-per-rev`` (2^40: beyond any encoder; a documented ceiling).
-MAX_COUNTS_PER_REV = 2**40
-
-
-def add_encoder_flags(p: argparse.ArgumentParser, resolution_help: str, counts_help: str, **kwargs) -> None:
-    """``--resolution R`` or ``--counts-per-rev N`` (one of them; read by :func:`encoder_resolution`)."""
-    group = p.add_mutually_exclusive_group()
-    group.add_argument("--resolution", type=POSITIVE_ARG, metavar="R", help=resolution_help, **kwargs)
-    group.add_argument("--counts-per-rev", type=integer(1, MAX_COUNTS_PER_REV), metavar="N", help=counts_help)
-
-
-def encoder_resolution(args: argparse.Namespace) -> float | None:
-    """The size of one count [m or rad]: ``--resolution``, or ``2 pi / --counts-per-rev`` rad."""
-    import math
-
-    return 2.0 * math.pi / args.counts_per_rev if args.counts_per_rev is not None else args.resolution
 
 
 def add_trace_flags(p: argparse.ArgumentParser, *, required: bool = True) -> None:

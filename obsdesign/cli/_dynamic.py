@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ._common import POSITIVE_ARG, UsageError, check_output_file, emit, integer
+from ._common import POSITIVE_ARG, UsageError, add_encoder_flags, check_output_file, emit, encoder_resolution, integer
 
 __all__ = ["add_refine_flags", "refine_from_args", "add_commands"]
 
@@ -64,11 +64,17 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     except ValueError as e:
         raise UsageError(f"obsdesign experiment: argument {e}") from None
     try:
+        rotary = args.rotary or args.counts_per_rev is not None
         exp = design_experiment(stroke=args.stroke, speed=args.speed, force=args.force, mass=args.mass, dt=args.dt,
-                                travel=args.travel, resolution=args.resolution, levels=args.levels,
-                                blocks=args.blocks, dwell=args.dwell, ramp=args.ramp)
+                                travel=args.travel, resolution=encoder_resolution(args), levels=args.levels,
+                                blocks=args.blocks, dwell=args.dwell, ramp=args.ramp, rotary=rotary,
+                                stribeck_speed=args.stribeck_speed)
     except ValueError as e:  # the API names its parameter: the flag of the same name
         name, _, rest = str(e).partition(": ")
+        if name == "resolution" and args.counts_per_rev is not None:  # the count's size from N: say it in counts
+            name, rest = "counts_per_rev", (f"expected more than 2 pi / travel = {6.283185307179586 / args.travel:.6g} "
+                                            f"counts (one count below --travel {args.travel:g} rad), found "
+                                            f"{args.counts_per_rev}")
         raise UsageError(f"obsdesign experiment: argument --{name.replace('_', '-')}: {rest}") from None
     if args.csv:
         exp.to_csv(args.csv)
@@ -87,14 +93,22 @@ def add_commands(sub) -> None:
         The subcommands of ``obsdesign``.
     """
     p = sub.add_parser("experiment", help="write a reference trajectory that makes the friction identifiable")
-    p.add_argument("--stroke", type=POSITIVE_ARG, required=True, metavar="M", help="usable travel [m]")
-    p.add_argument("--speed", type=POSITIVE_ARG, required=True, metavar="V", help="largest speed [m/s]")
-    p.add_argument("--force", type=POSITIVE_ARG, required=True, metavar="F", help="actuator force limit [N]")
-    p.add_argument("--mass", type=POSITIVE_ARG, required=True, metavar="KG", help="rough moving mass [kg]")
+    p.add_argument("--rotary", action="store_true",
+                   help="a rotary axis: every value below in rad, rad/s, N m, kg m^2 (--counts-per-rev implies it)")
+    p.add_argument("--stroke", type=POSITIVE_ARG, required=True, metavar="M", help="usable travel [m, rad]")
+    p.add_argument("--speed", type=POSITIVE_ARG, required=True, metavar="V", help="largest speed [m/s, rad/s]")
+    p.add_argument("--force", type=POSITIVE_ARG, required=True, metavar="F",
+                   help="actuator force limit [N] (torque limit [N m] with --rotary)")
+    p.add_argument("--mass", type=POSITIVE_ARG, required=True, metavar="KG",
+                   help="rough moving mass [kg] (inertia [kg m^2] with --rotary)")
     p.add_argument("--dt", type=POSITIVE_ARG, required=True, metavar="DT", help="sample time [s]")
     p.add_argument("--travel", type=POSITIVE_ARG, default=1e-3, metavar="M",
-                   help="largest expected pre-sliding travel 1/s [m] (default 1e-3)")
-    p.add_argument("--resolution", type=POSITIVE_ARG, default=None, metavar="M", help="encoder resolution [m]")
+                   help="largest expected pre-sliding travel 1/s [m, rad] (default 1e-3)")
+    add_encoder_flags(p, "encoder resolution [m, rad]", "encoder counts per revolution, 1 to 2^40 (resolution 2 pi / N "
+                      "rad; a rotary axis)")
+    p.add_argument("--stribeck-speed", type=POSITIVE_ARG, nargs=2, metavar=("LO", "HI"),
+                   help="range of the expected Stribeck speed vs [m/s, rad/s]: the staircase covers LO/3 to 3 HI "
+                        "and the plan says whether Fs and vs are identifiable")
     p.add_argument("--levels", type=integer(2), default=6, metavar="N", help="speed levels (2 to 20, default 6)")
     p.add_argument("--blocks", type=integer(1), default=5, metavar="N",
                    help="pre-sliding blocks of 5 dwelling reversals (default 5)")

@@ -115,7 +115,7 @@ def add_commands(sub) -> None:
     p.add_argument("--data", metavar="FILE", type=INPUT_FILE, help="add 'Validation on measured data' for a record (.csv or .mat)")
     add_trace_flags(p, required=False)
     p.add_argument("--moving-speed", type=POSITIVE_ARG, metavar="V",
-                   help="--data: speed [m/s] above which the axis counts as moving in the friction check "
+                   help="--data: speed [m/s, rad/s] above which the axis counts as moving in the friction check "
                         "(default 5 %% of the record's peak speed; standstill is reported separately)")
     p.add_argument("--paper-studies", action=argparse.BooleanOptionalAction, default=None,
                    help="add the paper's reproduction studies and claims (default: for the paper's presets only)")

@@ -271,6 +271,7 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     env.filters["num"] = _quantity  # one number format in the whole report: 4 significant digits
     env.filters["qty"] = lambda value, unit="": _quantity(value, units.unit(unit))
     env.filters["unit"] = units.unit
+    env.filters["words"] = units.words  # mass, force, voltage in the words of the config's axis
     env.filters["log10"] = math.log10
     env.filters["explorer_json"] = explorer_json
     env.filters["css_string"] = css_string
