@@ -169,8 +169,11 @@ def _simulate_kernel():
 _KERNEL = []
 
 
-def simulate_axis(spec: dict) -> dict:
+def simulate_axis(spec: dict, reference: tuple | None = None) -> dict:
     """The noise-free log of an axis of :data:`AXES`: ``t``, ``x`` (delayed, not quantized), ``force`` [N or N m].
+
+    ``reference``: ``(x_ref, v_ref, a_ref)`` per sample to track instead of the spec's ``moves`` (an
+    identification experiment, :func:`obsdesign.data.design_experiment`); the duration is then theirs.
 
     Also ``state``: the true position, velocity and bristle state ``z`` at each sample (not delayed), and
     ``u_sub``: the force applied in each sub-step (for the Cramer-Rao bound of benchmarks/bench_recovery.py).
@@ -182,9 +185,9 @@ def simulate_axis(spec: dict) -> dict:
     if not _KERNEL:
         _KERNEL.append(_simulate_kernel())
     dt = 1.0 / spec["rate"]
-    n = int(round(spec["duration"] / dt))
+    n = int(round(spec["duration"] / dt)) if reference is None else len(reference[0])
     t = np.arange(n) * dt
-    r, rv, ra = _reference(spec, t)
+    r, rv, ra = _reference(spec, t) if reference is None else (np.asarray(a, dtype=float) for a in reference)
     m = spec["m"]
     wc = 2 * np.pi * spec["rate"] / 40.0  # a crossover a fortieth of the rate
     kp, kd = m * wc**2 / 2.0, 1.4 * m * wc / 2.0

@@ -29,7 +29,7 @@ Examples
 >>> exp.reversals_dwelling, bool(abs(exp.x_ref).max() <= 0.02)
 (10, True)
 >>> sorted(exp.expected)
-['Cf', 'm', 'offset', 's', 'sigma']
+['Cf', 'm', 'offset', 's', 'sigma', 'timing']
 >>> rot = design_experiment(stroke=60.0, speed=20.0, force=1.0, mass=2.5e-3, dt=2.5e-4, travel=1e-3,
 ...                         rotary=True, stribeck_speed=(0.2, 1.0))
 >>> min(rot.levels) <= 0.2 / 3 * 1.001, max(rot.levels) >= 3.0, rot.expected["vs"]["identifiable"]
@@ -54,6 +54,10 @@ __all__ = ["Experiment", "design_experiment", "C_NAME"]
 #: What a C array name may be (an identifier, ASCII, at most 63 characters).
 C_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,62}$")
 _REVERSALS_PER_BLOCK = 5
+#: Why the plan does not make the log's timing identifiable (measured: docs/experiment.md).
+_TIMING_WHY = ("constant speeds and their ramps do not tell the input timing and the position delay apart (identify "
+               "says 'not resolved'; a wrong one biased sigma by -2 % on a simulated 4 kHz rotary axis): give the "
+               "drive's --input-timing (hold: a sampled controller's output) and --delay-samples")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -76,7 +80,8 @@ class Experiment:
     reversals_dwelling : int
         Small reversals followed by a dwell.
     expected : dict
-        Per parameter (``m, sigma, Cf, offset, s``; ``Fs, vs`` with a Stribeck range):
+        Per parameter (``m, sigma, Cf, offset, s``; ``Fs, vs`` with a Stribeck range; ``timing``, the log's
+        input timing and delay, which the plan does not resolve: give the drive's):
         ``{"identifiable": bool, "why": str}``.
     limits : dict
         The inputs: stroke, speed, force, mass, acceleration, travel, dwell (and ``stribeck_speed``).
@@ -178,7 +183,8 @@ class Experiment:
                  f"  peak acceleration {self.limits['acceleration']:.3g} {u('m/s^2')}, stroke used "
                  f"{float(np.ptp(self.x_ref)):.4g} of {self.limits['stroke']:g} {u('m')}",
                  f"  identify the staircase (samples 0 to {self.staircase_end}: --window 0:"
-                 f"{self.staircase_end * self.dt:.6g}) for m, sigma, Cf, offset"
+                 f"{self.staircase_end * self.dt:.6g} --input-timing T --delay-samples D, the drive's) for m, sigma, "
+                 "Cf, offset"
                  + (f", with --stribeck on --min-speed {0.5 * min(self.levels):.3g} for Fs, vs" if "vs" in self.expected
                     else "") + "; refine s over the whole record",
                  "  expected identifiability:"]
@@ -370,6 +376,7 @@ def design_experiment(*, stroke: float, speed: float, force: float, mass: float,
                      + ("" if resolved else f"; the smallest spans fewer than 20 encoder steps of {resolution:g} {L}")
                      + ")"},
     }
+    expected["timing"] = {"identifiable": False, "why": _TIMING_WHY}
     limits = {"stroke": stroke, "speed": speed, "force": force, "mass": mass, "acceleration": acc, "ramp": ramp,
               "travel": travel, "dwell": dwell, "resolution": float(resolution)}
     if stribeck_speed is not None:
