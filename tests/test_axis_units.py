@@ -190,7 +190,7 @@ def test_trace_figure_is_relabelled(rotary):
     res = od.simulate(od.load_config(rotary[0]), "tracking", duration=0.05)
     fig = trace_figure(res)
     labels = [ax.get_ylabel() for ax in fig.axes]
-    assert labels == ["displacement [mrad]", "error x_ref - x [urad]", "friction state [N m]", "force u [N m]"]
+    assert labels == ["displacement [mrad]", "error x_ref - x [urad]", "friction state [N m]", "torque u [N m]"]
 
 
 @pytest.mark.slow

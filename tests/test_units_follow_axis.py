@@ -287,3 +287,19 @@ def test_report_data_section_speaks_the_axis(logs, tmp_path, capsys):
     assert leaks(text, LINEAR) == [], leaks(text, LINEAR)
     for wanted in ("kg m^2", "N m s/rad", "torque [N m]", "friction [N m]", "velocity [mrad/s]"):
         assert wanted in text, wanted
+
+
+@pytest.mark.slow
+def test_refine_speaks_the_axis():
+    """The output-error refinement of a rotary log: its parameters, RMS error and note in kg m^2, N m, rad."""
+    from obsdesign.data import identify
+    from obsdesign.data.output_error import refine
+
+    spec = dict(AXES["rotary-4k-hold-d2"], duration=4.0)
+    trace = axis_trace(spec, noisy_log(spec, simulate_axis(spec), 1))
+    ident = identify(trace, n_boot=0)
+    result = refine(trace, ident, parameters=("s", "m", "offset"))
+    text, payload = str(result), json.dumps(_strings(result.to_dict()))
+    assert leaks(text, LINEAR) == [] and leaks(payload, LINEAR) == [], (leaks(text, LINEAR), leaks(payload, LINEAR))
+    assert [result[k].unit for k in ("s", "m", "offset")] == ["1/rad", "kg m^2", "N m"]
+    assert "rad; condition number" in text

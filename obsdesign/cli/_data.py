@@ -265,9 +265,9 @@ def _cmd_observe(args: argparse.Namespace) -> int:
         (obs.to_npz if args.out.lower().endswith(".npz") else obs.to_csv)(args.out)
     if args.plot:
         from ..report.data_section import observation_figure
-        from ..report.figures import save_figure
+        from ..report.figures import relabel, save_figure
 
-        save_figure(observation_figure(obs), args.plot)
+        save_figure(relabel(observation_figure(obs), obs.config.units), args.plot)  # the config's axis
     emit(args, obs, obs.summary())
     return 0
 

@@ -23,6 +23,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..axis import AxisSpec
 from .._validate import check_choice
 from ..friction.registry import FRICTION_MODELS
 from .identify import Identification
@@ -113,6 +114,8 @@ class Refinement:
         Simulations of all windows (the fit and its Jacobians, the start scan).
     wall_time : float
         Seconds.
+    length_unit : str
+        ``'m'``, or ``'rad'`` on a rotary axis (the units of the parameters are those of the axis).
     """
 
     model: str
@@ -126,6 +129,7 @@ class Refinement:
     condition_number: float
     evaluations: int
     wall_time: float
+    length_unit: str = "m"
 
     def __getitem__(self, name: str) -> RefinedParameter:
         for p in self.parameters:
@@ -154,11 +158,12 @@ class Refinement:
             return ident
         p = self["s"]
         return replace(ident, s=p.value, s_note=f"output error over {self.windows} windows ({self.reversals} "
-                                                f"reversals): 95 % interval {p.low:.4g} to {p.high:.4g} 1/m")
+                                                f"reversals): 95 % interval {p.low:.4g} to {p.high:.4g} "
+                                                f"1/{self.length_unit}")
 
     def __str__(self) -> str:
         lines = [f"Output-error refinement ({self.model}): {self.windows} windows, {self.reversals} reversals, "
-                 f"{self.samples} samples; RMS position error {self.rms_initial:.3g} -> {self.rms:.3g} m; "
+                 f"{self.samples} samples; RMS position error {self.rms_initial:.3g} -> {self.rms:.3g} {self.length_unit}; "
                  f"condition number {self.condition_number:.3g}"]
         for p in self.parameters:
             verdict = "identifiable" if p.identifiable else f"NOT identifiable: {p.note}"
@@ -174,6 +179,7 @@ class _Problem:
         from scipy import signal
 
         self.trace, self.ident, self.model, self.names = trace, ident, model, tuple(names)
+        self.axis = AxisSpec(kind=trace.units.axis)  # the units of the log's axis (kg m^2, N m, rad if rotary)
         self.dt = dt = trace.sample_time
         fs = 1.0 / dt
         sos = signal.butter(4, 0.1 * fs, fs=fs, output="sos")
@@ -213,17 +219,17 @@ class _Problem:
     def spec(self, name):
         """``(unit, low, high, log)`` of a refined name."""
         if name == "m":
-            return "kg", 1e-9, 1e9, True
+            return self.axis.mass_unit, 1e-9, 1e9, True
         if name == "delay":
             return "s", 0.0, 10.0 * self.dt, False
         if name == "offset":
-            return "N", -1e6, 1e6, False
+            return self.axis.force_unit, -1e6, 1e6, False
         info = FRICTION_MODELS[self.model]
         spec = {p.name: p for p in info.parameters}[name]
         low = spec.low
         if name == "s":
             low = max(low, 1.0 / self.travel)
-        return spec.unit, low, spec.high, low > 0
+        return self.axis.unit(spec.unit), low, spec.high, low > 0
 
     def to_theta(self, name, value):
         return math.log(value) if self.spec(name)[3] else value
@@ -356,7 +362,7 @@ def refine(trace: Trace, ident: Identification, *, parameters: tuple[str, ...] =
     prob = _Problem(trace, ident, model, names, initial, float(travel), float(window), int(substeps))
     if prob.starts.size == 0:
         raise ValueError(f"trace: no window to simulate: expected a reversal between strokes of gross sliding "
-                         f"longer than travel = {travel:g} m, found none in {trace.source!r}")
+                         f"longer than travel = {travel:g} {prob.axis.length_unit}, found none in {trace.source!r}")
     g, w = len(names), prob.starts.size
     if "s" in names and (initial is None or "s" not in initial):
         prob.values["s"] = _scan_s(prob, g, w)
@@ -428,4 +434,5 @@ def refine(trace: Trace, ident: Identification, *, parameters: tuple[str, ...] =
     return Refinement(model=model, parameters=tuple(out), fixed=fixed, windows=w, reversals=int(prob.reversals),
                       samples=int(r.size), rms_initial=float(np.sqrt(np.mean(r0**2))) * prob.scale,
                       rms=float(np.sqrt(np.mean(r**2))) * prob.scale, condition_number=cond,
-                      evaluations=prob.evaluations, wall_time=time.perf_counter() - t_start)
+                      evaluations=prob.evaluations, wall_time=time.perf_counter() - t_start,
+                      length_unit=prob.axis.length_unit)

@@ -447,8 +447,9 @@ def load_trace(path: str | os.PathLike, *, position: str, input: str, time: str 
     if np.array_equal(x_logged, u_logged):
         raise ValueError(f"input: expected the actuator input, found in {u_label} the same data as in {x_label}")
     if float(np.max(np.abs(u))) * abs(gain) > MAX_MAGNITUDE:
-        raise ValueError(f"input_gain: expected |input_gain x input| <= {MAX_MAGNITUDE:g} N, found "
-                         f"{float(np.max(np.abs(u))) * abs(gain):g} N (input_gain = {gain:g}, {u_label})")
+        F = units.force_unit
+        raise ValueError(f"input_gain: expected |input_gain x input| <= {MAX_MAGNITUDE:g} {F}, found "
+                         f"{float(np.max(np.abs(u))) * abs(gain):g} {F} (input_gain = {gain:g}, {u_label})")
     metadata = dict(log.metadata)
     own = common_time(log, ch_x, ch_u, x_label, u_label) if ch_t is None else None
     if ch_t is not None or own is not None:

@@ -443,8 +443,9 @@ def check_plausible(units: Units, *, sample_time: float | None = None, position_
             out.append(f"position range {position_range:.6g} {units.length_unit} is larger than an axis's stroke "
                        f"(expected up to {high:g}): is the position in mm, um or counts (--position-unit)?")
         elif position_range < low:
-            out.append(f"position range {position_range:.3g} {units.length_unit} is below 0.1 um: is the position "
-                       f"in m read with a smaller unit (--position-unit), or does the axis not move?")
+            L = units.length_unit
+            out.append(f"position range {position_range:.3g} {L} is below {low:g} {L}: is the position "
+                       f"in {L} read with a smaller unit (--position-unit), or does the axis not move?")
     if speed is not None and speed > (1e3 if rot else PLAUSIBLE["speed"][1]):
         out.append(f"peak speed {speed:.6g} {units.length_unit}/s is implausible for a servo axis: check the "
                    f"position unit (--position-unit) and the time unit (--time-unit)")
