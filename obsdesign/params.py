@@ -360,7 +360,7 @@ class Config:
 
     def to_toml(self) -> str:
         """Serialise to TOML; ``Config.from_toml(c.to_toml()) == c``."""
-        lines, unit = [f"name = {toml_value(self.name)}"] + self.axis_toml(), self.units.unit
+        lines, unit, words = [f"name = {toml_value(self.name)}"] + self.axis_toml(), self.units.unit, self.units.words
         for key, table in self.to_dict().items():
             if key in ("name", "sources", "plant_friction", "axis"):
                 continue
@@ -368,8 +368,7 @@ class Config:
             meta = {f.name: f.metadata for f in dataclasses.fields(section)}
             lines += ["", f"[{key}]"]
             for name, value in table.items():
-                lines.append(f"{name} = {toml_value(value)}  # [{unit(meta[name]['unit'])}] "
-                             f"{self.units.words(meta[name]['doc'])}")
+                lines.append(f"{name} = {toml_value(value)}  # [{unit(meta[name]['unit'])}] {words(meta[name]['doc'])}")
         return "\n".join(lines + self.extra_tables_toml()) + "\n"
 
     def axis_toml(self) -> list[str]:
@@ -414,8 +413,7 @@ class Config:
                 value = getattr(section, f.name)
                 default = f.default is not dataclasses.MISSING and value == f.default
                 rows.append(FieldRow(f"{key}.{f.name}", value, self.units.unit(f.metadata["unit"]),
-                                     self.units.words(f.metadata["doc"]),
-                                     default))
+                                     self.units.words(f.metadata["doc"]), default))
         return rows
 
 

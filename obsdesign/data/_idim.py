@@ -76,9 +76,10 @@ def ols(X: np.ndarray, y: np.ndarray, names: tuple[str, ...]) -> tuple[np.ndarra
     return theta, cov, resid, cond
 
 
-def implausible(result: dict, input_gain: float, units) -> tuple[str, ...]:
+def implausible(result: dict, trace) -> tuple[str, ...]:
     """Sentences naming each identified m, sigma, Cf (and per-direction level) <= 0 with its likely cause
-    (in the words and units of ``units``, the log's :class:`~obsdesign.data.units.Units`)."""
+    (in the words and units of the ``trace``'s axis)."""
+    input_gain, units = trace.input_gain, trace.units
     M, F, L = units.mass_unit, units.force_unit, units.length_unit
     names = {"m": (units.mass_word, M), "sigma": ("viscous coefficient", f"{F} s/{L}"), "Cf": ("Coulomb level", F),
              "sigma_pos": ("viscous coefficient for v > 0", f"{F} s/{L}"),

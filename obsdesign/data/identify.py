@@ -471,8 +471,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     intervals = widened(est["intervals"], values, model_shift)
     shown = ("m", "sigma", "Cf", "offset") + (ASYM if model == "asymmetric" else ()) + (("Fs", "vs") if est["stribeck"] else ())
     result = {k: float(values[k]) for k in shown} | {f"{k}_std": float(std.get(k, 0.0)) for k in shown}
-    notes = implausible({k: (None if k in est["at_bound"] else v) for k, v in result.items()}, trace.input_gain,
-                        trace.units)
+    notes = implausible({k: (None if k in est["at_bound"] else v) for k, v in result.items()}, trace)
     for note in notes:
         warnings.warn(note, stacklevel=2)
     quantum = quantization(position)
@@ -481,8 +480,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                              m=result["m"], sigma=result["sigma"], Cf=result["Cf"], offset=result["offset"],
                              rows=DEFAULT_DECIMATION if decimation is None else q, window=presliding_window,
                              length_unit=trace.units.length_unit)
-    notices = trace.warnings + trace.units.gain_note(trace.input_gain) + check_plausible(
-        trace.units, mass=result["m"]) + cautions(
+    notices = trace.warnings + check_plausible(trace.units, mass=result["m"], gain=trace.input_gain) + cautions(
         est, cols, noise_var, trace.units, filter_hz)
     return Identification(model=model, **result, nrmse_percent=est["nrmse"], condition_number=est["condition_number"],
                           samples=int(y.size), s=s, s_note=note, sample_time=dt, filter_hz=float(filter_hz),

@@ -408,8 +408,10 @@ class Units(AxisWords):
 
 
 def check_plausible(units: Units, *, sample_time: float | None = None, position_range: float | None = None,
-                    speed: float | None = None, mass: float | None = None) -> tuple[str, ...]:
-    """One sentence per value outside :data:`PLAUSIBLE`, naming the likely unit error.
+                    speed: float | None = None, mass: float | None = None,
+                    gain: float | None = None) -> tuple[str, ...]:
+    """One sentence per value outside :data:`PLAUSIBLE`, naming the likely unit error (and, with the input
+    ``gain``, :meth:`Units.gain_note`: a current or voltage at the default gain 1).
 
     The ranges are those of a servo axis (linear; for a rotary axis the position range is
     taken up to 1e4 rad and the speed up to 1e3 rad/s): a sample time in [1 us, 20 ms], a
@@ -421,6 +423,8 @@ def check_plausible(units: Units, *, sample_time: float | None = None, position_
         The log's units (the guesses depend on them).
     sample_time, position_range, speed, mass : float, optional
         SI values to check [s, m or rad, m/s or rad/s, kg or kg m^2].
+    gain : float, optional
+        The input gain [N/A, N m/A, ...] of the log.
 
     Examples
     --------
@@ -457,4 +461,4 @@ def check_plausible(units: Units, *, sample_time: float | None = None, position_
                "1e6 x too small")
         out.append(f"identified {'inertia' if rot else 'mass'} {mass:.6g} {units.mass_unit} is outside "
                    f"{low:g} to {high:g}: check the units ({why}; --time-unit, --position-unit, --input-gain)")
-    return tuple(out)
+    return tuple(out) + (units.gain_note(gain) if gain is not None else ())
