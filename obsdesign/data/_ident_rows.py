@@ -20,6 +20,7 @@ def rows(self) -> list[tuple[str, str]]:
     self : Identification
     """
     u = self.units
+    words = u.axis_spec(self.input_gain).words  # the sentences below in the axis's words (torque, inertia)
 
     def pm(name, digits=5):
         value, std = getattr(self, name), getattr(self, name + "_std")
@@ -40,13 +41,13 @@ def rows(self) -> list[tuple[str, str]]:
             ("units", u.describe(self.input_gain) + f"; input gain {self.input_gain:g} "
              f"{u.force_unit}/{u.input_unit(self.input_gain)}")]
     rows += [(n, pm(n)) for n in names]
-    rows += [("s", "-" if self.s is None else f"{self.s:.5g} 1/{u.length_unit}"), ("s note", self.s_note),
-             ("timing", self.timing_note or describe(self.input_timing, self.delay_samples)),
-             ("selection", self.selection or "-"), ("intervals", self.interval_method or "-"),
+    rows += [("s", "-" if self.s is None else f"{self.s:.5g} 1/{u.length_unit}"), ("s note", words(self.s_note)),
+             ("timing", words(self.timing_note or describe(self.input_timing, self.delay_samples))),
+             ("selection", words(self.selection or "-")), ("intervals", self.interval_method or "-"),
              ("NRMSE", f"{self.nrmse_percent:.3g} %"), ("condition number", f"{self.condition_number:.4g}"),
              ("rows in the fit", f"{self.samples} (|v| > {self.min_speed:.3g} {u.si('speed')}"
               + (f", {self.window}" if self.window else "") + ")"),
-             ("filter", f"Butterworth {FILTER_ORDER}th order {self.filter_hz:.4g} Hz, zero phase ({self.filter_rule})"),
+             ("filter", f"Butterworth {FILTER_ORDER}th order {self.filter_hz:.4g} Hz, zero phase ({words(self.filter_rule)})"),
              ("decimation", f"{self.decimation} (sample time {self.sample_time:g} s)")]
     rows += [("WARNING", w) for w in self.warnings] + [("caution", w) for w in self.notices]
     return rows
