@@ -112,6 +112,10 @@ class QuantileSketch:
         if not self.count:
             return math.nan
         rank = math.floor(q * (self.count - 1))
+        if rank == 0:
+            return self.min  # the extremes are kept exactly
+        if rank == self.count - 1:
+            return self.max
         gamma = math.exp(self._log_gamma)
         seen = 0
         for k in sorted(self.negative, reverse=True):  # most negative first
