@@ -56,6 +56,7 @@ from .._validate import check_integer
 from ..params import Config
 from ..sampled.choices import CONTROLLERS
 from ..sim.scenarios import build_scenario, scenario_spec
+from .criteria import Criterion, numeric_metrics, parse_criterion
 from .folder import SweepLock, check_start, read_manifest
 from .plan import check_axes, plan_runs
 from .pool import Executor
@@ -73,84 +74,6 @@ ALPHA = 1e-3
 #: Folder of the batch files inside the study's folder.
 BATCH_DIR = "batches"
 _BATCH_NAME = re.compile(r"b(\d{6})\.npz")
-_CRITERION = re.compile(r"^\s*([A-Za-z0-9_.]+)\s*(<=|>=)\s*(\S+)\s*$")
-
-
-@dataclass(frozen=True)
-class Criterion:
-    """A pass criterion of one run: ``metric <= limit`` or ``metric >= limit``.
-
-    Attributes
-    ----------
-    metric : str
-        A metric column (:func:`obsdesign.sweeps.run.metric_columns`).
-    op : str
-        ``'<='`` or ``'>='``.
-    limit : float
-        The limit, in the metric's unit.
-    """
-
-    metric: str
-    op: str
-    limit: float
-
-    def passes(self, values: np.ndarray) -> np.ndarray:
-        """Whether each value meets the criterion (a non-finite value does not).
-
-        Parameters
-        ----------
-        values : ndarray
-            Values of the metric.
-        """
-        with np.errstate(invalid="ignore"):
-            ok = values <= self.limit if self.op == "<=" else values >= self.limit
-        return ok & np.isfinite(values)
-
-    def __str__(self) -> str:
-        return f"{self.metric}{self.op}{self.limit:g}"
-
-
-def parse_criterion(text: str, scenario: str) -> Criterion:
-    """``'NAME<=LIMIT'`` or ``'NAME>=LIMIT'`` with NAME a metric of ``scenario``.
-
-    Parameters
-    ----------
-    text : str
-        The criterion.
-    scenario : str
-        The scenario (its metric columns are the names allowed).
-
-    Examples
-    --------
-    >>> parse_criterion("settling_time_1<=0.05", "positioning")
-    Criterion(metric='settling_time_1', op='<=', limit=0.05)
-    >>> parse_criterion("speed<=1", "positioning")
-    Traceback (most recent call last):
-    ...
-    ValueError: criteria: unknown metric 'speed' in 'speed<=1'; expected one of rms_error, max_error, observer_rms_error_v, observer_rms_error_f, settling_time_1, settling_time_2, steady_state_error_1, steady_state_error_2, overshoot_1, overshoot_2, rise_time_1, rise_time_2
-    """
-    if isinstance(text, Criterion):
-        return text
-    if not isinstance(text, str):
-        raise TypeError(f"criteria: expected strings NAME<=LIMIT or NAME>=LIMIT, found {text!r}")
-    match = _CRITERION.match(text)
-    if match is None:
-        raise ValueError(f"criteria: expected NAME<=LIMIT or NAME>=LIMIT, found {text!r}")
-    name, op, limit_text = match.groups()
-    names = _numeric_metrics(scenario)
-    if name not in names:
-        raise ValueError(f"criteria: unknown metric {name!r} in {text!r}; expected one of {', '.join(names)}")
-    try:
-        limit = float(limit_text)
-    except ValueError:
-        limit = math.nan
-    if not math.isfinite(limit):
-        raise ValueError(f"criteria: expected a finite number as the limit in {text!r}, found {limit_text!r}")
-    return Criterion(name, op, limit)
-
-
-def _numeric_metrics(scenario: str) -> list[str]:
-    return [c for c in metric_columns(scenario) if c not in ("stable", "diverged")]
 
 
 @dataclass(frozen=True, eq=False)
@@ -279,7 +202,8 @@ def _batch_path(out: Path, index: int) -> Path:
 
 def monte_carlo(cfg: Config, scenario: str, *, uncertain: dict, samples: int, out_dir: str | os.PathLike,
                 criteria: tuple | list = (), seed: int = 0, metric: str = "rms_error", worst: int = 10,
-                confidence: float = 0.95, batch: int = 200, executor=None, workers: int | None = None,
+                confidence: float = 0.95, quantiles: tuple = QUANTILES, batch: int = 200, executor=None,
+                workers: int | None = None,
                 resume: bool = False, force: bool = False, progress: bool | int = False,
                 duration: float | None = None, controller: str | None = None) -> MonteCarloResult:
     """Run a Monte-Carlo study of one design, streamed to ``out_dir`` (see the module notes).
@@ -306,6 +230,8 @@ def monte_carlo(cfg: Config, scenario: str, *, uncertain: dict, samples: int, ou
         Worst runs kept (at least 1).
     confidence : float
         Confidence level of the failure probability's interval (``0 < confidence < 1``).
+    quantiles : sequence of float
+        Probabilities of the reported quantiles (each in [0, 1]; default :data:`QUANTILES`).
     batch : int
         Runs per batch (at least 1): per task sent to a worker and per file.
     executor : optional
@@ -336,11 +262,15 @@ def monte_carlo(cfg: Config, scenario: str, *, uncertain: dict, samples: int, ou
         workers = check_integer("workers", workers, minimum=1)
     if isinstance(confidence, bool) or not isinstance(confidence, (int, float)) or not 0.0 < confidence < 1.0:
         raise ValueError(f"confidence: expected a number in (0, 1), found {confidence!r}")
+    quantiles = tuple(quantiles)
+    bad = [q for q in quantiles if isinstance(q, bool) or not isinstance(q, (int, float)) or not 0.0 <= q <= 1.0]
+    if bad or not quantiles:
+        raise ValueError(f"quantiles: expected probabilities in [0, 1], found {bad[0] if bad else 'none'!r}")
     _, uncertain = check_axes({}, dict(uncertain or {}), samples)
     spec = scenario_spec(scenario)
     columns = tuple(metric_columns(scenario))
-    if metric not in _numeric_metrics(scenario):
-        raise ValueError(f"metric: expected one of {', '.join(_numeric_metrics(scenario))}, found {metric!r}")
+    if metric not in numeric_metrics(scenario):
+        raise ValueError(f"metric: expected one of {', '.join(numeric_metrics(scenario))}, found {metric!r}")
     crit = tuple(parse_criterion(c, scenario) for c in criteria)
     if controller is not None:
         CONTROLLERS.check(controller)
@@ -380,7 +310,8 @@ def monte_carlo(cfg: Config, scenario: str, *, uncertain: dict, samples: int, ou
         resumed = sum(stop - start for i, start, stop in bounds if i in found)
         _run_batches(_Batch(cfg, scenario, options, uncertain, samples, seed, columns),
                      [b for b in bounds if b[0] not in found], out, samples, resumed, executor, workers, progress)
-        result = _reduce(out, bounds, uncertain, samples, seed, columns, crit, metric, worst, confidence)
+        result = _reduce(out, bounds, uncertain, samples, seed, columns, crit, metric, worst, confidence,
+                         quantiles)
         result = MonteCarloResult(**result, resumed_runs=resumed, wall_s=time.perf_counter() - t0, out_dir=out)
         atomic_write(out / "montecarlo.json", json.dumps(result.to_dict(), indent=1))
     return result
@@ -415,11 +346,11 @@ def _run_batches(runner: _Batch, todo: list, out: Path, total: int, done: int, e
 
 
 def _reduce(out: Path, bounds: list, uncertain: dict, samples: int, seed: int, columns: tuple, criteria: tuple,
-            metric: str, keep: int, confidence: float) -> dict[str, Any]:
+            metric: str, keep: int, confidence: float, quantiles: tuple) -> dict[str, Any]:
     """The statistics of the batch files, read one at a time in batch order."""
     from scipy.stats import binomtest
 
-    names = _numeric_metrics_of(columns)
+    names = [c for c in columns if c not in ("stable", "diverged")]
     sketches = {c: QuantileSketch(ALPHA) for c in names}
     moments = {c: Moments() for c in names}
     counts = dict.fromkeys(STATUS_VALUES, 0)
@@ -452,17 +383,13 @@ def _reduce(out: Path, bounds: list, uncertain: dict, samples: int, seed: int, c
     stats = {}
     for c in names:
         sk, mo = sketches[c], moments[c]
-        stats[c] = {"quantiles": {f"{q:g}": _json(sk.quantile(q)) for q in QUANTILES}, "mean": _json(mo.mean if mo.count else math.nan),
+        stats[c] = {"quantiles": {f"{q:g}": _json(sk.quantile(q)) for q in quantiles}, "mean": _json(mo.mean if mo.count else math.nan),
                     "std": _json(mo.std), "count": sk.count, "nonfinite": sk.nonfinite,
                     "min": _json(sk.min), "max": _json(sk.max)}
     worst = [entry for *_, entry in sorted(heap, key=lambda h: h[:2], reverse=True)]
     return {"runs": runs, "counts": counts, "criteria": tuple(str(c) for c in criteria), "failures": failures,
             "failure_probability": failures / runs, "interval": (float(ci.low), float(ci.high)),
             "confidence": confidence, "metrics": stats, "worst": worst, "metric": metric, "alpha": ALPHA}
-
-
-def _numeric_metrics_of(columns: tuple) -> list[str]:
-    return [c for c in columns if c not in ("stable", "diverged")]
 
 
 def _json(x: float) -> float | None:

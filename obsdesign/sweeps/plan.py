@@ -164,6 +164,13 @@ def check_axes(vary: dict, uncertain: dict, samples: int) -> tuple[dict, dict]:
 def count_runs(vary: dict, samples: int) -> int:
     """Runs of a sweep: grid points (the product of the ``n`` of ``vary``) times ``samples``.
 
+    Parameters
+    ----------
+    vary : dict
+        ``{name: (low, high, n)}`` grid axes.
+    samples : int
+        Draws per grid point.
+
     >>> count_runs({"rho": (1.0, 2.0, 3), "kappa": (1e5, 1e6, 2)}, 4)
     24
     """
