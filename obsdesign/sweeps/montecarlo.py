@@ -310,9 +310,9 @@ def monte_carlo(cfg: Config, scenario: str, *, uncertain: dict, samples: int, ou
         resumed = sum(stop - start for i, start, stop in bounds if i in found)
         _run_batches(_Batch(cfg, scenario, options, uncertain, samples, seed, columns),
                      [b for b in bounds if b[0] not in found], out, samples, resumed, executor, workers, progress)
-        result = _reduce(out, bounds, uncertain, samples, seed, columns, crit, metric, worst, confidence,
-                         quantiles)
-        result = MonteCarloResult(**result, resumed_runs=resumed, wall_s=time.perf_counter() - t0, out_dir=out)
+        stats = _reduce(out, bounds, uncertain, samples, seed, columns, crit, metric, worst, confidence,
+                        quantiles)
+        result = MonteCarloResult(**stats, resumed_runs=resumed, wall_s=time.perf_counter() - t0, out_dir=out)
         atomic_write(out / "montecarlo.json", json.dumps(result.to_dict(), indent=1))
     return result
 
