@@ -285,3 +285,15 @@ def test_killed_cli_study_resumes_to_the_uninterrupted_result(tmp_path):
     summary = json.loads(again.stdout)
     assert summary["resumed_runs"] == 10 * kept
     assert (tmp_path / "cut" / "montecarlo.json").read_text() == (tmp_path / "whole" / "montecarlo.json").read_text()
+
+
+def test_progress_lines_carry_the_eta_and_force_replaces_a_study(tmp_path, capsys):
+    kw = dict(**{**STUDY, "samples": 10}, out_dir=tmp_path, workers=1)
+    mc.monte_carlo(CFG, "constant", **kw, progress=5)
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert [line.split(",")[0] for line in lines] == ["monte carlo: 5/10 runs", "monte carlo: 10/10 runs"]
+    assert all(" s, ETA " in line for line in lines)
+    # a row sweep replacing the study (--force) leaves none of its files behind
+    od.sweep(CFG, "constant", uncertain={"Cf": (0.3, 0.4)}, samples=2, duration=0.2, workers=1, out_dir=tmp_path,
+             force=True)
+    assert not (tmp_path / "montecarlo.json").exists() and not list((tmp_path / mc.BATCH_DIR).iterdir())
