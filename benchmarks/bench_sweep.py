@@ -146,7 +146,7 @@ def run() -> list[dict]:
 
 SWEEP96 = dict(vary={"rho": (1.5, 4.0, 12)}, uncertain={"Cf": (0.3, 0.4)}, samples=8, seed=0)
 MC_UNCERTAIN = {"Cf": (0.25, 0.45), "sigma": (10.0, 40.0), "m": (0.45, 0.65)}
-MC_CRITERIA = ["settling_time_1<=0.1", "settling_time_2<=0.1"]
+MC_CRITERIA = ["settling_time_1<=0.6", "settling_time_2<=0.6"]
 
 
 def _load() -> str:
@@ -159,6 +159,21 @@ def _timed96(**kw) -> float:
     return time.perf_counter() - t0
 
 
+def _cpu() -> float:
+    import resource
+
+    return sum(getattr(resource.getrusage(who), f) for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)
+               for f in ("ru_utime", "ru_stime"))
+
+
+def _cpu96(workers: int) -> float:
+    """CPU seconds (this process and its reaped workers) of the 96-run sweep: unlike wall time, it hardly
+    moves with the load of a shared machine; equal for 1 and 2 workers means the pool adds no work."""
+    before = _cpu()
+    _timed96(workers=workers)
+    return _cpu() - before
+
+
 def run_scaling() -> list[dict]:
     """96 runs: od.sweep(workers=2) against workers=1 as a user gets them (start-up included), and local
     Dask clusters of 2 and 1 workers (started and warmed first), each timed alternately, best of 3."""
@@ -169,6 +184,11 @@ def run_scaling() -> list[dict]:
     for _ in range(3):
         one.append(_timed96(workers=1))
         two.append(_timed96(workers=2))
+    cpu = {w: min(_cpu96(w) for _ in range(2)) for w in (1, 2)}
+    rows.append({"benchmark": f"96 runs, CPU time of od.sweep(workers=2) (parent and workers) against workers=1 "
+                              f"({_load()})", "value": f"{cpu[2]:.2f} s", "reference": f"workers=1: {cpu[1]:.2f} s",
+                 "ratio": f"{cpu[2] / cpu[1]:.2f}", "target": "<= 1.1 (the pool adds no work)",
+                 "ok": cpu[2] <= 1.1 * cpu[1]})
     ratio = min(one) / min(two)
     rows.append({"benchmark": f"96 runs (6 s positioning), od.sweep(workers=2) against workers=1, start-up included, "
                               f"best of 3 ({load})", "value": f"{min(two):.2f} s",
@@ -227,7 +247,7 @@ def _study(samples: int, workers: int = 2) -> tuple[float, object]:
         return time.perf_counter() - t0, res
 
 
-def run_montecarlo(samples: int = 600) -> list[dict]:
+def run_montecarlo(samples: int = 400) -> list[dict]:
     """The streamed Monte-Carlo study of the positioning scenario on 2 workers: rate, extrapolation to
     10^5 runs, the parent's peak memory at two run counts; with OBSDESIGN_BENCH_MC_FULL=1 a real 10^5 run."""
     rows = []
