@@ -297,3 +297,15 @@ def test_progress_lines_carry_the_eta_and_force_replaces_a_study(tmp_path, capsy
     od.sweep(CFG, "constant", uncertain={"Cf": (0.3, 0.4)}, samples=2, duration=0.2, workers=1, out_dir=tmp_path,
              force=True)
     assert not (tmp_path / "montecarlo.json").exists() and not list((tmp_path / mc.BATCH_DIR).iterdir())
+
+
+@pytest.mark.slow
+def test_dask_cluster_gives_the_same_study(study, tmp_path):
+    """The batches on a local Dask cluster of two workers (the windowed submission through distributed.wait)."""
+    distributed = pytest.importorskip("distributed", reason="dask[distributed] not installed")
+    res, _, _ = study
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        again = mc.monte_carlo(CFG, "constant", **STUDY, criteria=CRITERIA, worst=4, out_dir=tmp_path,
+                               executor=client)
+    assert again.to_dict() == res.to_dict()
