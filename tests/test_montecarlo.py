@@ -309,3 +309,19 @@ def test_dask_cluster_gives_the_same_study(study, tmp_path):
         again = mc.monte_carlo(CFG, "constant", **STUDY, criteria=CRITERIA, worst=4, out_dir=tmp_path,
                                executor=client)
     assert again.to_dict() == res.to_dict()
+
+
+def test_cli_streams_a_large_study_without_vary(tmp_path, monkeypatch, capsys):
+    """Above STREAM_ABOVE samples without --vary the sweep is streamed (lowered here to keep it short)."""
+    from obsdesign.cli import _sim
+
+    monkeypatch.setattr(_sim, "STREAM_ABOVE", 5)
+    base = ["sweep", "--scenario", "constant", "--duration", "0.2", "--uncertain", "Cf=0.3:0.4", "--workers", "1"]
+    assert main([*base, "--samples", "6", "--criterion", "rms_error<=1", "--out", str(tmp_path / "s")]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    # no failure in 6 runs: the Clopper-Pearson interval is [0, 1 - 0.025^(1/6)] in closed form
+    assert printed["runs"] == 6 and printed["failures"] == 0 and printed["interval"][0] == 0.0
+    assert printed["interval"][1] == pytest.approx(1 - 0.025 ** (1 / 6), rel=1e-9)
+    assert (tmp_path / "s" / "montecarlo.json").is_file() and not (tmp_path / "s" / "results.csv").exists()
+    assert main([*base, "--samples", "5", "--out", str(tmp_path / "r")]) == 0  # not above: rows
+    assert (tmp_path / "r" / "results.csv").is_file() and not (tmp_path / "r" / "montecarlo.json").exists()
