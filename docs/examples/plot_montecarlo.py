@@ -11,8 +11,8 @@ interval, the quantiles of every metric and the worst runs, which can be run aga
 
 Here 120 runs, so that the site builds in seconds. The same study at 10^5 runs
 (``--samples 100000``) holds no more memory and takes 20-37 minutes on the two idle cores of the
-development machine, the time of 10^5 simulations of 6 s (``benchmarks/RESULTS.md``, "Monte-Carlo
-study (issue 37)").
+development machine, the time of 10^5 simulations of 6 s (``benchmarks/RESULTS.md``, "Sweeps that
+scale and a Monte-Carlo study at 10^5 runs").
 
 Asserts: every reported quantile is within 0.1 % of ``numpy.quantile`` of the values in the batch
 files, the failure count is that of the criteria applied to them, and the worst run replays to the
