@@ -325,3 +325,23 @@ def test_cli_streams_a_large_study_without_vary(tmp_path, monkeypatch, capsys):
     assert (tmp_path / "s" / "montecarlo.json").is_file() and not (tmp_path / "s" / "results.csv").exists()
     assert main([*base, "--samples", "5", "--out", str(tmp_path / "r")]) == 0  # not above: rows
     assert (tmp_path / "r" / "results.csv").is_file() and not (tmp_path / "r" / "montecarlo.json").exists()
+
+
+def test_sweep_warns_of_a_lag_design_on_the_physical_plant(tmp_path, capsys):
+    """table1 (variant lag, beta set) tracking: sweep runs the physical plant (the API's default) where the
+    lag observer's estimate is biased; simulate on that plant gives metres of error where the model plant
+    gives millimetres, so the sweep says so in one line (as simulate does)."""
+    lag = od.load_preset("table1")
+    physical = od.simulate(lag, "tracking", duration=2.0, plant="physical", keep_trace=False).metrics["rms_error"]
+    model = od.simulate(lag, "tracking", duration=2.0, plant="model", keep_trace=False).metrics["rms_error"]
+    assert physical > 100 * model
+    base = ["sweep", "--preset", "table1", "--scenario", "constant", "--duration", "0.1", "--samples", "2",
+            "--uncertain", "Cf=0.3:0.4", "--workers", "1"]
+    assert main([*base, "--stream", "--out", str(tmp_path / "a")]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert [line for line in err if "warning" in line] == [
+        "obsdesign sweep: warning: the 'lag' observer follows eq:3:1, which drops the -Fv/beta term of the physical "
+        "lag plant, so its friction estimate is biased here (docs/simulation.md); use --variant static for a "
+        "meaningful estimate"]
+    assert main([*base, "--variant", "static", "--out", str(tmp_path / "b")]) == 0
+    assert "warning" not in capsys.readouterr().err

@@ -43,10 +43,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     cfg = load(args).override(noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
                               quantization=args.quantization, dt=args.dt)
     plant = args.plant or ("model" if cfg.observer.variant == "lag" else "physical")
-    if plant == "physical" and cfg.observer.variant == "lag" and cfg.friction.beta is not None:
-        print("obsdesign simulate: warning: the 'lag' observer follows eq:3:1, which drops the -Fv/beta term of "
-              "the physical lag plant, so its friction estimate is biased here (docs/simulation.md); use "
-              "--plant model or --variant static for a meaningful estimate", file=sys.stderr)
+    if plant == "physical":
+        _warn_lag_on_physical("simulate", cfg, "--plant model or --variant static")
     check_samples(args.duration or DEFAULT_DURATION[args.scenario], cfg.observer.dt)
     options = {field: getattr(args, flag) for flag, field in _SPEC_FLAGS[args.scenario].items()
                if getattr(args, flag) is not None}
@@ -86,6 +84,14 @@ def _split(item: str, flag: str, syntax: str, n_parts: int) -> tuple[str, list[s
     if not sep or not name or len(parts) != n_parts:
         raise ValueError(f"{flag}: expected {syntax}, found {item!r}")
     return name, parts
+
+
+def _warn_lag_on_physical(command: str, cfg, cure: str) -> None:
+    """The one-line warning of a 'lag' design simulated on the physical plant (its estimate biased)."""
+    if cfg.observer.variant == "lag" and cfg.friction.beta is not None:
+        print(f"obsdesign {command}: warning: the 'lag' observer follows eq:3:1, which drops the -Fv/beta term of "
+              "the physical lag plant, so its friction estimate is biased here (docs/simulation.md); use "
+              f"{cure} for a meaningful estimate", file=sys.stderr)
 
 
 def parse_vary(items: list[str]) -> dict[str, tuple[float, float, int]]:
@@ -162,6 +168,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if args.resume and not (out / "results.csv").exists():
         raise UsageError(f"obsdesign sweep: argument --resume: no results.csv in {args.out!r} to resume")
     cfg = load(args)
+    _warn_lag_on_physical("sweep", cfg, "--variant static")  # a sweep simulates the physical plant
     client = _connect(args.scheduler) if args.scheduler else None
     try:
         res = sweep(cfg, args.scenario, vary=vary, uncertain=uncertain, samples=args.samples, seed=args.seed,
@@ -218,6 +225,7 @@ def _monte_carlo(args: argparse.Namespace, vary: dict, uncertain: dict, runs: in
     if args.resume and not (out / "sweep.json").exists():
         raise UsageError(f"obsdesign sweep: argument --resume: no sweep.json in {str(out)!r} to resume")
     cfg = load(args)
+    _warn_lag_on_physical("sweep", cfg, "--variant static")
     client = _connect(args.scheduler) if args.scheduler else None
     try:
         res = monte_carlo(cfg, args.scenario, uncertain=uncertain, samples=args.samples, seed=args.seed,
