@@ -357,7 +357,7 @@ def add_commands(sub) -> None:
                    help=f"a Monte-Carlo study streamed to DIR/batches (default above {STREAM_ABOVE} samples "
                         "without --vary): quantiles, failure probability, worst runs in DIR/montecarlo.json")
     p.add_argument("--criterion", action="append", metavar="NAME<=LIMIT",
-                   help="pass criterion of a run in a streamed study (repeatable; also NAME>=LIMIT)")
+                   help="pass criterion of a run in a streamed study, quoted for the shell (repeatable; also NAME>=LIMIT)")
     p.add_argument("--batch", type=integer(1), help="runs per batch of a streamed study (default 200)")
     p.add_argument("--worst", type=integer(1), help="worst runs kept by a streamed study (default 10)")
     p.set_defaults(run=_cmd_sweep)
