@@ -32,7 +32,7 @@ SUITES = {
     "Symbolic derivation (issue 2)": bench_derive.run,
     "Closed-loop simulator (issue 4)": bench_sim.run,
     "Friction-model plants (issue 19)": bench_friction_plants.run,
-    "Sweeps (issue 6)": bench_sweep.run,
+    "Sweeps (issue 6)": bench_sweep.run_all,
     "Measured data (issue 10)": bench_data.run,
     "Identification (issue 17)": bench_identify.run,
     "Command-line start-up (issue 13)": bench_cli.run,

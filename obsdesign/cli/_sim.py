@@ -43,10 +43,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     cfg = load(args).override(noise_rms=args.noise_rms, noise_bandwidth=args.noise_bandwidth,
                               quantization=args.quantization, dt=args.dt)
     plant = args.plant or ("model" if cfg.observer.variant == "lag" else "physical")
-    if plant == "physical" and cfg.observer.variant == "lag" and cfg.friction.beta is not None:
-        print("obsdesign simulate: warning: the 'lag' observer follows eq:3:1, which drops the -Fv/beta term of "
-              "the physical lag plant, so its friction estimate is biased here (docs/simulation.md); use "
-              "--plant model or --variant static for a meaningful estimate", file=sys.stderr)
+    if plant == "physical":
+        _warn_lag_on_physical("simulate", cfg, "--plant model or --variant static")
     check_samples(args.duration or DEFAULT_DURATION[args.scenario], cfg.observer.dt)
     options = {field: getattr(args, flag) for flag, field in _SPEC_FLAGS[args.scenario].items()
                if getattr(args, flag) is not None}
@@ -86,6 +84,14 @@ def _split(item: str, flag: str, syntax: str, n_parts: int) -> tuple[str, list[s
     if not sep or not name or len(parts) != n_parts:
         raise ValueError(f"{flag}: expected {syntax}, found {item!r}")
     return name, parts
+
+
+def _warn_lag_on_physical(command: str, cfg, cure: str) -> None:
+    """The one-line warning of a 'lag' design simulated on the physical plant (its estimate biased)."""
+    if cfg.observer.variant == "lag" and cfg.friction.beta is not None:
+        print(f"obsdesign {command}: warning: the 'lag' observer follows eq:3:1, which drops the -Fv/beta term of "
+              "the physical lag plant, so its friction estimate is biased here (docs/simulation.md); use "
+              f"{cure} for a meaningful estimate", file=sys.stderr)
 
 
 def parse_vary(items: list[str]) -> dict[str, tuple[float, float, int]]:
@@ -152,9 +158,17 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     runs = check_runs(vary, args.samples)
     check_output_dir("sweep", "--out", args.out)
     out = Path(args.out)
+    stream = args.stream or (not vary and runs > STREAM_ABOVE)
+    if not stream and (args.criterion or args.batch is not None or args.worst is not None):
+        flag = "--criterion" if args.criterion else "--batch" if args.batch is not None else "--worst"
+        raise UsageError(f"obsdesign sweep: argument {flag}: only for a streamed Monte-Carlo study "
+                         f"(--stream, or no --vary and more than {STREAM_ABOVE} samples)")
+    if stream:
+        return _monte_carlo(args, vary, uncertain, runs, out)
     if args.resume and not (out / "results.csv").exists():
         raise UsageError(f"obsdesign sweep: argument --resume: no results.csv in {args.out!r} to resume")
     cfg = load(args)
+    _warn_lag_on_physical("sweep", cfg, "--variant static")  # a sweep simulates the physical plant
     client = _connect(args.scheduler) if args.scheduler else None
     try:
         res = sweep(cfg, args.scenario, vary=vary, uncertain=uncertain, samples=args.samples, seed=args.seed,
@@ -185,6 +199,62 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     save_figure(sweep_distribution_figure(res, args.metric), out / "summary_distributions.svg")
     atomic_write(out / "summary.json", json.dumps(summary, indent=1))
     print(json.dumps(summary))
+    return 0
+
+
+#: A sweep without --vary of more samples than this is streamed (obsdesign.sweeps.montecarlo).
+STREAM_ABOVE = 20_000
+
+
+def _monte_carlo(args: argparse.Namespace, vary: dict, uncertain: dict, runs: int, out: Path) -> int:
+    """``sweep --stream``: a Monte-Carlo study of one design, streamed to ``out`` in batches."""
+    from .._io import atomic_write
+    from ..sweeps.montecarlo import monte_carlo, parse_criterion
+    from ..sweeps.summary import make_summary
+
+    if vary:
+        raise UsageError("obsdesign sweep: argument --vary: a streamed Monte-Carlo study is of one design; "
+                         "drop --vary (or --stream for a grid sweep with results.csv)")
+    if not uncertain:
+        raise UsageError("obsdesign sweep: argument --uncertain: a Monte-Carlo study needs at least one "
+                         "--uncertain NAME=LO:HI")
+    try:
+        criteria = [parse_criterion(c, args.scenario) for c in args.criterion or []]
+    except ValueError as e:
+        raise UsageError(f"obsdesign sweep: argument --criterion: {str(e).removeprefix('criteria: ')}") from None
+    if args.resume and not (out / "sweep.json").exists():
+        raise UsageError(f"obsdesign sweep: argument --resume: no sweep.json in {str(out)!r} to resume")
+    cfg = load(args)
+    _warn_lag_on_physical("sweep", cfg, "--variant static")
+    client = _connect(args.scheduler) if args.scheduler else None
+    try:
+        res = monte_carlo(cfg, args.scenario, uncertain=uncertain, samples=args.samples, seed=args.seed,
+                          criteria=criteria, metric=args.metric, worst=args.worst or 10, batch=args.batch or 200,
+                          executor=client, workers=args.workers, out_dir=out, resume=args.resume, force=args.force,
+                          progress=_progress(runs), duration=args.duration)
+    except KeyboardInterrupt:
+        print(f"obsdesign sweep: interrupted; finished batches are in {str(out / 'batches')!r}, "
+              "continue with --resume", file=sys.stderr)
+        return 130
+    except Exception as e:
+        if not _is_worker_failure(e):
+            raise
+        print(f"obsdesign sweep: a worker failed ({type(e).__name__}); finished batches are in "
+              f"{str(out / 'batches')!r}, continue with --resume", file=sys.stderr)
+        return 1
+    finally:
+        if client is not None:
+            client.close()
+    if res.counts["failed"] == res.runs:
+        first = res.worst[0]
+        raise UsageError(f"obsdesign sweep: all {res.runs} runs failed; the first (run {first['run']}): "
+                         f"{first['error']} ({str(out / 'montecarlo.json')!r})")
+    summary = make_summary([], [], metric=args.metric, resumed_runs=res.resumed_runs, wall_s=res.wall_s)
+    summary.update({"runs": res.runs, **res.counts})
+    atomic_write(out / "summary.json", json.dumps(summary, indent=1))
+    lo, hi = res.interval
+    print(json.dumps({**summary, "failures": res.failures, "failure_probability": res.failure_probability,
+                      "interval": [lo, hi], "confidence": res.confidence, "criteria": list(res.criteria)}))
     return 0
 
 
@@ -281,5 +351,13 @@ def add_commands(sub) -> None:
     again = p.add_mutually_exclusive_group()
     again.add_argument("--resume", action="store_true", help="finish an interrupted sweep in --out")
     again.add_argument("--force", action="store_true", help="replace the results of another sweep in --out")
-    p.add_argument("--metric", default="rms_error", help="metric for the best design (default rms_error)")
+    p.add_argument("--metric", default="rms_error",
+                   help="metric for the best design, or of the worst runs of a streamed study (default rms_error)")
+    p.add_argument("--stream", action="store_true",
+                   help=f"a Monte-Carlo study streamed to DIR/batches (default above {STREAM_ABOVE} samples "
+                        "without --vary): quantiles, failure probability, worst runs in DIR/montecarlo.json")
+    p.add_argument("--criterion", action="append", metavar="NAME<=LIMIT",
+                   help="pass criterion of a run in a streamed study, quoted for the shell (repeatable; also NAME>=LIMIT)")
+    p.add_argument("--batch", type=integer(1), help="runs per batch of a streamed study (default 200)")
+    p.add_argument("--worst", type=integer(1), help="worst runs kept by a streamed study (default 10)")
     p.set_defaults(run=_cmd_sweep)

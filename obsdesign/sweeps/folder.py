@@ -5,7 +5,7 @@
   the operating system when the process ends, however it ends.
 * **No silent overwrite.** A folder that holds results (``results.csv`` or ``sweep.json``)
   is refused unless the sweep resumes it (``resume=True``, same settings) or replaces it
-  (``force=True``, which also removes the old summary files).
+  (``force=True``, which also removes the old summary files and a streamed study's batch files).
 * **Resume.** ``sweep.json`` must exist, parse and equal the new sweep's settings (the keys
   that differ are named); every row of ``results.csv`` is checked against the plan
   (:func:`obsdesign.sweeps.store.read_rows`).
@@ -31,8 +31,8 @@ from typing import Any
 
 __all__ = ["SweepLock", "check_start", "read_manifest", "SUMMARY_FILES"]
 
-#: Files a finished sweep adds (removed by ``force``).
-SUMMARY_FILES = ("summary.json", "summary_map.svg", "summary_distributions.svg")
+#: Files a finished sweep adds (removed by ``force``); ``montecarlo.json``: a streamed study's.
+SUMMARY_FILES = ("summary.json", "summary_map.svg", "summary_distributions.svg", "montecarlo.json")
 
 
 class SweepLock:
@@ -92,6 +92,8 @@ def check_start(folder: Path, *, resume: bool, force: bool) -> None:
     if force:
         for name in (*SUMMARY_FILES, "results.csv", "sweep.json", ".checksums"):
             (folder / name).unlink(missing_ok=True)
+        for batch in folder.glob("batches/b*.npz"):  # a streamed study's (obsdesign.sweeps.montecarlo)
+            batch.unlink()
 
 
 def read_manifest(path: Path, expected: dict) -> None:

@@ -14,7 +14,6 @@ Examples
 from __future__ import annotations
 
 import dataclasses
-import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,7 +21,7 @@ import numpy as np
 from .._validate import FINITE, Integer, check_integer
 from ..params import PARAMETERS, SECTIONS
 
-__all__ = ["RunSpec", "make_plan", "check_names", "check_axes", "integer_fields", "MAX_RUNS"]
+__all__ = ["RunSpec", "make_plan", "plan_runs", "count_runs", "check_names", "check_axes", "integer_fields", "MAX_RUNS"]
 
 #: Most runs a sweep may plan (a plan holds one seed per run in memory).
 MAX_RUNS = 1_000_000
@@ -156,12 +155,69 @@ def check_axes(vary: dict, uncertain: dict, samples: int) -> tuple[dict, dict]:
         if hi < lo:
             raise ValueError(f"uncertain {name}: expected LO <= HI, found {lo:g} > {hi:g}")
         out_unc[name] = (lo, hi)
-    runs = samples
-    for _, _, n in out_vary.values():
-        runs *= n
+    runs = count_runs(out_vary, samples)
     if runs > MAX_RUNS:
         raise ValueError(f"vary, samples: expected at most {MAX_RUNS} runs in all, found {runs}")
     return out_vary, out_unc
+
+
+def count_runs(vary: dict, samples: int) -> int:
+    """Runs of a sweep: grid points (the product of the ``n`` of ``vary``) times ``samples``.
+
+    Parameters
+    ----------
+    vary : dict
+        ``{name: (low, high, n)}`` grid axes.
+    samples : int
+        Draws per grid point.
+
+    >>> count_runs({"rho": (1.0, 2.0, 3), "kappa": (1e5, 1e6, 2)}, 4)
+    24
+    """
+    runs = samples
+    for _, _, n in vary.values():
+        runs *= n
+    return runs
+
+
+def plan_runs(vary: dict, uncertain: dict, samples: int, seed: int, start: int, stop: int) -> list[RunSpec]:
+    """Runs ``start`` to ``stop - 1`` of the plan of :func:`make_plan`, built without the others.
+
+    Run ``r``'s seed sequence is ``SeedSequence(seed, spawn_key=(r,))``, which is the ``r``-th
+    child of ``SeedSequence(seed).spawn(n_runs)``; so a batch of a streamed Monte-Carlo study
+    (:mod:`obsdesign.sweeps.montecarlo`) gets the same draws in any worker, in any order, after
+    a resume, and the memory of the plan does not grow with the number of runs.
+
+    Parameters
+    ----------
+    vary, uncertain, samples, seed
+        As :func:`make_plan`.
+    start, stop : int
+        The range of run indices (``0 <= start <= stop <= count_runs(vary, samples)``).
+
+    Examples
+    --------
+    >>> full = make_plan({"rho": (1.0, 2.0, 2)}, {"Cf": (0.3, 0.4)}, samples=3, seed=5)
+    >>> plan_runs({"rho": (1.0, 2.0, 2)}, {"Cf": (0.3, 0.4)}, 3, 5, 2, 4) == full[2:4]
+    True
+    """
+    n_runs = count_runs(vary, samples)
+    if not 0 <= start <= stop <= n_runs:
+        raise ValueError(f"start, stop: expected 0 <= start <= stop <= {n_runs}, found {start}, {stop}")
+    axes = [np.linspace(lo, hi, n) for lo, hi, n in vary.values()]
+    shape = tuple(len(a) for a in axes)
+    ints = integer_fields()
+    plan = []
+    for r in range(start, stop):
+        g, j = divmod(r, samples)
+        index = np.unravel_index(g, shape) if shape else ()
+        child = np.random.SeedSequence(seed, spawn_key=(r,))
+        rng = np.random.default_rng(child)
+        params = {name: int(round(v)) if name.removeprefix("plant.") in ints else float(v)
+                  for name, v in zip(vary, (a[i] for a, i in zip(axes, index)))}
+        params.update({name: float(rng.uniform(lo, hi)) for name, (lo, hi) in uncertain.items()})
+        plan.append(RunSpec(r, g, j, int(child.generate_state(1, np.uint32)[0]), params))
+    return plan
 
 
 def make_plan(vary: dict, uncertain: dict, samples: int, seed: int) -> list[RunSpec]:
@@ -178,18 +234,4 @@ def make_plan(vary: dict, uncertain: dict, samples: int, seed: int) -> list[RunS
     seed : int
         Sweep seed.
     """
-    axes = [np.linspace(lo, hi, n) for lo, hi, n in vary.values()]
-    ints = integer_fields()
-    grid = list(itertools.product(*axes)) if axes else [()]
-    n_runs = len(grid) * samples
-    children = np.random.SeedSequence(seed).spawn(n_runs)
-    plan = []
-    for g, point in enumerate(grid):
-        for j in range(samples):
-            r = g * samples + j
-            rng = np.random.default_rng(children[r])
-            params = {name: int(round(v)) if name.removeprefix("plant.") in ints else float(v)
-                      for name, v in zip(vary, point)}
-            params.update({name: float(rng.uniform(lo, hi)) for name, (lo, hi) in uncertain.items()})
-            plan.append(RunSpec(r, g, j, int(children[r].generate_state(1, np.uint32)[0]), params))
-    return plan
+    return plan_runs(vary, uncertain, samples, seed, 0, count_runs(vary, samples))

@@ -39,6 +39,8 @@ DASK_CPU_SETTINGS = {
     "distributed.admin.system-monitor.interval": "5s",
 }
 
+_END = object()
+
 #: Seconds a Dask sweep waits with no worker in the cluster before it gives up.
 STALL_S = 60.0
 
@@ -162,11 +164,19 @@ class Executor:
             return max(1, sum(executor.nthreads().values()))
         return max(1, getattr(executor, "_max_workers", 1))
 
-    def map_batches(self, fn, batches):
-        """Results of ``fn(batch)`` as they complete (in this process: in order)."""
+    def map_batches(self, fn, batches, *, window: int | None = None):
+        """Results of ``fn(batch)`` as they complete (in this process: in order).
+
+        With ``window``, at most that many batches are submitted and not yet collected at any
+        time (``batches`` may then be a lazy iterable): the memory of a long study does not grow
+        with its number of batches.
+        """
         if self.pool is None:
             for batch in batches:
                 yield fn(batch)
+            return
+        if window is not None:
+            yield from self._windowed(fn, iter(batches), window)
             return
         self.futures = [self.pool.submit(fn, batch) for batch in batches]
         if self.dask:
@@ -174,6 +184,38 @@ class Executor:
             return
         for fut in concurrent.futures.as_completed(self.futures):
             yield fut.result()
+
+    def _windowed(self, fn, batches, window: int):
+        """Results as they complete, with at most ``window`` batches in flight."""
+        if self.dask:
+            from distributed import wait
+        else:
+            from concurrent.futures import wait
+        pending: set = set()
+        idle_since = None
+        while True:
+            while len(pending) < window:
+                batch = next(batches, _END)
+                if batch is _END:
+                    break
+                pending.add(self.pool.submit(fn, batch))
+            self.futures = list(pending)
+            if not pending:
+                return
+            try:
+                done, pending = wait(pending, timeout=2.0, return_when="FIRST_COMPLETED")
+            except TimeoutError:  # distributed's TimeoutError is the builtin one
+                done = set()
+            pending = set(pending)
+            for fut in done:
+                yield fut.result()
+            if not self.dask or done or self.pool.nthreads():
+                idle_since = None
+            elif idle_since is None:
+                idle_since = time.monotonic()
+            elif time.monotonic() - idle_since > STALL_S:
+                raise NoWorkersError(f"the Dask cluster has had no worker for {STALL_S:g} s with "
+                                     f"{len(pending)} batches pending")
 
     def _dask_results(self):
         """Results as they complete; ``NoWorkersError`` when the cluster stays without workers."""
