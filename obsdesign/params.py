@@ -139,6 +139,10 @@ class ObserverSpec:
             raise ValueError(f"observer.dt: expected a sample time in [1e-12, 1] s, found {self.dt!r}")
 
 
+#: The choices of ``[pid] design`` (:func:`obsdesign.design.pid.resolve_pid` resolves them).
+PID_DESIGNS = ("auto", "paper", "sampled")
+
+
 @document_fields
 @dataclass(frozen=True, kw_only=True)
 class PIDSpec:
@@ -164,6 +168,11 @@ class PIDSpec:
     )
     derivative_N: float = param_field(
         DERIVATIVE_N, "-", "derivative filter: time constant (kd/kp)/N in simulations (0.1 to 1e4)", 10.0
+    )
+    design: str = param_field(
+        Choice(PID_DESIGNS), "-",
+        "gains: the paper's rule, tuned on the sampled loop with the delay, or auto (sampled where the paper's "
+        "loses more than 3 deg of phase margin there)", "auto"
     )
 
     def __post_init__(self) -> None:

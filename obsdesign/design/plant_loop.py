@@ -212,9 +212,7 @@ def plant_loop(cfg: Config, *, regime: str = "sliding", delay_samples: int | Non
     d = cfg.hardware.delay_samples if delay_samples is None else check_integer("delay_samples", delay_samples, minimum=0,
                                                                                       maximum=MAX_DELAY_SAMPLES)
     dt = cfg.observer.dt
-    kp, ki, kd, tau_d = sampled_pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
-                                          phase_margin_deg=cfg.pid.phase_margin_deg,
-                                          derivative_N=cfg.pid.derivative_N)
+    kp, ki, kd, tau_d = sampled_pid_gains(cfg)
     num, den = _plant_coefficients(cfg, regime)
     args = (kp, ki, kd, tau_d, dt, d, tuple(num), tuple(den))
     # python-control's numbers kept on disk like the sampled loop's (a warm `loop` imports no python-control);

@@ -316,8 +316,7 @@ def sampled_loop(cfg: Config, *, delay_samples: int | None = None) -> SampledLoo
     d = cfg.hardware.delay_samples if delay_samples is None else check_integer("delay_samples", delay_samples, minimum=0,
                                                                                       maximum=MAX_DELAY_SAMPLES)
     dt, N = cfg.observer.dt, cfg.pid.derivative_N
-    kp, ki, kd, tau_d = sampled_pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
-                                          phase_margin_deg=cfg.pid.phase_margin_deg, derivative_N=N)
+    kp, ki, kd, tau_d = sampled_pid_gains(cfg)
     args = (kp, ki, kd, tau_d, dt, cfg.phi, cfg.pid.tau, d)
     numbers = memo("sampled_loop", args, lambda: _numbers(*args), valid=list_of(17),
                    verify=lambda value: _verify(args, value))
