@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     import control as ct
 
 __all__ = ["PIDDesign", "PIDChoice", "DESIGNS", "AUTO_THRESHOLD_DEG", "design_pid", "pid_gains", "sampled_pid_gains",
-           "derivative_time", "sampled_phase_margin", "delta_loop_polynomials", "resolve_pid", "pid_from_config", "pid_from_gains", "peak_magnitude",
+           "derivative_time", "sampled_phase_margin", "delta_loop_polynomials", "resolve_pid", "PIDDesigns", "pid_designs", "pid_from_config", "pid_from_gains", "peak_magnitude",
            "lazy_system", "kept_response", "loop_polynomials", "check_margins", "check_peak"]
 
 
@@ -626,11 +626,11 @@ def _resolve(phi: float, tau: float, max_S: float, pm: float, N: float, dt: floa
                                                   delay_samples=d)
     paper_pm = paper_pm if paper_stable else -math.inf
     cost = pm - paper_pm
-    where = f"dt = {dt:g} s, delay {d} samples, derivative filter N = {N:g}"
+    has = (f"the paper's design has {paper_pm:.2f} deg" if math.isfinite(paper_pm)
+           else "the paper's design is unstable") + (f" on the sampled loop (dt = {dt:g} s, delay {d} samples, "
+                                                       f"derivative filter N = {N:g}), target {pm:g} deg")
     if setting == "paper" or (setting == "auto" and cost <= AUTO_THRESHOLD_DEG):
-        why = ("[pid] design = 'paper'" if setting == "paper" else
-               f"auto: the loop that runs ({where}) costs the paper's design {cost:.2f} deg of phase margin, "
-               f"within {AUTO_THRESHOLD_DEG:g} deg")
+        why = "[pid] design = 'paper'" if setting == "paper" else f"auto: {has}: within {AUTO_THRESHOLD_DEG:g} deg"
         return ("paper", why, k0, T0, pm, paper_pm, paper_pm)
     k, T_I, design, got = memo("pid_sampled", (phi, tau, max_S, pm, N, dt, d),
                                lambda: _sampled_search(phi, tau, max_S, pm, N, dt, d),
@@ -638,8 +638,7 @@ def _resolve(phi: float, tau: float, max_S: float, pm: float, N: float, dt: floa
                                and all(isinstance(x, float) for x in v))
     lost = "" if k == k0 else f"; k lowered to {k / k0:.3g} of 1/max_S"
     why = ("[pid] design = 'sampled'" if setting == "sampled" else
-           f"auto: the loop that runs ({where}) costs the paper's design {cost:.2f} deg of phase margin, "
-           f"more than {AUTO_THRESHOLD_DEG:g} deg") + lost
+           f"auto: {has}: more than {AUTO_THRESHOLD_DEG:g} deg lost") + lost
     return ("sampled", why, k, T_I, design, paper_pm, got)
 
 
@@ -762,6 +761,95 @@ def pid_from_config(cfg: Config, *, design: str | None = None) -> PIDDesign:
     else:
         pid = _build(c.k, c.T_I, float(cfg.pid.tau), float(cfg.phi), c.design_phase_margin_deg)
     return dataclasses.replace(pid, design=c.design, reason=c.reason)
+
+
+@dataclass(frozen=True, kw_only=True)
+class PIDDesigns(ResultDisplay):
+    """Both PID designs of a config on the sampled loop with the delay, and the one the config carries.
+
+    Attributes
+    ----------
+    carried : PIDDesign
+        The design the config carries (:func:`pid_from_config`), verified by python-control.
+    paper, sampled : PIDChoice or None
+        The paper's rule and the sampled design (``None``: no sampled design meets the target, see ``note``).
+    dt : float
+        Sample time [s].
+    delay_samples : int
+        The drive's delay [samples].
+    target_deg : float
+        The config's phase margin ``pid.phase_margin_deg`` [deg].
+    note : str
+        Why there is no sampled design ("" when there is).
+    """
+
+    _title = "Sensitivity-based PID: the paper's rule and the sampled design"
+    carried: PIDDesign
+    paper: PIDChoice
+    sampled: PIDChoice | None
+    dt: float
+    delay_samples: int
+    target_deg: float
+    note: str = ""
+
+    def to_dict(self) -> dict:
+        """JSON-ready values: the carried design's keys of :meth:`PIDDesign.to_dict`, ``paper`` and ``sampled``."""
+        def one(c: PIDChoice | None):
+            if c is None:
+                return None
+            pm = c.sampled_pm_deg
+            return {"k": c.k, "T_I": c.T_I, "kp": c.kp, "ki": c.ki, "kd": c.kd, "tau_d": c.tau_d,
+                    "design_phase_margin_deg": c.design_phase_margin_deg,
+                    "sampled_phase_margin_deg": pm if math.isfinite(pm) else None}
+
+        return {**self.carried.to_dict(), "setting": self.paper.setting, "dt": self.dt,
+                "delay_samples": self.delay_samples, "target_phase_margin_deg": self.target_deg,
+                "paper": one(self.paper), "sampled": one(self.sampled), "note": self.note}
+
+    def _rows(self):
+        rows = list(self.carried._rows())
+        where = f"dt = {self.dt:g} s, delay {self.delay_samples} samples"
+        for name, c in (("paper", self.paper), ("sampled", self.sampled)):
+            if c is None:
+                rows.append((f"{name}: no design", self.note))
+                continue
+            rows += [(f"{name}: kp [V/m] / ki [V/(m s)] / kd [V s/m]", f"{c.kp:.6g} / {c.ki:.6g} / {c.kd:.6g}"),
+                     (f"{name}: k [V/m] / T_I [s]", f"{c.k:.6g} / {c.T_I:.6g}"),
+                     (f"{name}: phase margin on the sampled loop ({where}) [deg]",
+                      f"{c.sampled_pm_deg:.4g} (target {self.target_deg:g})")]
+        rows.append(("carried by the config", f"{self.carried.design} ([pid] design = {self.paper.setting!r})"))
+        return rows
+
+
+def pid_designs(cfg: Config) -> PIDDesigns:
+    """The paper's and the sampled PID of ``cfg`` on its sampled loop, and the one it carries (``obsdesign pid``).
+
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+
+    Returns
+    -------
+    PIDDesigns
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> d = pid_designs(od.load_preset("vcm").override(delay_samples=1))
+    >>> d.carried.design, round(d.paper.sampled_pm_deg, 2), round(d.sampled.sampled_pm_deg, 2)
+    ('paper', 59.91, 60.0)
+    """
+    carried = pid_from_config(cfg)
+    paper = resolve_pid(cfg, design="paper")
+    paper = dataclasses.replace(paper, setting=cfg.pid.design)
+    sampled, note = None, ""
+    try:
+        sampled = dataclasses.replace(resolve_pid(cfg, design="sampled"), setting=cfg.pid.design)
+    except ValueError as exc:
+        note = str(exc)
+    return PIDDesigns(carried=carried, paper=paper, sampled=sampled, dt=cfg.observer.dt,
+                      delay_samples=cfg.hardware.delay_samples, target_deg=cfg.pid.phase_margin_deg, note=note)
 
 
 def pid_from_gains(*, kp: float, ki: float, kd: float, phi: float) -> PIDDesign:
