@@ -174,7 +174,7 @@ def cfg_files(tmp_path_factory):
 @pytest.mark.parametrize("d", [0, 1])
 def test_loop_json_agrees_with_an_independent_sampled_loop(cfg_files, name, d):
     flags = cfg_files[name]
-    code, out, _ = run("pid", *flags, "--json")
+    code, out, _ = run("pid", *flags, "--delay", d, "--json")  # the PID the config carries for this delay
     gains = json.loads(out)
     code, out, err = run("loop", *flags, "--delay", d, "--json")
     assert code == 0 and err == ""
