@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     import control as ct
 
 __all__ = ["PIDDesign", "PIDChoice", "DESIGNS", "AUTO_THRESHOLD_DEG", "design_pid", "pid_gains", "sampled_pid_gains",
-           "derivative_time", "sampled_phase_margin", "delta_loop_polynomials", "resolve_pid", "PIDDesigns", "pid_designs", "pid_from_config", "pid_from_gains", "peak_magnitude",
+           "derivative_time", "sampled_phase_margin", "sampled_crossover", "delta_loop_polynomials", "resolve_pid", "PIDDesigns", "pid_designs", "pid_from_config", "pid_from_gains", "peak_magnitude",
            "lazy_system", "kept_response", "loop_polynomials", "check_margins", "check_peak"]
 
 
@@ -507,6 +507,31 @@ def sampled_phase_margin(*, k: float, T_I: float, tau: float, phi: float, deriva
     return float(pm), bool(np.all(2.0 * poles.real + np.abs(poles) ** 2 < 0.0))
 
 
+def sampled_crossover(*, k: float, T_I: float, tau: float, phi: float, derivative_N: float, dt: float,
+                      delay_samples: int) -> float:
+    """The gain crossover [rad/s] of :func:`sampled_phase_margin`'s loop with the smallest margin (``nan``: none).
+
+    Parameters
+    ----------
+    k, T_I, tau, phi, derivative_N, dt : float
+        As in :func:`sampled_phase_margin`.
+    delay_samples : int
+        The drive's delay [samples].
+
+    >>> w = sampled_crossover(k=400.0, T_I=0.092140, tau=0.006675, phi=0.0407, derivative_N=10.0, dt=1e-4,
+    ...                       delay_samples=0)
+    >>> round(w, 1)
+    18.8
+    """
+    from .margins import gain_crossovers
+
+    kp, ki, kd = k * (T_I + tau) / T_I, k / T_I, k * tau  # eq:PIDparams
+    num, den = delta_loop_polynomials(kp, ki, kd, derivative_time(kp, kd, derivative_N), dt, phi, tau,
+                                      delay_samples)
+    found = gain_crossovers(num, den, dt, delta=True)
+    return float(min(found)[1]) if found else math.nan
+
+
 def _ramp_remainder(x: float) -> float:
     """``x - (1 - exp(-x))`` without the cancellation at small ``x`` (its series below 0.1)."""
     if x >= 0.1:
@@ -636,7 +661,12 @@ def _resolve(phi: float, tau: float, max_S: float, pm: float, N: float, dt: floa
                                lambda: _sampled_search(phi, tau, max_S, pm, N, dt, d),
                                valid=lambda v: isinstance(v, list) and len(v) == 4
                                and all(isinstance(x, float) for x in v))
-    lost = "" if k == k0 else f"; k lowered to {k / k0:.3g} of 1/max_S"
+    lost = ""
+    if k != k0:
+        w0, w1 = (sampled_crossover(k=x, T_I=y, tau=tau, phi=phi, derivative_N=N, dt=dt, delay_samples=d)
+                  for x, y in ((k0, T0), (k, T_I)))
+        lost = (f"; k lowered to {k / k0:.3g} of 1/max_S, the crossover from {w0:.4g} to {w1:.4g} rad/s (a "
+                f"{pm:g} deg margin is out of this PID's reach at the paper's crossover: see docs/delay.md)")
     why = ("[pid] design = 'sampled'" if setting == "sampled" else
            f"auto: {has}: more than {AUTO_THRESHOLD_DEG:g} deg lost") + lost
     return ("sampled", why, k, T_I, design, paper_pm, got)
