@@ -581,7 +581,7 @@ def delta_loop_polynomials(kp: float, ki: float, kd: float, tau_d: float, dt: fl
     num_C = (kp * np.polymul(dl, dla) + ki * dt * np.polymul([1.0, 1.0], dla)
              + kd * ca / dt * np.polymul(dl, dl))
     num_H = phi * np.array([b1, dt * ce])
-    den = np.polymul(np.polymul(dl, dla), np.polymul(dl, dle))
+    den: np.ndarray = np.polymul(np.polymul(dl, dla), np.polymul(dl, dle))
     for _ in range(d):
         den = np.polymul(den, [1.0, 1.0])
     return np.polymul(num_C, num_H), den
@@ -622,7 +622,7 @@ def _sampled_search(phi: float, tau: float, max_S: float, pm: float, N: float, d
             return [k0, _rule(k0, phi, design), design, margin(k0, design, 20001)]
     # 2. the gain lowered: for each design margin the largest k = 10^(-i/10) / max_S that meets the target; for
     # the design margins with the largest, k bisected to the target; the largest k (the smaller margin of a tie)
-    steps, tied = 61, []
+    steps, tied = 61, list[float]()
     for design in grid:
         for i in range(1, steps + 1):
             if margin(10.0 ** (-i / 10.0) * k0, design) >= pm:
