@@ -46,6 +46,7 @@ __all__ = ["PlantParams", "FrictionParams", "SensorSpec", "ObserverSpec", "PIDSp
            "AxisSpec", "Config", "load_preset", "read_config", "preset_names", "VARIANTS", "PARAMETERS", "SECTIONS", "FieldRow"]
 
 VARIANTS = ("lag", "static")
+PID_DESIGNS = ("auto", "paper", "sampled")  #: ``[pid] design`` (:func:`obsdesign.design.pid.resolve_pid`)
 
 
 @document_fields
@@ -139,10 +140,6 @@ class ObserverSpec:
             raise ValueError(f"observer.dt: expected a sample time in [1e-12, 1] s, found {self.dt!r}")
 
 
-#: The choices of ``[pid] design`` (:func:`obsdesign.design.pid.resolve_pid` resolves them).
-PID_DESIGNS = ("auto", "paper", "sampled")
-
-
 @document_fields
 @dataclass(frozen=True, kw_only=True)
 class PIDSpec:
@@ -159,21 +156,15 @@ class PIDSpec:
 
     _section = "pid"
     max_S: float = param_field(POSITIVE, "m/V", "upper bound of |S| (eq:pidGain)")
-    phase_margin_deg: float = param_field(
-        Range(low=0.0, high=90.0), "deg", "phase margin Phi at crossover (eq:L_omegas)"
-    )
+    phase_margin_deg: float = param_field(Range(low=0.0, high=90.0), "deg", "phase margin Phi at crossover (eq:L_omegas)")
     tau: float = param_field(POSITIVE, "s", "plant time constant of eq:linplant")
     phi: float | None = param_field(
         Range(low=0.0, optional=True), "m/(V s)", "plant gain of eq:linplant (default K tau / m)", None
     )
-    derivative_N: float = param_field(
-        DERIVATIVE_N, "-", "derivative filter: time constant (kd/kp)/N in simulations (0.1 to 1e4)", 10.0
-    )
-    design: str = param_field(
-        Choice(PID_DESIGNS), "-",
-        "gains: the paper's rule, tuned on the sampled loop with the delay, or auto (sampled where the paper's "
-        "loses more than 3 deg of phase margin there)", "auto"
-    )
+    derivative_N: float = param_field(DERIVATIVE_N, "-", "derivative filter: time constant (kd/kp)/N in simulations "
+                                      "(0.1 to 1e4)", 10.0)
+    design: str = param_field(Choice(PID_DESIGNS), "-", "gains: the paper's rule, tuned on the sampled loop with the "
+                              "delay, or auto (sampled where the paper's loses > 3 deg there)", "auto")
 
     def __post_init__(self) -> None:
         validate_fields(self)
@@ -286,7 +277,7 @@ class Config:
         >>> load_preset("table1").override(mass=1.0)
         Traceback (most recent call last):
         ...
-        ValueError: override: unknown parameter 'mass'; expected one of Cf, G, K, beta, buildup, deadzone, delay_samples, derivative_N, dt, ff_offset, ff_presliding, ff_stribeck, ff_stribeck_velocity, gain, kappa, lookahead, m, max_S, mode, noise_bandwidth, noise_rms, omega_co, phase_margin_deg, phi, quantization, rho, s, sigma, tau, u_max, variant, viscous
+        ValueError: override: unknown parameter 'mass'; expected one of Cf, G, K, beta, buildup, deadzone, delay_samples, derivative_N, design, dt, ff_offset, ff_presliding, ff_stribeck, ff_stribeck_velocity, gain, kappa, lookahead, m, max_S, mode, noise_bandwidth, noise_rms, omega_co, phase_margin_deg, phi, quantization, rho, s, sigma, tau, u_max, variant, viscous
         """
         changes: dict[str, dict[str, Any]] = {}
         for name, value in values.items():

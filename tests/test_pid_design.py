@@ -18,7 +18,8 @@ import pytest
 import obsdesign as od
 from obsdesign.axis import AxisSpec
 from obsdesign.cli import main
-from obsdesign.design.pid import pid_from_config, resolve_pid, sampled_pid_gains
+from obsdesign.design.pid import pid_from_config
+from obsdesign.design.pid_sampled import resolve_pid, sampled_pid_gains
 from obsdesign.sampled.controller import sampled_controller
 
 

@@ -51,7 +51,7 @@ def compensated_loop(cfg: Config, est, gain: float) -> tuple[float, bool, float]
     from ..estimators import noise_level
 
     dt, d, K = cfg.observer.dt, cfg.hardware.delay_samples, cfg.plant.K
-    from .pid import sampled_pid_gains
+    from .pid_sampled import sampled_pid_gains
 
     C, H = _pid_and_plant(*sampled_pid_gains(cfg), cfg.phi, cfg.pid.tau, dt)
     Gy = est.transfer_from_measurement()[1, 0]

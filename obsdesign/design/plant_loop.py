@@ -45,7 +45,7 @@ from .._display import ResultDisplay
 from .._memo import memo
 from .._validate import MAX_DELAY_SAMPLES, Choice, check_integer
 from ..params import Config
-from .pid import sampled_pid_gains
+from .pid_sampled import sampled_pid_gains
 from .margins import closed_loop, loop_margins
 from .sampled_loop import discrete_peak, discrete_pid
 
@@ -344,7 +344,7 @@ def loop_margins_of(cfg: Config) -> LoopMargins:
     >>> round(lm.model.phase_margin_deg, 2), round(lm.simulated["sliding"].phase_margin_deg, 2)
     (60.02, 44.07)
     """
-    from .pid import resolve_pid
+    from .pid_sampled import resolve_pid
     from .sampled_loop import sampled_loop
 
     return LoopMargins(design=resolve_pid(cfg).design, model=sampled_loop(cfg), simulated=plant_loops(cfg))

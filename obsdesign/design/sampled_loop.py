@@ -49,7 +49,8 @@ from .._memo import list_of, memo
 from .._validate import MAX_DELAY_SAMPLES, POSITIVE, check_integer
 from ..params import Config
 from .margins import closed_loop, loop_margins as _margins
-from .pid import lazy_system, sampled_pid_gains
+from .pid import lazy_system
+from .pid_sampled import sampled_pid_gains
 
 if TYPE_CHECKING:
     import control as ct

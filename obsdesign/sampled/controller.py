@@ -348,7 +348,7 @@ def sampled_controller(cfg: Config, *, controller: str = "pid+observer", schedul
     if controller == "open-loop":
         kp = ki = kd = tau_d = 0.0
     else:
-        from ..design.pid import sampled_pid_gains
+        from ..design.pid_sampled import sampled_pid_gains
 
         kp, ki, kd, tau_d = sampled_pid_gains(cfg)
     compensation = cfg.compensation if controller == "pid+observer" else CompensationSpec()
