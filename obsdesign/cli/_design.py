@@ -64,7 +64,7 @@ def _loop_margins(cfg):
 
 
 def _cmd_pid(args: argparse.Namespace) -> int:
-    from ..design.pid_sampled import pid_designs
+    from ..design.pid_report import pid_designs
 
     cfg = load(args)
     with finite_design(args, ("phi", "tau", "max_s", "phase_margin")):

@@ -30,6 +30,7 @@ from .._display import ResultDisplay
 from .._memo import memo
 from .._validate import POSITIVE, Range
 from ..params import Config
+from .pid_sampled import pid_gains, resolve_pid
 
 if TYPE_CHECKING:
     import control as ct
@@ -116,7 +117,6 @@ def kept_response(result, name: str, w) -> np.ndarray:
 
 
 _POS = POSITIVE
-_PHASE = Range(low=0.0, high=90.0)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -417,33 +417,6 @@ def design_pid(*, phi: float, tau: float, max_S: float, phase_margin_deg: float)
     return _build(k, T_I, float(tau), float(phi), float(phase_margin_deg))
 
 
-def pid_gains(*, phi: float, tau: float, max_S: float, phase_margin_deg: float) -> tuple[float, ...]:
-    """``(k, T_I, kp, ki, kd)`` of the design rule alone, without the python-control verification.
-
-    Parameters
-    ----------
-    phi : float
-        Plant gain [m/(V s)].
-    tau : float
-        Plant time constant [s].
-    max_S : float
-        Bound of |S| [m/V].
-    phase_margin_deg : float
-        Phase margin [deg], in (0, 90).
-
-    >>> [round(x, 4) for x in pid_gains(phi=0.0407, tau=0.006675, max_S=1/400, phase_margin_deg=60.0)]
-    [400.0, 0.0921, 428.9784, 4341.3333, 2.67]
-    """
-    phi = _POS.check("phi", phi)
-    tau = _POS.check("tau", tau)
-    max_S = _POS.check("max_S", max_S)
-    pm = _PHASE.check("phase_margin_deg", phase_margin_deg)
-    k = 1.0 / max_S  # eq:pidGain
-    t2 = math.tan(math.radians(pm)) ** 2
-    T_I = t2 / (k * phi * math.sqrt(1.0 + t2))  # eq:pidTime
-    return k, T_I, k * (T_I + tau) / T_I, k / T_I, k * tau  # eq:PIDparams
-
-
 def pid_from_config(cfg: Config, *, design: str | None = None) -> PIDDesign:
     """The PID the config carries (:func:`~obsdesign.design.pid_sampled.resolve_pid`), verified by python-control.
 
@@ -454,8 +427,6 @@ def pid_from_config(cfg: Config, *, design: str | None = None) -> PIDDesign:
     design : str, optional
         ``"auto"``, ``"paper"`` or ``"sampled"`` instead of ``cfg.pid.design``.
     """
-    from .pid_sampled import resolve_pid
-
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
     c = resolve_pid(cfg, design=design)

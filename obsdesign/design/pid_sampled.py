@@ -1,6 +1,6 @@
 """The PID designed for the loop that runs: ``[pid] design = auto | paper | sampled`` resolved in one place.
 
-``paper`` is the rule of section 4.1 (:func:`~obsdesign.design.pid.pid_gains`) on the continuous design model
+``paper`` is the rule of section 4.1 (:func:`pid_gains`) on the continuous design model
 eq:linplant. ``sampled`` keeps its structure (``k``, ``T_I``, ``kd = k tau``, ``ki = k / T_I``,
 ``kp = k (T_I + tau) / T_I``, the kernel's derivative filter) and chooses the gains so that the sampled loop of
 :mod:`obsdesign.design.sampled_loop` (ZOH of the design model, the derivative filter, the drive's delay
@@ -28,14 +28,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._display import ResultDisplay
 from .._memo import memo
-from .._validate import Choice
+from .._validate import POSITIVE, Choice, Range
 from ..params import PID_DESIGNS, Config
-from .pid import PIDDesign, pid_from_config, pid_gains
 
-__all__ = ["DESIGNS", "AUTO_THRESHOLD_DEG", "PIDChoice", "resolve_pid", "sampled_pid_gains", "derivative_time",
-           "PIDDesigns", "pid_designs",
+__all__ = ["DESIGNS", "AUTO_THRESHOLD_DEG", "PIDChoice", "resolve_pid", "pid_gains", "sampled_pid_gains",
+           "derivative_time",
            "sampled_phase_margin", "sampled_crossover", "delta_loop_polynomials"]
 
 #: The choices of ``[pid] design``: the paper's rule, the sampled design, or the sampled design where the
@@ -43,6 +41,36 @@ __all__ = ["DESIGNS", "AUTO_THRESHOLD_DEG", "PIDChoice", "resolve_pid", "sampled
 DESIGNS = PID_DESIGNS
 #: Phase margin [deg] the sampled loop may lose against the paper's design before ``auto`` picks ``sampled``.
 AUTO_THRESHOLD_DEG = 3.0
+
+
+_POS, _PHASE = POSITIVE, Range(low=0.0, high=90.0)
+
+
+def pid_gains(*, phi: float, tau: float, max_S: float, phase_margin_deg: float) -> tuple[float, ...]:
+    """``(k, T_I, kp, ki, kd)`` of the design rule alone, without the python-control verification.
+
+    Parameters
+    ----------
+    phi : float
+        Plant gain [m/(V s)].
+    tau : float
+        Plant time constant [s].
+    max_S : float
+        Bound of |S| [m/V].
+    phase_margin_deg : float
+        Phase margin [deg], in (0, 90).
+
+    >>> [round(x, 4) for x in pid_gains(phi=0.0407, tau=0.006675, max_S=1/400, phase_margin_deg=60.0)]
+    [400.0, 0.0921, 428.9784, 4341.3333, 2.67]
+    """
+    phi = _POS.check("phi", phi)
+    tau = _POS.check("tau", tau)
+    max_S = _POS.check("max_S", max_S)
+    pm = _PHASE.check("phase_margin_deg", phase_margin_deg)
+    k = 1.0 / max_S  # eq:pidGain
+    t2 = math.tan(math.radians(pm)) ** 2
+    T_I = t2 / (k * phi * math.sqrt(1.0 + t2))  # eq:pidTime
+    return k, T_I, k * (T_I + tau) / T_I, k / T_I, k * tau  # eq:PIDparams
 
 
 def derivative_time(kp: float, kd: float, derivative_N: float) -> float:
@@ -198,7 +226,7 @@ def delta_loop_polynomials(kp: float, ki: float, kd: float, tau_d: float, dt: fl
 
 
 def _rule(k: float, phi: float, pm_deg: float) -> float:
-    """``T_I`` of eq:pidTime (:func:`~obsdesign.design.pid.pid_gains`) for the gain ``k`` and the design margin."""
+    """``T_I`` of eq:pidTime (:func:`pid_gains`) for the gain ``k`` and the design margin."""
     return pid_gains(phi=phi, tau=1.0, max_S=1.0 / k, phase_margin_deg=pm_deg)[1]
 
 
@@ -256,6 +284,11 @@ def _resolve(phi: float, tau: float, max_S: float, pm: float, N: float, dt: floa
     """``(design, reason, k, T_I, design margin, paper's sampled margin, carried design's sampled margin)``."""
     k0 = 1.0 / max_S
     T0 = _rule(k0, phi, pm)
+    kp0 = k0 * (T0 + tau) / T0
+    tau_d0 = derivative_time(kp0, k0 * tau, N) if math.isfinite(kp0) else math.nan
+    if not all(math.isfinite(x) and x > 0 for x in (k0, T0, kp0, k0 / T0, k0 * tau, tau_d0, dt / tau_d0, dt / tau)):
+        raise OverflowError(f"pid: the paper's PID is not finite (k = {k0:g}, T_I = {T0:g}, kp = {kp0:g}, "
+                            f"tau_d = {tau_d0:g} s)")
     paper_pm, paper_stable = sampled_phase_margin(k=k0, T_I=T0, tau=tau, phi=phi, derivative_N=N, dt=dt,
                                                   delay_samples=d)
     paper_pm = paper_pm if paper_stable else -math.inf
@@ -266,10 +299,16 @@ def _resolve(phi: float, tau: float, max_S: float, pm: float, N: float, dt: floa
     if setting == "paper" or (setting == "auto" and cost <= AUTO_THRESHOLD_DEG):
         why = "[pid] design = 'paper'" if setting == "paper" else f"auto: {has}: within {AUTO_THRESHOLD_DEG:g} deg"
         return ("paper", why, k0, T0, pm, paper_pm, paper_pm)
-    k, T_I, design, got = memo("pid_sampled", (phi, tau, max_S, pm, N, dt, d),
-                               lambda: _sampled_search(phi, tau, max_S, pm, N, dt, d),
-                               valid=lambda v: isinstance(v, list) and len(v) == 4
-                               and all(isinstance(x, float) for x in v))
+    try:
+        k, T_I, design, got = memo("pid_sampled", (phi, tau, max_S, pm, N, dt, d),
+                                   lambda: _sampled_search(phi, tau, max_S, pm, N, dt, d),
+                                   valid=lambda v: isinstance(v, list) and len(v) == 4
+                                   and all(isinstance(x, float) for x in v))
+    except ValueError as exc:
+        if setting == "sampled":
+            raise
+        return ("paper", f"auto: {has}, and {str(exc).removeprefix('pid.design: ').split(';')[0]}: kept the "
+                f"paper's", k0, T0, pm, paper_pm, paper_pm)
     lost = ""
     if k != k0:
         w0, w1 = (sampled_crossover(k=x, T_I=y, tau=tau, phi=phi, derivative_N=N, dt=dt, delay_samples=d)
@@ -362,92 +401,3 @@ def resolve_pid(cfg: Config, *, design: str | None = None) -> PIDChoice:
     return PIDChoice(setting=setting, design=chosen, reason=reason, k=k, T_I=T_I, design_phase_margin_deg=design_pm,
                      kp=kp, ki=ki, kd=kd, tau_d=derivative_time(kp, kd, N), paper_sampled_pm_deg=paper_pm,
                      sampled_pm_deg=got)
-
-
-@dataclass(frozen=True, kw_only=True)
-class PIDDesigns(ResultDisplay):
-    """Both PID designs of a config on the sampled loop with the delay, and the one the config carries.
-
-    Attributes
-    ----------
-    carried : PIDDesign
-        The design the config carries (:func:`pid_from_config`), verified by python-control.
-    paper, sampled : PIDChoice or None
-        The paper's rule and the sampled design (``None``: no sampled design meets the target, see ``note``).
-    dt : float
-        Sample time [s].
-    delay_samples : int
-        The drive's delay [samples].
-    target_deg : float
-        The config's phase margin ``pid.phase_margin_deg`` [deg].
-    note : str
-        Why there is no sampled design ("" when there is).
-    """
-
-    _title = "Sensitivity-based PID: the paper's rule and the sampled design"
-    carried: PIDDesign
-    paper: PIDChoice
-    sampled: PIDChoice | None
-    dt: float
-    delay_samples: int
-    target_deg: float
-    note: str = ""
-
-    def to_dict(self) -> dict:
-        """JSON-ready values: the carried design's keys of :meth:`PIDDesign.to_dict`, ``paper`` and ``sampled``."""
-        def one(c: PIDChoice | None):
-            if c is None:
-                return None
-            pm = c.sampled_pm_deg
-            return {"k": c.k, "T_I": c.T_I, "kp": c.kp, "ki": c.ki, "kd": c.kd, "tau_d": c.tau_d,
-                    "design_phase_margin_deg": c.design_phase_margin_deg,
-                    "sampled_phase_margin_deg": pm if math.isfinite(pm) else None}
-
-        return {**self.carried.to_dict(), "setting": self.paper.setting, "dt": self.dt,
-                "delay_samples": self.delay_samples, "target_phase_margin_deg": self.target_deg,
-                "paper": one(self.paper), "sampled": one(self.sampled), "note": self.note}
-
-    def _rows(self):
-        rows = list(self.carried._rows())
-        where = f"dt = {self.dt:g} s, delay {self.delay_samples} samples"
-        for name, c in (("paper", self.paper), ("sampled", self.sampled)):
-            if c is None:
-                rows.append((f"{name}: no design", self.note))
-                continue
-            rows += [(f"{name}: kp [V/m] / ki [V/(m s)] / kd [V s/m]", f"{c.kp:.6g} / {c.ki:.6g} / {c.kd:.6g}"),
-                     (f"{name}: k [V/m] / T_I [s]", f"{c.k:.6g} / {c.T_I:.6g}"),
-                     (f"{name}: phase margin on the sampled loop ({where}) [deg]",
-                      f"{c.sampled_pm_deg:.4g} (target {self.target_deg:g})")]
-        rows.append(("carried by the config", f"{self.carried.design} ([pid] design = {self.paper.setting!r})"))
-        return rows
-
-
-def pid_designs(cfg: Config) -> PIDDesigns:
-    """The paper's and the sampled PID of ``cfg`` on its sampled loop, and the one it carries (``obsdesign pid``).
-
-    Parameters
-    ----------
-    cfg : Config
-        The design.
-
-    Returns
-    -------
-    PIDDesigns
-
-    Examples
-    --------
-    >>> import obsdesign as od
-    >>> d = pid_designs(od.load_preset("vcm").override(delay_samples=1))
-    >>> d.carried.design, round(d.paper.sampled_pm_deg, 2), round(d.sampled.sampled_pm_deg, 2)
-    ('paper', 59.91, 60.0)
-    """
-    carried = pid_from_config(cfg)
-    paper = resolve_pid(cfg, design="paper")
-    paper = dataclasses.replace(paper, setting=cfg.pid.design)
-    sampled, note = None, ""
-    try:
-        sampled = dataclasses.replace(resolve_pid(cfg, design="sampled"), setting=cfg.pid.design)
-    except ValueError as exc:
-        note = str(exc)
-    return PIDDesigns(carried=carried, paper=paper, sampled=sampled, dt=cfg.observer.dt,
-                      delay_samples=cfg.hardware.delay_samples, target_deg=cfg.pid.phase_margin_deg, note=note)

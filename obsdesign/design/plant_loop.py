@@ -185,7 +185,8 @@ def plant_loop(cfg: Config, *, regime: str = "sliding", delay_samples: int | Non
     regime : str
         One of :data:`REGIMES`.
     delay_samples : int, optional
-        The drive's delay [samples] (>= 0); default ``cfg.hardware.delay_samples``.
+        The drive's delay [samples] (>= 0); default ``cfg.hardware.delay_samples`` (the PID stays the one the
+        config carries for its own delay).
 
     Returns
     -------

@@ -291,7 +291,9 @@ def sampled_loop(cfg: Config, *, delay_samples: int | None = None) -> SampledLoo
     cfg : Config
         The design: ``pid`` section, ``phi``, ``observer.dt``, ``pid.derivative_N``.
     delay_samples : int, optional
-        Computation delay [samples] (>= 0); default ``cfg.hardware.delay_samples``.
+        Computation delay [samples] (>= 0); default ``cfg.hardware.delay_samples``. The PID is the one the
+        config carries (:func:`~obsdesign.design.pid_sampled.resolve_pid`, for the config's own delay): another
+        value analyses those gains in a loop with another delay.
 
     Returns
     -------
