@@ -163,8 +163,8 @@ class PIDSpec:
     )
     derivative_N: float = param_field(DERIVATIVE_N, "-", "derivative filter: time constant (kd/kp)/N in simulations "
                                       "(0.1 to 1e4)", 10.0)
-    design: str = param_field(Choice(PID_DESIGNS), "-", "gains: the paper's rule, tuned on the sampled loop with the "
-                              "delay, or auto (sampled where the paper's loses > 3 deg there)", "auto")
+    design: str = param_field(Choice(PID_DESIGNS), "-", "gains: paper (section 4.1), sampled (the phase margin on the "
+                              "sampled loop with the delay) or auto (docs/delay.md)", "auto")
 
     def __post_init__(self) -> None:
         validate_fields(self)

@@ -113,15 +113,21 @@ CASES = {"rotary-4k-d1": lambda: rotary_4khz(1), "rotary-4k-d2": lambda: rotary_
          "linear-500hz-d1": lambda: linear_500hz(1)}
 
 
+#: where the sampled design keeps k = 1 / max_S (auto carries it), where it needs a lower k (auto keeps the paper's)
+KEEPS_K = {"linear-500hz": True, "rotary-4k-d1": False, "rotary-4k-d2": False, "loop2k": False, "loop2k-d1": False,
+           "linear-500hz-d1": False}
+
+
 @pytest.mark.parametrize("name", list(CASES))
-def test_auto_picks_the_sampled_design_where_the_papers_loses_more_than_3_deg(name):
-    cfg = CASES[name]()
+def test_the_sampled_design_meets_the_target_where_the_papers_loses_more_than_3_deg(name):
+    cfg = CASES[name]().override(design="sampled")
     target = cfg.pid.phase_margin_deg
     _, _, kp, ki, kd = paper_gains(cfg)
     paper_pm, _ = independent_margin(cfg, kp, ki, kd)
     assert paper_pm < target - 3.0  # the premise, computed here
     c = resolve_pid(cfg)
-    assert c.design == "sampled" and "more than 3 deg lost" in c.reason
+    assert c.design == "sampled" and c.reason == "[pid] design = 'sampled'"
+    assert (c.k == 1.0 / cfg.pid.max_S) == KEEPS_K[name]
     assert c.paper_sampled_pm_deg == pytest.approx(paper_pm, abs=1e-6)
     pm, stable = independent_margin(cfg, c.kp, c.ki, c.kd)
     assert stable and abs(pm - target) <= 3.0
@@ -131,13 +137,41 @@ def test_auto_picks_the_sampled_design_where_the_papers_loses_more_than_3_deg(na
     assert c.kp == pytest.approx(c.k * (c.T_I + cfg.pid.tau) / c.T_I, rel=1e-14)
 
 
+@pytest.mark.parametrize("name", list(CASES))
+def test_auto_carries_the_sampled_design_only_where_it_keeps_the_S_bound(name):
+    cfg = CASES[name]()
+    c, sampled = resolve_pid(cfg), resolve_pid(cfg, design="sampled")
+    if KEEPS_K[name]:
+        assert c.design == "sampled" and "more than 3 deg lost" in c.reason
+        assert (c.kp, c.ki, c.kd) == (sampled.kp, sampled.ki, sampled.kd)
+    else:  # the target needs a lower k: the specifications conflict, auto keeps the paper's and says so
+        _, _, kp, ki, kd = paper_gains(cfg)
+        assert c.design == "paper" and "kept the paper's" in c.reason and "k below 1 / max_S" in c.reason
+        assert (c.kp, c.ki, c.kd) == pytest.approx((kp, ki, kd), rel=1e-14)
+
+
+def test_auto_without_the_S_bound_rule_carries_the_sampled_design(monkeypatch):
+    import obsdesign.design.pid_sampled as ps
+
+    monkeypatch.setattr(ps, "AUTO_KEEPS_MAX_S", False)
+    ps._resolve.cache_clear()
+    try:
+        c = resolve_pid(rotary_4khz(1))
+        assert c.design == "sampled" and "k lowered to" in c.reason and "crossover from" in c.reason
+        pm, stable = independent_margin(rotary_4khz(1), c.kp, c.ki, c.kd)
+        assert stable and pm == pytest.approx(60.0, abs=3.0)
+    finally:
+        monkeypatch.undo()
+        ps._resolve.cache_clear()
+
+
 @pytest.mark.parametrize("name", ["rotary-4k-d1", "linear-500hz"])
 def test_every_reader_takes_the_carried_pid(name):
     from obsdesign.design.loop import loop_analysis
     from obsdesign.design.plant_loop import plant_loop
     from obsdesign.design.sampled_loop import sampled_loop
 
-    cfg = CASES[name]()
+    cfg = CASES[name]().override(design="sampled")
     kp, ki, kd, tau_d = sampled_pid_gains(cfg)
     c = resolve_pid(cfg)
     assert (kp, ki, kd, tau_d) == (c.kp, c.ki, c.kd, c.tau_d)
@@ -198,13 +232,16 @@ def test_pid_command_reports_both_designs(tmp_path, capsys):
     doc = json.loads(capsys.readouterr().out)
     cfg = rotary_4khz(1)
     _, _, kp, ki, kd = paper_gains(cfg)
-    assert doc["design"] == "sampled" and doc["setting"] == "auto" and "more than 3 deg" in doc["reason"]
+    assert doc["design"] == "paper" and doc["setting"] == "auto" and "kept the paper's" in doc["reason"]
     assert (doc["paper"]["kp"], doc["paper"]["ki"], doc["paper"]["kd"]) == pytest.approx((kp, ki, kd), rel=1e-14)
     assert doc["paper"]["sampled_phase_margin_deg"] == pytest.approx(independent_margin(cfg, kp, ki, kd)[0], abs=1e-6)
     s = doc["sampled"]
-    assert (doc["kp"], doc["ki"], doc["kd"]) == (s["kp"], s["ki"], s["kd"])  # the carried one on top
+    assert (doc["kp"], doc["ki"], doc["kd"]) == pytest.approx((kp, ki, kd), rel=1e-14)  # the carried one on top
     assert s["sampled_phase_margin_deg"] == pytest.approx(independent_margin(cfg, s["kp"], s["ki"], s["kd"])[0],
                                                           abs=1e-6)
+    assert main(["pid", "--config", str(path), "--design", "sampled", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["design"] == "sampled" and (doc["kp"], doc["ki"], doc["kd"]) == (s["kp"], s["ki"], s["kd"])
     assert main(["pid", "--config", str(path), "--design", "paper"]) == 0
     out = capsys.readouterr().out
     assert "carried by the config" in out and "paper ([pid] design = 'paper')" in out

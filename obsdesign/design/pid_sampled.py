@@ -5,7 +5,8 @@ eq:linplant. ``sampled`` keeps its structure (``k``, ``T_I``, ``kd = k tau``, ``
 ``kp = k (T_I + tau) / T_I``, the kernel's derivative filter) and chooses the gains so that the sampled loop of
 :mod:`obsdesign.design.sampled_loop` (ZOH of the design model, the derivative filter, the drive's delay
 ``[hardware] delay_samples``) has the phase margin ``pid.phase_margin_deg``. ``auto`` (default) carries the
-sampled design where the paper's loses more than :data:`AUTO_THRESHOLD_DEG` on that loop (docs/delay.md).
+sampled design where the paper's loses more than :data:`AUTO_THRESHOLD_DEG` on that loop and the sampled design
+keeps ``k = 1 / max_S`` (:data:`AUTO_KEEPS_MAX_S`), else the paper's (docs/delay.md).
 Every reader of the PID goes through :func:`resolve_pid` (via :func:`sampled_pid_gains`
 and :func:`~obsdesign.design.pid.pid_from_config`). NumPy only: the margins are those of ``L(exp(j w dt))``
 in powers of ``z - 1`` (:func:`delta_loop_polynomials`), the crossovers by
@@ -32,7 +33,7 @@ from .._memo import memo
 from .._validate import POSITIVE, Choice, Range
 from ..params import PID_DESIGNS, Config
 
-__all__ = ["DESIGNS", "AUTO_THRESHOLD_DEG", "PIDChoice", "resolve_pid", "pid_gains", "sampled_pid_gains",
+__all__ = ["DESIGNS", "AUTO_THRESHOLD_DEG", "AUTO_KEEPS_MAX_S", "PIDChoice", "resolve_pid", "pid_gains", "sampled_pid_gains",
            "derivative_time",
            "sampled_phase_margin", "sampled_crossover", "delta_loop_polynomials"]
 
@@ -41,6 +42,10 @@ __all__ = ["DESIGNS", "AUTO_THRESHOLD_DEG", "PIDChoice", "resolve_pid", "pid_gai
 DESIGNS = PID_DESIGNS
 #: Phase margin [deg] the sampled loop may lose against the paper's design before ``auto`` picks ``sampled``.
 AUTO_THRESHOLD_DEG = 3.0
+#: ``auto`` carries the sampled design only where it keeps ``k = 1 / max_S`` (the |S| bound of eq:pidGain): where
+#: the target needs a lower ``k`` the two specifications conflict and ``auto`` keeps the paper's gains, saying so
+#: (docs/delay.md: on the identified axes the sampled design would lower the crossover 8 to 15 times).
+AUTO_KEEPS_MAX_S = True
 
 
 _POS, _PHASE = POSITIVE, Range(low=0.0, high=90.0)
@@ -230,8 +235,10 @@ def _rule(k: float, phi: float, pm_deg: float) -> float:
     return pid_gains(phi=phi, tau=1.0, max_S=1.0 / k, phase_margin_deg=pm_deg)[1]
 
 
-def _sampled_search(phi: float, tau: float, max_S: float, pm: float, N: float, dt: float, d: int) -> list:
-    """``[k, T_I, design margin, sampled margin]`` of the sampled design (:func:`sampled_design`'s search)."""
+def _sampled_search(phi: float, tau: float, max_S: float, pm: float, N: float, dt: float, d: int,
+                    keep_k: bool = False) -> list:
+    """``[k, T_I, design margin, sampled margin]`` of the sampled design (:func:`resolve_pid`'s search); with
+    ``keep_k`` only the first stage (``[]`` where it does not reach the target)."""
     k0 = 1.0 / max_S
     cap = pm + (90.0 - pm) * 2.0 / 3.0
     grid = [pm + (cap - pm) * j / 10.0 for j in range(11)]
@@ -257,6 +264,8 @@ def _sampled_search(phi: float, tau: float, max_S: float, pm: float, N: float, d
         if value >= pm:
             design = grid[0] if j == 0 else bisect(lambda x: margin(k0, x) >= pm, grid[j - 1], grid[j])
             return [k0, _rule(k0, phi, design), design, margin(k0, design, 20001)]
+    if keep_k:
+        return []
     # 2. the gain lowered: for each design margin the largest k = 10^(-i/10) / max_S that meets the target; for
     # the design margins with the largest, k bisected to the target; the largest k (the smaller margin of a tie)
     steps, tied = 61, list[float]()
@@ -299,16 +308,15 @@ def _resolve(phi: float, tau: float, max_S: float, pm: float, N: float, dt: floa
     if setting == "paper" or (setting == "auto" and cost <= AUTO_THRESHOLD_DEG):
         why = "[pid] design = 'paper'" if setting == "paper" else f"auto: {has}: within {AUTO_THRESHOLD_DEG:g} deg"
         return ("paper", why, k0, T0, pm, paper_pm, paper_pm)
-    try:
-        k, T_I, design, got = memo("pid_sampled", (phi, tau, max_S, pm, N, dt, d),
-                                   lambda: _sampled_search(phi, tau, max_S, pm, N, dt, d),
-                                   valid=lambda v: isinstance(v, list) and len(v) == 4
-                                   and all(isinstance(x, float) for x in v))
-    except ValueError as exc:
-        if setting == "sampled":
-            raise
-        return ("paper", f"auto: {has}, and {str(exc).removeprefix('pid.design: ').split(';')[0]}: kept the "
-                f"paper's", k0, T0, pm, paper_pm, paper_pm)
+    keep_k = setting == "auto" and AUTO_KEEPS_MAX_S
+    found = memo("pid_sampled", (phi, tau, max_S, pm, N, dt, d, keep_k),
+                 lambda: _sampled_search(phi, tau, max_S, pm, N, dt, d, keep_k),
+                 valid=lambda v: isinstance(v, list) and len(v) in (0, 4) and all(isinstance(x, float) for x in v))
+    if not found:  # auto, and only a lower k would meet the target: the two specifications conflict
+        return ("paper", f"auto: {has}, and a sampled design meets it only with k below 1 / max_S (a lower "
+                f"crossover; `obsdesign pid` shows it): kept the paper's; design = 'sampled' carries it",
+                k0, T0, pm, paper_pm, paper_pm)
+    k, T_I, design, got = found
     lost = ""
     if k != k0:
         w0, w1 = (sampled_crossover(k=x, T_I=y, tau=tau, phi=phi, derivative_N=N, dt=dt, delay_samples=d)
@@ -365,8 +373,8 @@ def resolve_pid(cfg: Config, *, design: str | None = None) -> PIDChoice:
     has the phase margin ``pid.phase_margin_deg``: first with ``k = 1 / max_S`` kept and the rule's design
     margin raised (a longer ``T_I``, at most two thirds of the way to 90 deg); where that does not reach the
     target, ``k`` lowered (the largest that does, over the same design margins). ``auto`` (default): the
-    sampled design where the paper's loses more than :data:`AUTO_THRESHOLD_DEG` on the sampled loop, else the
-    paper's (docs/delay.md).
+    sampled design where the paper's loses more than :data:`AUTO_THRESHOLD_DEG` on the sampled loop and the
+    sampled design keeps ``k = 1 / max_S`` (:data:`AUTO_KEEPS_MAX_S`), else the paper's (docs/delay.md).
 
     Parameters
     ----------
