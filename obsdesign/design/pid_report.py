@@ -4,8 +4,10 @@ Examples
 --------
 >>> import obsdesign as od
 >>> d = pid_designs(od.load_preset("vcm"))
->>> d.carried.design, d.paper.design, d.sampled.design
-('paper', 'paper', 'paper')
+>>> d.carried.design, d.paper.design, d.sampled.design   # on vcm the sampled design is the paper's gains
+('paper', 'paper', 'sampled')
+>>> d.sampled.kp == d.paper.kp
+True
 """
 
 from __future__ import annotations
