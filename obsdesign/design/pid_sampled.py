@@ -26,6 +26,7 @@ import dataclasses
 import functools
 import math
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -48,7 +49,8 @@ AUTO_THRESHOLD_DEG = 3.0
 AUTO_KEEPS_MAX_S = True
 
 
-_POS, _PHASE = POSITIVE, Range(low=0.0, high=90.0)
+_POS = POSITIVE
+_PHASE = Range(low=0.0, high=90.0)
 
 
 def pid_gains(*, phi: float, tau: float, max_S: float, phase_margin_deg: float) -> tuple[float, ...]:
@@ -68,10 +70,8 @@ def pid_gains(*, phi: float, tau: float, max_S: float, phase_margin_deg: float) 
     >>> [round(x, 4) for x in pid_gains(phi=0.0407, tau=0.006675, max_S=1/400, phase_margin_deg=60.0)]
     [400.0, 0.0921, 428.9784, 4341.3333, 2.67]
     """
-    phi = _POS.check("phi", phi)
-    tau = _POS.check("tau", tau)
-    max_S = _POS.check("max_S", max_S)
-    pm = _PHASE.check("phase_margin_deg", phase_margin_deg)
+    phi, tau, max_S = (cast(float, _POS.check(n, v)) for n, v in (("phi", phi), ("tau", tau), ("max_S", max_S)))
+    pm = cast(float, _PHASE.check("phase_margin_deg", phase_margin_deg))  # bounded: never None
     k = 1.0 / max_S  # eq:pidGain
     t2 = math.tan(math.radians(pm)) ** 2
     T_I = t2 / (k * phi * math.sqrt(1.0 + t2))  # eq:pidTime
