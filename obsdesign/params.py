@@ -46,6 +46,7 @@ __all__ = ["PlantParams", "FrictionParams", "SensorSpec", "ObserverSpec", "PIDSp
            "AxisSpec", "Config", "load_preset", "read_config", "preset_names", "VARIANTS", "PARAMETERS", "SECTIONS", "FieldRow"]
 
 VARIANTS = ("lag", "static")
+PID_DESIGNS = ("auto", "paper", "sampled")  #: ``[pid] design`` (:func:`obsdesign.design.pid.resolve_pid`)
 
 
 @document_fields
@@ -155,16 +156,15 @@ class PIDSpec:
 
     _section = "pid"
     max_S: float = param_field(POSITIVE, "m/V", "upper bound of |S| (eq:pidGain)")
-    phase_margin_deg: float = param_field(
-        Range(low=0.0, high=90.0), "deg", "phase margin Phi at crossover (eq:L_omegas)"
-    )
+    phase_margin_deg: float = param_field(Range(low=0.0, high=90.0), "deg", "phase margin Phi at crossover (eq:L_omegas)")
     tau: float = param_field(POSITIVE, "s", "plant time constant of eq:linplant")
     phi: float | None = param_field(
         Range(low=0.0, optional=True), "m/(V s)", "plant gain of eq:linplant (default K tau / m)", None
     )
-    derivative_N: float = param_field(
-        DERIVATIVE_N, "-", "derivative filter: time constant (kd/kp)/N in simulations (0.1 to 1e4)", 10.0
-    )
+    derivative_N: float = param_field(DERIVATIVE_N, "-", "derivative filter: time constant (kd/kp)/N in simulations "
+                                      "(0.1 to 1e4)", 10.0)
+    design: str = param_field(Choice(PID_DESIGNS), "-", "gains: paper (section 4.1), sampled (the phase margin on the "
+                              "sampled loop with the delay) or auto (docs/delay.md)", "auto")
 
     def __post_init__(self) -> None:
         validate_fields(self)
@@ -277,7 +277,7 @@ class Config:
         >>> load_preset("table1").override(mass=1.0)
         Traceback (most recent call last):
         ...
-        ValueError: override: unknown parameter 'mass'; expected one of Cf, G, K, beta, buildup, deadzone, delay_samples, derivative_N, dt, ff_offset, ff_presliding, ff_stribeck, ff_stribeck_velocity, gain, kappa, lookahead, m, max_S, mode, noise_bandwidth, noise_rms, omega_co, phase_margin_deg, phi, quantization, rho, s, sigma, tau, u_max, variant, viscous
+        ValueError: override: unknown parameter 'mass'; expected one of Cf, G, K, beta, buildup, deadzone, delay_samples, derivative_N, design, dt, ff_offset, ff_presliding, ff_stribeck, ff_stribeck_velocity, gain, kappa, lookahead, m, max_S, mode, noise_bandwidth, noise_rms, omega_co, phase_margin_deg, phi, quantization, rho, s, sigma, tau, u_max, variant, viscous
         """
         changes: dict[str, dict[str, Any]] = {}
         for name, value in values.items():

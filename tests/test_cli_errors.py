@@ -211,7 +211,7 @@ def test_numpy_scalars_are_accepted_and_huge_integers_refused():  # a11, a12, a1
 def test_warnings_of_a_successful_command_are_one_line_each(capsys, monkeypatch):  # L6
     import warnings
 
-    import obsdesign.design as design
+    import obsdesign.design.pid as design  # pid_from_config's verification (the PID the config carries)
 
     real = design.design_pid
 

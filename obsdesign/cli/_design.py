@@ -6,9 +6,10 @@ import argparse
 import json
 import sys
 
-from ..params import VARIANTS
+from .._validate import MAX_DELAY_SAMPLES
+from ..params import PID_DESIGNS, VARIANTS
 from ._common import (NONNEGATIVE_ARG, PHASE_ARG, POSITIVE_ARG, add_config_flags, add_design_flags, emit,
-                      finite_design, load, warn_unstable)
+                      finite_design, integer, load, warn_unstable)
 
 __all__ = ["add_commands"]
 
@@ -39,30 +40,40 @@ def _cmd_check(args: argparse.Namespace) -> int:
         warnings.simplefilter("default", MemoWarning)  # a refused memo entry is still said
         with finite_design(args, ("rho", "kappa")):
             report = check_stability(cfg)
-    emit(args, report, report.to_dict(), units=cfg.units)
+    loops, why = _loop_margins(cfg)  # information beside the verdicts: the exit status is the observer's
+    doc = report.to_dict()
+    doc["loop_margins"] = loops.to_dict() if loops is not None else {"error": why}
+    emit(args, report, doc, units=cfg.units)
     if not args.json:
+        print()
+        print(loops.text(cfg.units) if loops is not None else f"loop margins: not computed: {why}")
         for note in report.warnings:
             print(f"warning: {note}")
     return 0 if report.all_hold else 1
 
 
+def _loop_margins(cfg):
+    """The PID loop's margins around the design model and the simulated plant, or why not (a PID without a
+    design meeting its target is the PID's problem, not the observer's: ``check`` still gives its verdicts)."""
+    from ..design.plant_loop import loop_margins_of
+
+    try:
+        return loop_margins_of(cfg), ""
+    except ValueError as exc:
+        return None, str(exc)
+
+
 def _cmd_pid(args: argparse.Namespace) -> int:
-    from ..design import design_pid
+    from ..design.pid_report import pid_designs
 
     cfg = load(args)
     with finite_design(args, ("phi", "tau", "max_s", "phase_margin")):
-        pid = _design_pid(args, cfg, design_pid)
-    emit(args, pid, pid.to_dict(), units=cfg.units)
+        phi = args.phi if args.phi is not None else (None if args.tau is None else cfg.plant.K * args.tau / cfg.plant.m)
+        cfg = cfg.override(phi=phi, tau=args.tau, max_S=args.max_s, phase_margin_deg=args.phase_margin,
+                           design=args.design, delay_samples=args.delay)
+        designs = pid_designs(cfg)
+    emit(args, designs, designs.to_dict(), units=cfg.units)
     return 0
-
-
-def _design_pid(args, cfg, design_pid):
-    return design_pid(
-        phi=args.phi if args.phi is not None else (cfg.phi if args.tau is None else cfg.plant.K * args.tau / cfg.plant.m),
-        tau=args.tau if args.tau is not None else cfg.pid.tau,
-        max_S=args.max_s if args.max_s is not None else cfg.pid.max_S,
-        phase_margin_deg=args.phase_margin if args.phase_margin is not None else cfg.pid.phase_margin_deg,
-    )
 
 
 def _cmd_noise(args: argparse.Namespace) -> int:
@@ -95,6 +106,10 @@ def add_commands(sub) -> None:
     p.add_argument("--tau", type=POSITIVE_ARG, help="plant time constant tau [s]")
     p.add_argument("--max-s", type=POSITIVE_ARG, help="bound of |S| [m/V]; k = 1/max|S|")
     p.add_argument("--phase-margin", type=PHASE_ARG, help="phase margin [deg], in (0, 90)")
+    p.add_argument("--design", choices=PID_DESIGNS,
+                   help="which PID the config carries (default: [pid] design, itself default auto)")
+    p.add_argument("--delay", type=integer(0, MAX_DELAY_SAMPLES), metavar="N",
+                   help="the drive's delay in the sampled loop [samples] (0 to 10000; default hardware.delay_samples)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(run=_cmd_pid)
 

@@ -51,7 +51,9 @@ def compensated_loop(cfg: Config, est, gain: float) -> tuple[float, bool, float]
     from ..estimators import noise_level
 
     dt, d, K = cfg.observer.dt, cfg.hardware.delay_samples, cfg.plant.K
-    C, H = _pid_and_plant(cfg.phi, cfg.pid.tau, cfg.pid.max_S, cfg.pid.phase_margin_deg, cfg.pid.derivative_N, dt)
+    from .pid_sampled import sampled_pid_gains
+
+    C, H = _pid_and_plant(*sampled_pid_gains(cfg), cfg.phi, cfg.pid.tau, dt)
     Gy = est.transfer_from_measurement()[1, 0]
     Gu = est.transfer_from_input()[1, 0]
     delay = ct.ss(ct.tf([1.0], [1.0] + [0.0] * d, dt)) if d else ct.ss([], [], [], [[1.0]], dt)
@@ -84,15 +86,13 @@ def compensated_loop(cfg: Config, est, gain: float) -> tuple[float, bool, float]
 
 
 @functools.lru_cache(maxsize=16)
-def _pid_and_plant(phi, tau, max_S, phase_margin_deg, derivative_N, dt):
-    """The kernel's discrete PID and the ZOH plant of :mod:`obsdesign.design.sampled_loop`, as state space."""
+def _pid_and_plant(kp, ki, kd, tau_d, phi, tau, dt):
+    """The kernel's discrete PID (the config's, :func:`~obsdesign.design.pid.sampled_pid_gains`) and the ZOH
+    plant of :mod:`obsdesign.design.sampled_loop`, as state space."""
     import control as ct
 
-    from .pid import sampled_pid_gains
     from .sampled_loop import discrete_pid, zoh_plant
 
-    kp, ki, kd, tau_d = sampled_pid_gains(phi=phi, tau=tau, max_S=max_S, phase_margin_deg=phase_margin_deg,
-                                          derivative_N=derivative_N)
     return (ct.ss(discrete_pid(kp=kp, ki=ki, kd=kd, tau_d=tau_d, dt=dt)),
             ct.ss(zoh_plant(phi=phi, tau=tau, dt=dt)))
 

@@ -47,7 +47,7 @@ import numpy as np
 
 from .._memo import memo
 from ..params import Config, load_preset
-from .pid import PIDDesign, check_margins, check_peak, design_pid, kept_response, lazy_system, loop_polynomials, peak_magnitude
+from .pid import PIDDesign, check_margins, check_peak, kept_response, lazy_system, loop_polynomials, peak_magnitude, pid_from_config
 from .plant_loop import PlantLoop, plant_loops
 from .sampled_loop import SampledLoop, sampled_loop
 from .._display import ResultDisplay
@@ -222,7 +222,7 @@ def loop_analysis(cfg: Config | None = None, *, phi: float | None = None, tau: f
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config or None, found {type(cfg).__name__}")
     cfg = cfg.override(phi=phi, tau=tau, delay_samples=delay_samples)
-    pid = design_pid(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S, phase_margin_deg=cfg.pid.phase_margin_deg)
+    pid = pid_from_config(cfg)
     gm, pm, wpc, wgc, max_S, w_S, max_T, w_T, poles, bandwidth = memo(
         "loop", (pid.k, pid.T_I, pid.tau, pid.phi), lambda: _numbers(pid), valid=_is_loop_numbers,
         verify=lambda value: _verify(pid, value))

@@ -48,7 +48,7 @@ def loop_margins(L: ct.TransferFunction) -> tuple[float, float, float, float, fl
     return float(gm), float(pm), float(wgc), float(wpc), dm
 
 
-def gain_crossovers(num, den, dt: float, points: int = 20001) -> list[tuple[float, float]]:
+def gain_crossovers(num, den, dt: float, points: int = 20001, *, delta: bool = False) -> list[tuple[float, float]]:
     """The gain crossovers of the discrete loop ``L(z) = num(z) / den(z)``: ``(phase margin [deg], w [rad/s])``.
 
     ``|L(exp(j w dt))| - 1`` changes sign between neighbours of a log grid from ``1e-6 pi/dt`` to the Nyquist
@@ -63,6 +63,9 @@ def gain_crossovers(num, den, dt: float, points: int = 20001) -> list[tuple[floa
         Sample time [s].
     points : int
         Grid points.
+    delta : bool
+        ``num`` and ``den`` are polynomials in ``delta = z - 1`` instead of ``z``, evaluated at
+        ``expm1(j w dt)``: well conditioned where poles and zeros crowd ``z = 1`` (``w dt`` small).
 
     Returns
     -------
@@ -83,7 +86,7 @@ def gain_crossovers(num, den, dt: float, points: int = 20001) -> list[tuple[floa
     w_nyq = math.pi / dt
 
     def L(w):
-        z = np.exp(1j * np.asarray(w) * dt)
+        z = (np.expm1 if delta else np.exp)(1j * np.asarray(w) * dt)
         return np.polyval(num, z) / np.polyval(den, z)
 
     w = np.logspace(math.log10(w_nyq) - 6.0, math.log10(w_nyq), points)

@@ -19,6 +19,7 @@ True
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -27,13 +28,14 @@ import numpy as np
 
 from .._display import ResultDisplay
 from .._memo import memo
-from .._validate import NONNEGATIVE, POSITIVE, Range
+from .._validate import POSITIVE, Range
 from ..params import Config
+from .pid_sampled import pid_gains, resolve_pid
 
 if TYPE_CHECKING:
     import control as ct
 
-__all__ = ["PIDDesign", "design_pid", "pid_gains", "sampled_pid_gains", "pid_from_config", "pid_from_gains", "peak_magnitude",
+__all__ = ["PIDDesign", "design_pid", "pid_gains", "pid_from_config", "pid_from_gains", "peak_magnitude",
            "lazy_system", "kept_response", "loop_polynomials", "check_margins", "check_peak"]
 
 
@@ -115,7 +117,6 @@ def kept_response(result, name: str, w) -> np.ndarray:
 
 
 _POS = POSITIVE
-_PHASE = Range(low=0.0, high=90.0)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -139,6 +140,11 @@ class PIDDesign(ResultDisplay):
         for this loop, whose phase never reaches -180 deg) and gain crossover.
     closed_loop_stable : bool
         All poles of S in the open left half-plane.
+    design : str
+        ``"paper"`` (the rule of section 4.1) or ``"sampled"`` (gains chosen on the sampled loop with the delay,
+        :func:`resolve_pid`).
+    reason : str
+        Why the config carries this design, in one line ("" for a design built from numbers alone).
     H, C, S : control.TransferFunction
         Plant, controller and input disturbance sensitivity ``H / (1 + H C)`` (eq:Syd).
     """
@@ -159,6 +165,8 @@ class PIDDesign(ResultDisplay):
     gain_margin: float
     omega_crossover: float
     closed_loop_stable: bool
+    design: str = "paper"
+    reason: str = ""
     H = lazy_system()
     C = lazy_system()
     S = lazy_system()
@@ -172,7 +180,8 @@ class PIDDesign(ResultDisplay):
     def to_dict(self) -> dict:
         """JSON-ready values (the keys of ``obsdesign pid --json`` and more)."""
         keys = ("k", "T_I", "kp", "ki", "kd", "omega_s", "max_S_achieved", "phase_margin_deg", "tau", "phi",
-                "omega_peak", "phase_margin_achieved_deg", "gain_margin", "omega_crossover", "closed_loop_stable")
+                "omega_peak", "phase_margin_achieved_deg", "gain_margin", "omega_crossover", "closed_loop_stable",
+                "design", "reason")
         return {key: getattr(self, key) for key in keys}
 
     def _rows(self):
@@ -183,7 +192,8 @@ class PIDDesign(ResultDisplay):
                 ("at omega [rad/s]", self.omega_peak),
                 ("phase margin (python-control) [deg]", self.phase_margin_achieved_deg),
                 ("crossover (python-control) [rad/s]", self.omega_crossover),
-                ("closed loop stable", self.closed_loop_stable)]
+                ("closed loop stable", self.closed_loop_stable), ("design", self.design)] + (
+                    [("why", self.reason)] if self.reason else [])
 
 
 def peak_magnitude(sys: ct.TransferFunction) -> tuple[float, float]:
@@ -407,63 +417,24 @@ def design_pid(*, phi: float, tau: float, max_S: float, phase_margin_deg: float)
     return _build(k, T_I, float(tau), float(phi), float(phase_margin_deg))
 
 
-def pid_gains(*, phi: float, tau: float, max_S: float, phase_margin_deg: float) -> tuple[float, ...]:
-    """``(k, T_I, kp, ki, kd)`` of the design rule alone, without the python-control verification.
-
-    Parameters
-    ----------
-    phi : float
-        Plant gain [m/(V s)].
-    tau : float
-        Plant time constant [s].
-    max_S : float
-        Bound of |S| [m/V].
-    phase_margin_deg : float
-        Phase margin [deg], in (0, 90).
-
-    >>> [round(x, 4) for x in pid_gains(phi=0.0407, tau=0.006675, max_S=1/400, phase_margin_deg=60.0)]
-    [400.0, 0.0921, 428.9784, 4341.3333, 2.67]
-    """
-    phi = _POS.check("phi", phi)
-    tau = _POS.check("tau", tau)
-    max_S = _POS.check("max_S", max_S)
-    pm = _PHASE.check("phase_margin_deg", phase_margin_deg)
-    k = 1.0 / max_S  # eq:pidGain
-    t2 = math.tan(math.radians(pm)) ** 2
-    T_I = t2 / (k * phi * math.sqrt(1.0 + t2))  # eq:pidTime
-    return k, T_I, k * (T_I + tau) / T_I, k / T_I, k * tau  # eq:PIDparams
-
-
-def sampled_pid_gains(*, phi: float, tau: float, max_S: float, phase_margin_deg: float,
-                      derivative_N: float) -> tuple[float, float, float, float]:
-    """``(kp, ki, kd, tau_d)`` as the sampled controller runs them: :func:`pid_gains` and the one definition of
-    the derivative filter's ``tau_d = kd / (kp N)``.
-
-    Parameters
-    ----------
-    phi, tau, max_S, phase_margin_deg, derivative_N : float
-        As in :func:`pid_gains`; ``derivative_N``: the filter's ``N`` (``pid.derivative_N``).
-
-    >>> kp, ki, kd, tau_d = sampled_pid_gains(phi=0.0407, tau=0.006675, max_S=1/400, phase_margin_deg=60.0,
-    ...                                       derivative_N=10.0)
-    >>> abs(tau_d - 400.0 * 0.006675 / kp / 10.0) < 1e-15   # kd = k tau with k = 1 / max_S
-    True
-    """
-    _, _, kp, ki, kd = pid_gains(phi=phi, tau=tau, max_S=max_S, phase_margin_deg=phase_margin_deg)
-    return kp, ki, kd, kd / kp / derivative_N
-
-
-def pid_from_config(cfg: Config) -> PIDDesign:
-    """:func:`design_pid` with the config's PID section (``phi`` defaults to ``K tau / m``).
+def pid_from_config(cfg: Config, *, design: str | None = None) -> PIDDesign:
+    """The PID the config carries (:func:`~obsdesign.design.pid_sampled.resolve_pid`), verified by python-control.
 
     Parameters
     ----------
     cfg : Config
-        The design; its ``pid`` section and ``phi``.
+        The design; its ``pid`` section, ``phi``, ``observer.dt`` and ``[hardware] delay_samples``.
+    design : str, optional
+        ``"auto"``, ``"paper"`` or ``"sampled"`` instead of ``cfg.pid.design``.
     """
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
-    return design_pid(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S, phase_margin_deg=cfg.pid.phase_margin_deg)
+    c = resolve_pid(cfg, design=design)
+    if c.design == "paper":
+        pid = design_pid(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S, phase_margin_deg=cfg.pid.phase_margin_deg)
+    else:
+        pid = _build(c.k, c.T_I, float(cfg.pid.tau), float(cfg.phi), c.design_phase_margin_deg)
+    return dataclasses.replace(pid, design=c.design, reason=c.reason)
 
 
 def pid_from_gains(*, kp: float, ki: float, kd: float, phi: float) -> PIDDesign:

@@ -45,11 +45,11 @@ from .._display import ResultDisplay
 from .._memo import memo
 from .._validate import MAX_DELAY_SAMPLES, Choice, check_integer
 from ..params import Config
-from .pid import sampled_pid_gains
+from .pid_sampled import sampled_pid_gains
 from .margins import closed_loop, loop_margins
 from .sampled_loop import discrete_peak, discrete_pid
 
-__all__ = ["PlantLoop", "plant_loop", "plant_loops", "simulated_plant", "REGIMES"]
+__all__ = ["PlantLoop", "plant_loop", "plant_loops", "simulated_plant", "REGIMES", "LoopMargins", "loop_margins_of"]
 
 #: Operating points of the linearisation: gross sliding (no Coulomb stiffness), rest (stiffness kappa).
 REGIMES = ("sliding", "rest")
@@ -185,7 +185,8 @@ def plant_loop(cfg: Config, *, regime: str = "sliding", delay_samples: int | Non
     regime : str
         One of :data:`REGIMES`.
     delay_samples : int, optional
-        The drive's delay [samples] (>= 0); default ``cfg.hardware.delay_samples``.
+        The drive's delay [samples] (>= 0); default ``cfg.hardware.delay_samples`` (the PID stays the one the
+        config carries for its own delay).
 
     Returns
     -------
@@ -212,9 +213,7 @@ def plant_loop(cfg: Config, *, regime: str = "sliding", delay_samples: int | Non
     d = cfg.hardware.delay_samples if delay_samples is None else check_integer("delay_samples", delay_samples, minimum=0,
                                                                                       maximum=MAX_DELAY_SAMPLES)
     dt = cfg.observer.dt
-    kp, ki, kd, tau_d = sampled_pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
-                                          phase_margin_deg=cfg.pid.phase_margin_deg,
-                                          derivative_N=cfg.pid.derivative_N)
+    kp, ki, kd, tau_d = sampled_pid_gains(cfg)
     num, den = _plant_coefficients(cfg, regime)
     args = (kp, ki, kd, tau_d, dt, d, tuple(num), tuple(den))
     # python-control's numbers kept on disk like the sampled loop's (a warm `loop` imports no python-control);
@@ -276,3 +275,77 @@ def plant_loops(cfg: Config, *, delay_samples: int | None = None) -> dict[str, P
     ['rest', 'sliding']
     """
     return {regime: plant_loop(cfg, regime=regime, delay_samples=delay_samples) for regime in REGIMES}
+
+
+@dataclass(frozen=True, kw_only=True)
+class LoopMargins(ResultDisplay):
+    """The margins of the sampled loop around the design model beside those around the simulated plant
+    (``obsdesign check``).
+
+    Attributes
+    ----------
+    design : str
+        The PID the config carries (``"paper"`` or ``"sampled"``, :func:`~obsdesign.design.pid.resolve_pid`).
+    model : SampledLoop
+        The sampled loop around the PID's design model eq:linplant.
+    simulated : dict of str to PlantLoop
+        The sampled loop around the simulated plant, by regime.
+    """
+
+    design: str
+    model: object
+    simulated: dict
+
+    _title = "Loop margins: the PID's design model beside the simulated plant (sampled loop, the drive's delay)"
+
+    def to_dict(self) -> dict:
+        """JSON-ready values: ``pid_design``, ``design_model`` and ``simulated_plant`` by regime."""
+        return {"pid_design": self.design, "design_model": self.model.to_dict(),  # type: ignore[attr-defined]
+                "simulated_plant": {regime: pl.to_dict() for regime, pl in self.simulated.items()}}
+
+    def _rows(self):
+        m = self.model
+        loops = [("design model", m.stable, m.phase_margin_deg, m.gain_margin_db,  # type: ignore[attr-defined]
+                  m.delay_margin_samples, m.max_S, m.max_T)]  # type: ignore[attr-defined]
+        loops += [(f"simulated plant, {r}", pl.stable, pl.phase_margin_deg, pl.gain_margin_db, pl.delay_margin_samples,
+                   pl.max_S, pl.max_T) for r, pl in self.simulated.items()]
+        names = " / ".join(name for name, *_ in loops)
+
+        def row(i: int) -> str:
+            return " / ".join(f"{loop[i]:.4g}" for loop in loops)
+
+        rows = [("loops", f"{names} (PID: {self.design}, dt = {m.dt:g} s, "  # type: ignore[attr-defined]
+                          f"delay {m.delay_samples} samples)"),  # type: ignore[attr-defined]
+                ("phase margin [deg]", row(2)), ("gain margin [dB]", row(3)),
+                ("delay margin [samples]", row(4)), ("max |S| [-]", row(5)), ("max |T| [-]", row(6))]
+        unstable = [name for name, stable, *_ in loops if not stable]
+        if unstable:
+            rows.append(("UNSTABLE", ", ".join(unstable)))
+        rows += [(f"note ({r})", pl.note) for r, pl in self.simulated.items() if pl.note]
+        return rows
+
+
+def loop_margins_of(cfg: Config) -> LoopMargins:
+    """:class:`LoopMargins` of the config: its PID's sampled loop around the design model and around the
+    simulated plant (both regimes), with the drive's delay.
+
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+
+    Returns
+    -------
+    LoopMargins
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> lm = loop_margins_of(od.load_preset("vcm"))
+    >>> round(lm.model.phase_margin_deg, 2), round(lm.simulated["sliding"].phase_margin_deg, 2)
+    (60.02, 44.07)
+    """
+    from .pid_sampled import resolve_pid
+    from .sampled_loop import sampled_loop
+
+    return LoopMargins(design=resolve_pid(cfg).design, model=sampled_loop(cfg), simulated=plant_loops(cfg))

@@ -49,7 +49,8 @@ from .._memo import list_of, memo
 from .._validate import MAX_DELAY_SAMPLES, POSITIVE, check_integer
 from ..params import Config
 from .margins import closed_loop, loop_margins as _margins
-from .pid import lazy_system, sampled_pid_gains
+from .pid import lazy_system
+from .pid_sampled import sampled_pid_gains
 
 if TYPE_CHECKING:
     import control as ct
@@ -290,7 +291,9 @@ def sampled_loop(cfg: Config, *, delay_samples: int | None = None) -> SampledLoo
     cfg : Config
         The design: ``pid`` section, ``phi``, ``observer.dt``, ``pid.derivative_N``.
     delay_samples : int, optional
-        Computation delay [samples] (>= 0); default ``cfg.hardware.delay_samples``.
+        Computation delay [samples] (>= 0); default ``cfg.hardware.delay_samples``. The PID is the one the
+        config carries (:func:`~obsdesign.design.pid_sampled.resolve_pid`, for the config's own delay): another
+        value analyses those gains in a loop with another delay.
 
     Returns
     -------
@@ -316,8 +319,7 @@ def sampled_loop(cfg: Config, *, delay_samples: int | None = None) -> SampledLoo
     d = cfg.hardware.delay_samples if delay_samples is None else check_integer("delay_samples", delay_samples, minimum=0,
                                                                                       maximum=MAX_DELAY_SAMPLES)
     dt, N = cfg.observer.dt, cfg.pid.derivative_N
-    kp, ki, kd, tau_d = sampled_pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
-                                          phase_margin_deg=cfg.pid.phase_margin_deg, derivative_N=N)
+    kp, ki, kd, tau_d = sampled_pid_gains(cfg)
     args = (kp, ki, kd, tau_d, dt, cfg.phi, cfg.pid.tau, d)
     numbers = memo("sampled_loop", args, lambda: _numbers(*args), valid=list_of(17),
                    verify=lambda value: _verify(args, value))
@@ -379,7 +381,7 @@ def _verify(args: tuple, value: list) -> str | None:
     roots = sorted((complex(p) for p in np.roots(np.polyadd(den, num))), key=lambda p: (abs(p), p.imag))
     if (not isinstance(poles, (list, tuple)) or len(poles) != len(roots)
             or any(not isinstance(p, complex) or abs(p - r) > 1e-6 for p, r in zip(poles, roots))
-            or abs(max(abs(r) for r in roots) - rmax) > 1e-9):
+            or abs(max(abs(r) for r in roots) - rmax) > 1e-6):  # the poles' tolerance (near-double poles)
         return "its closed-loop poles are not the roots of the characteristic polynomial"
     return None
 

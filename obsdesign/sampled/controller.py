@@ -348,11 +348,9 @@ def sampled_controller(cfg: Config, *, controller: str = "pid+observer", schedul
     if controller == "open-loop":
         kp = ki = kd = tau_d = 0.0
     else:
-        from ..design.pid import sampled_pid_gains
+        from ..design.pid_sampled import sampled_pid_gains
 
-        kp, ki, kd, tau_d = sampled_pid_gains(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S,
-                                              phase_margin_deg=cfg.pid.phase_margin_deg,
-                                              derivative_N=cfg.pid.derivative_N)
+        kp, ki, kd, tau_d = sampled_pid_gains(cfg)
     compensation = cfg.compensation if controller == "pid+observer" else CompensationSpec()
     if compensation.mode == "blend" and baseline is not None:
         raise ValueError(f"compensation.mode: 'blend' needs the paper observer's low-passed estimate; expected "
