@@ -46,11 +46,11 @@ from .estimators.registry import ESTIMATORS, RULES
 from .friction.registry import FRICTION_MODELS
 from .params import Config
 from .plant_spec import PlantFrictionSpec
+from .sim.bands import SETTLE_DWELL
 from .sim.cases import CASES, TRANSIENT
 from .sim.metrics import rms
 from .sim.shared import run_shared
 from .sim.simulate import prepare, run
-from .sim.bands import SETTLE_DWELL
 from .sim.step_metrics import step_metrics
 from .sweeps.pool import Executor
 

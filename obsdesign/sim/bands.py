@@ -127,6 +127,15 @@ def settle_band(cfg, *, span: float, given: float | None = None) -> SettleBand:
 def error_bound(span: float, band: float) -> float:
     """The largest ``|e|`` [m] of a run that has not run away: :data:`RUNAWAY_FACTOR` x (span + band).
 
+    Parameters
+    ----------
+    span : float
+        Peak-to-peak of the reference [m].
+    band : float
+        The settling band [m].
+
+    Examples
+    --------
     >>> round(error_bound(1e-3, 2e-6), 9)
     0.01002
     """
@@ -141,6 +150,13 @@ def force_bound(cfg) -> float:
     ----------
     cfg : Config
         The simulated plant's config (the design's, or the plant's own under model mismatch).
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> pl = od.load_preset("vcm").plant
+    >>> force_bound(od.load_preset("vcm")) == 10 * (pl.K * pl.u_max + abs(pl.G) + 0.35)
+    True
     """
     pl = cfg.plant
     return RUNAWAY_FACTOR * (abs(pl.K) * pl.u_max + abs(pl.G) + cfg.friction.Cf)

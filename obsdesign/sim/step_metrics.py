@@ -104,7 +104,7 @@ def settling_sample(y: np.ndarray, center: float, band: float, *, dwell: float =
     Examples
     --------
     >>> y = np.array([3.0, 2.0, 0.5, 0.2, 0.1, 0.0, 0.0, 0.0, 0.0, 0.0])
-    >>> settling_sample(y, 0.0, 1.0), settling_sample(y, 0.0, 1.0, dwell=0.8)
+    >>> settling_sample(y, 0.0, 1.0), settling_sample(y, 0.0, 1.0, dwell=0.5)
     (2, 2)
     >>> settling_sample(y, 0.0, 1.0, dwell=0.9) is None                 # inside for 8 of the 9 it needs
     True
