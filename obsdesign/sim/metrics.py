@@ -223,18 +223,21 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
             m["diverged"], m["divergence"] = True, "runaway"
         elif ff.size and float(max(np.max(ff), -np.min(ff))) > force_bound:
             m["diverged"], m["divergence"] = True, "estimate"
+    if sc.holds and settle_tol is None:
+        raise ValueError("settle_tol: expected a band > 0 for a scenario with holds, found None")
+    band = math.inf if settle_tol is None else float(settle_tol)
     for start, end in sc.holds:
         i0, i1 = hold_samples(start, end, dt, len(e))  # at least 2 (build_scenario)
         seg = e[i0:i1]
         reached = finite or i1 - 1 < n_written
-        settled = settling_sample(seg, 0.0, settle_tol, dwell=SETTLE_DWELL, scratch=scratch) if reached else None
+        settled = settling_sample(seg, 0.0, band, dwell=SETTLE_DWELL, scratch=scratch) if reached else None
         m["settling_time"].append(None if settled is None else (0.0 if settled == 0 else float(settled * dt)))
         m["settled"].append(settled is not None)
-        _step_response(m, sc, out["x"], i0, i1, start, settle_tol, reached=reached, scratch=buffers)
+        _step_response(m, sc, out["x"], i0, i1, start, band, reached=reached, scratch=buffers)
         tail = seg[int((1.0 - SETTLE_DWELL) * len(seg)):]
         sse = float(np.mean(tail)) if np.all(np.isfinite(tail)) else None
         m["steady_state_error"].append(sse)
-        m["steady_state_in_band"].append(None if sse is None else abs(sse) <= settle_tol)
+        m["steady_state_in_band"].append(None if sse is None else abs(sse) <= band)
     if sc.name == "tracking":
         # The chirp's frequency rises monotonically, so each band is a contiguous run of samples.
         m["rms_error_per_band"] = {}
