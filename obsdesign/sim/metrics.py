@@ -160,7 +160,7 @@ def _divergence(out: dict[str, np.ndarray], n_written: int, step_stable: bool) -
 
 def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_written: int, settle_tol: float | None,
                  wall: float, *, step_stable: bool = True, settle_rule: str = "given",
-                 force_bound: float = math.inf) -> dict[str, Any]:
+                 force_bound: float = math.inf, span: float | None = None) -> dict[str, Any]:
     """The metrics of a run from the kernel's outputs (see the module docstring).
 
     Parameters
@@ -183,6 +183,8 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
         Where the band comes from (:class:`obsdesign.sim.bands.SettleBand`), stated in the metrics.
     force_bound : float
         The estimate's runaway bound [N] (:func:`obsdesign.sim.bands.force_bound`).
+    span : float, optional
+        Peak-to-peak of the reference the run followed [m] (default: the scenario's ``x_ref``).
     """
     dt = sc.dt
     valid = slice(0, n_written)
@@ -196,7 +198,8 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
     buffers = np.empty((2, len(e)))
     scratch = buffers[0]
     closed = not sc.spec.open_loop
-    span = float(np.max(sc.x_ref) - np.min(sc.x_ref)) if closed and len(sc.x_ref) else 0.0
+    if span is None:
+        span = float(np.max(sc.x_ref) - np.min(sc.x_ref)) if closed and len(sc.x_ref) else 0.0
     max_error = float(max(np.max(e_valid), -np.min(e_valid))) if n_written else None
     m: dict[str, Any] = {
         "rms_error": rms(e_valid, finite=finite, scratch=scratch),

@@ -371,7 +371,8 @@ def loop_result(loop: LoopInputs, out: dict[str, np.ndarray], n_written: int, wa
                                  beta=fr.beta if fr.beta is not None else 0.0,
                                  model_lag=loop.mode == kernel.PLANT_MODEL and loop.lag_model)
     metrics = loop_metrics(loop.scenario, out, e, n_written, loop.settle_tol, wall, step_stable=stable_step,
-                           settle_rule=loop.settle_rule, force_bound=force_bound(loop.plant_config or loop.config))
+                           settle_rule=loop.settle_rule, force_bound=force_bound(loop.plant_config or loop.config),
+                           span=float(np.max(loop.x_ref) - np.min(loop.x_ref)) if n else 0.0)
     traces = {}
     if keep_trace:
         traces = dict(out, t=np.arange(n) * loop.dt, x_ref=loop.x_ref, e=e)
