@@ -46,6 +46,7 @@ from .estimators.registry import ESTIMATORS, RULES
 from .friction.registry import FRICTION_MODELS
 from .params import Config
 from .plant_spec import PlantFrictionSpec
+from .sim.bands import SETTLE_DWELL
 from .sim.cases import CASES, TRANSIENT
 from .sim.metrics import rms
 from .sim.shared import run_shared
@@ -53,7 +54,7 @@ from .sim.simulate import prepare, run
 from .sim.step_metrics import step_metrics
 from .sweeps.pool import Executor
 
-__all__ = ["COLUMNS", "SCENARIOS", "TRANSIENT", "SETTLE_BAND", "JUDGED", "TIE", "ComparisonResult", "compare",
+__all__ = ["COLUMNS", "SCENARIOS", "TRANSIENT", "JUDGED", "TIE", "ComparisonResult", "compare",
            "compare_one", "compare_rows", "summarize", "check_comparison_runs", "plant_config", "NOT_TUNED", "not_tuned_row",
            "not_tuned", "paper_design"]
 
@@ -64,8 +65,6 @@ COLUMNS = ("plant", "estimator", "scenario", "seed", "friction_rms_error", "velo
 SCENARIOS = CASES
 #: Relative difference below which two estimators tie, whatever the spread (deterministic runs).
 TIE = 0.01
-#: Settling band [m] of the positioning rows: 2 um, the simulator's default ``settle_tol``.
-SETTLE_BAND = 2e-6
 #: The metrics each scenario is judged by in the summary (lower is better): the friction
 #: estimate everywhere, and the control result where there is a controller.
 JUDGED = {"excitation": ("friction_rms_error",), "positioning": ("friction_rms_error", "settling_time"),
@@ -220,7 +219,9 @@ def _row_metrics(row: dict[str, Any], res) -> None:
         for t_step, y0, y1 in ((spec.step_up, 0.0, spec.step_size), (spec.step_down, spec.step_size, 0.0)):
             end = spec.step_down if t_step == spec.step_up else duration
             window = (res.t >= t_step) & (res.t < end)
-            m = step_metrics(res.t[window], res.x[window], t_step=t_step, y0=y0, y1=y1, settle_band=SETTLE_BAND)
+            # the run's own band (obsdesign.sim.bands: 2 counts or 3 x the noise RMS) and the simulator's dwell
+            m = step_metrics(res.t[window], res.x[window], t_step=t_step, y0=y0, y1=y1,
+                             settle_band=res.metrics["settle_band"], dwell=SETTLE_DWELL)
             times.append(m["settling_time"])
             over.append(m["overshoot"])
         row["settling_time"] = None if any(t is None for t in times) else float(np.mean(times))

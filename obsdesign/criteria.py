@@ -21,7 +21,9 @@ THRESHOLDS = {
     "gain_margin_db": (6.0, "gain margin of the sampled loop >= 6 dB (a factor 2)"),
     "max_S": (2.0, "max |S| of the sampled loop <= 2 (the closest approach to -1 is at least 0.5)"),
     "pole_dt": (1.0, "fastest observer pole x dt <= 1 (the observer is not faster than the sampling)"),
-    "settles": (None, "the compensated positioning step settles into the 2 um band within each hold"),
+    "settles": (None, "the compensated positioning step settles within each hold: into its band (max(2 x encoder "
+                      "resolution, 3 x noise RMS) unless given) and stays there for at least the last 10 % of the "
+                      "hold; a run that diverges or runs away fails"),
     "settling_ratio": (1.1, "compensation does not slow settling: mean settling time with the observer "
                             "<= 1.1 x the PID's alone"),
     "tracking_ratio": (1.0, "compensation improves tracking: RMS tracking error with the observer < the PID's alone"),
@@ -93,12 +95,20 @@ def judge_design(cfg, *, sampled_loop, experiments, noise, stability) -> tuple[C
     product = abs(stability.fastest_pole) * cfg.observer.dt
     add("pole_dt", f"{abs(stability.fastest_pole):.4g} 1/s x {cfg.observer.dt:g} s = {product:.3g}",
         product <= THRESHOLDS["pole_dt"][0])
+    unit = cfg.units.unit
     obs, pid = experiments.positioning["pid+observer"], experiments.positioning["pid"]
     times = obs["settling_time"]
-    add("settles", ", ".join("never" if t is None else f"{t:.4g} s" for t in times) or "no step",
-        bool(times) and all(t is not None for t in times))
+    band = obs.get("settle_band")
+    band_text = "" if band is None else f" (band {band:.4g} {unit('m')}: {obs.get('settle_band_rule')})"
+    if obs.get("diverged"):
+        add("settles", f"diverged ({obs['divergence']}){band_text}", False)
+    else:
+        add("settles", (", ".join("did not settle" if t is None else f"{t:.4g} s" for t in times) or "no step")
+            + band_text, bool(times) and all(t is not None for t in times))
     with_obs, alone = _mean(obs["settling_time"]), _mean(pid["settling_time"])
-    if with_obs is None:
+    if obs.get("diverged"):
+        add("settling_ratio", f"the run with the observer diverged ({obs['divergence']})", False)
+    elif with_obs is None:
         add("settling_ratio", "a step with the observer did not settle", False)
     elif alone is None:
         add("settling_ratio", f"{with_obs:.4g} s; a step of the PID alone did not settle", True)
@@ -107,16 +117,20 @@ def judge_design(cfg, *, sampled_loop, experiments, noise, stability) -> tuple[C
             with_obs <= THRESHOLDS["settling_ratio"][0] * alone)
     e_obs = experiments.tracking["pid+observer"]["rms_error"]
     e_pid = experiments.tracking["pid"]["rms_error"]
-    if e_obs is None or e_pid is None:
-        add("tracking_ratio", "a tracking run diverged", False)
+    trk_obs = experiments.tracking["pid+observer"]
+    if e_obs is None or e_pid is None or trk_obs.get("diverged"):
+        add("tracking_ratio", "a tracking run diverged" + (f" ({trk_obs['divergence']})" if trk_obs.get("diverged") else ""),
+            False)
     else:
-        L = cfg.units.length_unit
-        add("tracking_ratio", f"{e_obs:.4g} {L} against {e_pid:.4g} {L} (ratio {e_obs / e_pid:.3g})",
+        add("tracking_ratio", f"{e_obs:.4g} {unit('m')} against {e_pid:.4g} {unit('m')} (ratio {e_obs / e_pid:.3g})",
             e_obs < THRESHOLDS["tracking_ratio"][0] * e_pid)
-    cf, F = cfg.friction.Cf, cfg.units.force_unit  # the units of the config's axis
-    add("noise_fraction", f"{noise.rms_filtered:.4g} {F} = {noise.rms_filtered / cf:.3g} Cf",
+    cf = cfg.friction.Cf
+    add("noise_fraction", f"{noise.rms_filtered:.4g} {unit('N')} = {noise.rms_filtered / cf:.3g} Cf",
         noise.rms_filtered <= THRESHOLDS["noise_fraction"][0] * cf)
-    err = experiments.tracking["pid+observer"].get("observer_rms_error_f")
-    add("estimate_fraction", "diverged" if err is None else f"{err:.4g} {F} = {err / cf:.3g} Cf",
-        err is not None and err <= THRESHOLDS["estimate_fraction"][0] * cf)
+    err = trk_obs.get("observer_rms_error_f")
+    if err is None or trk_obs.get("diverged"):
+        add("estimate_fraction", "diverged" + (f" ({trk_obs['divergence']})" if trk_obs.get("diverged") else ""), False)
+    else:
+        add("estimate_fraction", f"{err:.4g} {unit('N')} = {err / cf:.3g} Cf",
+            err <= THRESHOLDS["estimate_fraction"][0] * cf)
     return tuple(out)

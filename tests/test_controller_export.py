@@ -43,14 +43,16 @@ CASES = {
     "tracking": (VCM, dict(scenario="tracking", controller="pid+observer")),
     "positioning": (VCM, dict(scenario=od.sim.Positioning(step_down=1.2), controller="pid+observer")),
     "pid-only": (VCM, dict(scenario="tracking", controller="pid")),
-    "saturated": (VCM.override(u_max=0.5), dict(scenario=od.sim.Positioning(step_down=1.2), controller="pid+observer")),
+    "saturated": (VCM.override(u_max=1.8), dict(scenario=od.sim.Positioning(step_down=1.2), controller="pid+observer")),
+    # the lag observer runs in its model plant (plant="model", the CLI's default for it): in the physical lag plant
+    # table1's compensated loop runs away at the actuator's limit (flagged 'runaway' since issue 33 point 4)
     "noisy-lag": (od.load_preset("table1").override(noise_rms=2e-7),
                   # simulated and exported with the schedule without reversal hysteresis
-                  dict(scenario="tracking", controller="pid+observer", stiffness="estimated-raw")),
+                  dict(scenario="tracking", controller="pid+observer", stiffness="estimated-raw", plant="model")),
     # the drive's delay ([hardware] delay_samples): the simulated plant applies the command of sample n from
     # n + d; the exported controller has no delay (_applied shifts its commands)
     "delayed": (od.load_preset("table1").override(quantization=1e-7, delay_samples=2),
-                dict(scenario=od.sim.Positioning(step_down=1.2), controller="pid+observer")),
+                dict(scenario=od.sim.Positioning(step_down=1.2), controller="pid+observer", plant="model")),
     "delayed-eso": (VCM.override(noise_rms=1e-6, delay_samples=1),
                     dict(scenario="tracking", controller="pid+observer", estimator="eso")),
 }
@@ -70,7 +72,9 @@ def case(request):
     assert not res.metrics["diverged"]
     if request.param == "saturated":
         cmd = (res.u + cfg.plant.G) / cfg.plant.K
-        assert np.sum(np.abs(np.abs(cmd) - 0.5) < 1e-12) > 100  # the limit is active for a while
+        # the limit is active for a while; 1.8 V is above the load G/K = 1.61 V (at 0.5 V the axis could not hold
+        # its load and fell 0.3 m, a runaway since issue 33 point 4)
+        assert np.sum(np.abs(np.abs(cmd) - 1.8) < 1e-12) > 100
     return request.param, cfg, kw["controller"], res
 
 
@@ -313,7 +317,9 @@ def test_compensation_knobs_follow_the_law(language, comp, knob_inputs, tmp_path
 # Parity contract: every schedule and every estimator, under sensor noise and quantization.
 # (benchmarks/parity.py runs the same over 60 s tracking and the whole positioning scenario.)
 NOISY = {
-    "tracking": (od.load_preset("table1").override(quantization=1e-7), "tracking", 0.5),  # lag, noise 1 um
+    # static, noise 1 um: the lag variant runs away in the physical lag plant (issue 33 point 4) and saturates in
+    # its model plant (a spring sigma/beta); its parity is the 'noisy-lag' case above
+    "tracking": (od.load_preset("table1").override(quantization=1e-7, variant="static"), "tracking", 0.5),
     "positioning": (VCM.override(noise_rms=1e-6), od.sim.Positioning(step_up=0.05, step_down=0.4), 0.7),  # static
 }
 PARITY_KNOBS = {"default": CompensationSpec(), "knobs": CompensationSpec(gain=0.7, viscous=True, deadzone=1e-4)}
@@ -325,7 +331,9 @@ def _noisy_run(scenario_name, estimator, schedule, knobs):
     cfg = cfg.override(gain=comp.gain, viscous=comp.viscous, deadzone=comp.deadzone)
     res = od.simulate(cfg, scenario, controller="pid+observer", stiffness=schedule, estimator=estimator,
                       duration=duration)
-    assert not res.metrics["diverged"]
+    # parity needs finite traces, not a good loop: ('paper', 'constant') runs away on table1's tracking
+    # (|e| 0.14 m, flagged 'runaway' since issue 33 point 4), and the export must reproduce that run too
+    assert res.metrics["divergence"] in (None, "runaway")
     return cfg, res
 
 

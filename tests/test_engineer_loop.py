@@ -326,8 +326,9 @@ def test_step_metrics_match_step_info_on_a_linear_loop():
     s = ct.tf("s")
     C = loop.sampled.kp + loop.sampled.ki / s + loop.sampled.kd * s / (loop.sampled.tau_d * s + 1)
     T = ct.feedback(C * K / (s * (m * s + sigma)), 1)
-    info = ct.step_info(T, T=np.linspace(0, 2.5, 250001), SettlingTimeThreshold=2e-6 / 1e-3)
     mt = res.metrics
+    assert mt["settle_band"] == pytest.approx(1e-3 * 1e-3, rel=1e-15)  # an ideal sensor: 0.1 % of the 1 mm step
+    info = ct.step_info(T, T=np.linspace(0, 2.5, 250001), SettlingTimeThreshold=mt["settle_band"] / 1e-3)
     assert len(mt["overshoot"]) == len(mt["rise_time"]) == len(mt["settling_time"]) == 2
     for i in range(2):  # step up and step down (symmetric)
         assert mt["overshoot"][i] == pytest.approx(info["Overshoot"] / 100, rel=0.01)

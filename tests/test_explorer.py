@@ -341,4 +341,11 @@ def test_the_rotary_axis_in_the_fields(page, dt, delay):
     x_page = np.asarray(driver.execute_script("return lastStep.x;"))
     x_sim = run(preview_inputs(ref)).x
     assert x_page.shape == x_sim.shape and np.max(np.abs(x_page - x_sim)) <= FIELDS_TOLERANCE
-    assert "settling into 2 urad" in driver.find_element(By.ID, "stepsummary").text   # the axis's units
+    # the band of the axis (2 counts of 2^20 per revolution: 11.98 urad), in its units, and the simulator's verdict
+    summary = driver.find_element(By.ID, "stepsummary").text
+    assert "settling into 12.0 urad (2 x encoder resolution 5.992e-06 rad): " in summary, summary
+    settling = run(preview_inputs(ref)).metrics["settling_time"][0]
+    if settling is None:
+        assert "did not settle" in summary
+    else:
+        assert float(summary.split("after ")[1].split(" s")[0]) == pytest.approx(settling, rel=5e-3), summary

@@ -147,8 +147,10 @@ def test_observe_reproduces_the_simulator_for_every_estimator(estimator):
 
 
 def _check_observe(cfg, schedule, estimator):
+    # the lag variant in its model plant: table1's compensated loop runs away in the physical lag plant (flagged
+    # 'runaway' since issue 33 point 4)
     res = od.simulate(cfg, od.sim.Positioning(step_up=0.2, step_down=0.6), duration=1.0, stiffness=schedule,
-                      estimator=estimator)
+                      estimator=estimator, plant="model" if cfg.observer.variant == "lag" else "physical")
     assert not res.metrics["diverged"]
     trace = Trace(t=res.t, position=res.x_meas, force=res.u + cfg.plant.G, sample_time=cfg.observer.dt)
     ctrl = sampled_controller(cfg, schedule=schedule, estimator=estimator)

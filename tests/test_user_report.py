@@ -74,13 +74,19 @@ def test_a_value_edited_after_identify_is_not_credited_to_the_identification(tmp
 
 
 def _inputs(pm=45.0, gm=8.0, max_s=1.5, pole=-500.0, settle_obs=(0.1, 0.1), settle_pid=(0.1, 0.1),
-            track=(1e-6, 2e-6), noise=0.01, est=0.05):
+            track=(1e-6, 2e-6), noise=0.01, est=0.05, pos_div=None, track_div=None):
     cfg = od.load_preset("vcm")   # Cf 0.35 N, dt 1e-4 s
     loop = SimpleNamespace(phase_margin_deg=pm, gain_margin_db=gm, max_S=max_s)
-    exp = SimpleNamespace(positioning={"pid+observer": {"settling_time": list(settle_obs)},
-                                       "pid": {"settling_time": list(settle_pid)}},
-                          tracking={"pid+observer": {"rms_error": track[0], "observer_rms_error_f": est},
-                                    "pid": {"rms_error": track[1]}})
+
+    def div(label):  # a run that diverged: its metrics can still be finite (a runaway within the bounds)
+        return {"diverged": label is not None, "divergence": label}
+
+    exp = SimpleNamespace(positioning={"pid+observer": {"settling_time": list(settle_obs), **div(pos_div),
+                                                        "settle_band": 2e-6, "settle_band_rule": "given"},
+                                       "pid": {"settling_time": list(settle_pid), **div(None)}},
+                          tracking={"pid+observer": {"rms_error": track[0], "observer_rms_error_f": est,
+                                                     **div(track_div)},
+                                    "pid": {"rms_error": track[1], **div(None)}})
     return cfg, dict(sampled_loop=loop, experiments=exp, noise=SimpleNamespace(rms_filtered=noise),
                      stability=SimpleNamespace(fastest_pole=pole))
 
@@ -98,6 +104,8 @@ def _inputs(pm=45.0, gm=8.0, max_s=1.5, pole=-500.0, settle_obs=(0.1, 0.1), sett
     ({"track": (2e-6, 2e-6)}, ["tracking_ratio"]),
     ({"noise": 0.036}, ["noise_fraction"]),                               # > 0.1 Cf = 0.035 N
     ({"est": 0.071}, ["estimate_fraction"]),                              # > 0.2 Cf = 0.07 N
+    ({"pos_div": "runaway"}, ["settles", "settling_ratio"]),             # finite times, but it ran away
+    ({"track_div": "estimate"}, ["tracking_ratio", "estimate_fraction"]),
 ])
 def test_criteria_apply_their_stated_thresholds(change, failing):
     cfg, kw = _inputs(**change)
@@ -105,6 +113,15 @@ def test_criteria_apply_their_stated_thresholds(change, failing):
     assert [c.name for c in got] == list(THRESHOLDS)
     assert [c.name for c in got if not c.holds] == failing
     assert all(c.rule == THRESHOLDS[c.name][1] for c in got)
+
+
+def test_criteria_say_did_not_settle_and_the_band():
+    cfg, kw = _inputs(settle_obs=(0.1, None))
+    settles = next(c for c in judge_design(cfg, **kw) if c.name == "settles")
+    assert not settles.holds and settles.measured == "0.1 s, did not settle (band 2e-06 m: given)"
+    cfg, kw = _inputs(pos_div="runaway")
+    settles = next(c for c in judge_design(cfg, **kw) if c.name == "settles")
+    assert not settles.holds and settles.measured.startswith("diverged (runaway)")
 
 
 def _dwell_trace():

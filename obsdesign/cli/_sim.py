@@ -328,7 +328,9 @@ def add_commands(sub) -> None:
     p.add_argument("--step-up", type=NONNEGATIVE_ARG, help="time of the step up [s] (default 0.5)")
     p.add_argument("--step-down", type=NONNEGATIVE_ARG, help="time of the step back [s] (default 3.0)")
     p.add_argument("--excitation-bandwidth", type=POSITIVE_ARG, help="bandwidth of the excitation force [Hz] (default 5)")
-    p.add_argument("--settle-tol", type=POSITIVE_ARG, default=2e-6, help="settling band [m] (default 2e-6)")
+    p.add_argument("--settle-tol", type=POSITIVE_ARG,
+                   help="settling band [m] (default: max(2 x quantization, 3 x noise RMS), 0.1 %% of the step for an "
+                        "ideal sensor; stated in the output)")
     p.add_argument("--out", metavar="FILE", help="write the trace to FILE.csv or FILE.npz")
     p.add_argument("--plot", metavar="FILE", help="write a figure to FILE.svg or FILE.png")
     from ._circle import add_circle_flags

@@ -148,6 +148,7 @@ def explorer_context(cfg: Config, certificate=None) -> dict:
     from ..design.certificate import certify
     from ..export.codegen import js_module
     from ..sim import kernel
+    from ..sim.bands import SETTLE_DWELL
     from ..sim.numerics import MAX_STEP_RATE, fastest_rate
 
     variant = cfg.observer.variant
@@ -193,6 +194,8 @@ def explorer_context(cfg: Config, certificate=None) -> dict:
             "duration": PREVIEW_DURATION, "max_samples": PREVIEW_SAMPLES, "substeps": PREVIEW_SUBSTEPS,
             "rate": fastest_rate(cfg)[1], "max_step_rate": MAX_STEP_RATE, "delay_init": float(plant.delay_init),
             "omega_co": cfg.observer.omega_co,
+            # the settling band of the run (noise-free: 2 counts, or 0.1 % of the step) and the simulator's dwell
+            "band": float(loop.settle_tol), "band_rule": loop.settle_rule, "dwell": SETTLE_DWELL,
             **_reference_inputs(loop),
         },
     }

@@ -1,25 +1,40 @@
 """Summary metrics of a simulated run (the ``metrics`` of a :class:`~obsdesign.sim.SimResult`).
 
+Lengths are in the axis's unit: m on a linear axis, rad on a rotary one (m/s or rad/s, N or N m).
+
 =========================  =====================================================================
 key                        meaning
 =========================  =====================================================================
 ``rms_error``              RMS of ``e = x_ref - x`` over the run [m]
 ``max_error``              largest ``|e|`` [m]
-``settling_time``          per positioning hold: time after the step until ``|e|`` stays within
-                           ``settle_tol`` (``None``: never within the hold) [s]
+``settle_band``            half-width of the settling band [m] (:mod:`obsdesign.sim.bands`:
+                           ``max(2 x resolution, 3 x noise RMS)`` unless given; ``None`` for an
+                           open-loop run)
+``settle_band_rule``       where the band comes from (``'2 x encoder resolution 1e-06 m'``, ``'given'``)
+``settling_time``          per positioning hold: time after the step from which ``|e|`` stays within
+                           the band to the end of the hold, at least its last 10 %
+                           (``None``: did not settle) [s]
+``settled``                per hold: whether it settled (``False``: "did not settle")
 ``steady_state_error``     per hold: mean ``e`` over its last 10 % [m]
+``steady_state_in_band``   per hold: ``|steady_state_error|`` within the band (``None``: not reached)
 ``overshoot``              per positioning step: largest excursion of ``x`` beyond the target in
                            the step direction, as a fraction of the step [-]
 ``rise_time``              per positioning step: 10 % to 90 % of the step [s] (``None``: not reached)
 ``observer_rms_error_v``   RMS of ``v_hat - v`` [m/s]
 ``observer_rms_error_f``   RMS of ``f_hat - f`` [N] (``f``: the plant's value of the estimated state)
-``diverged``               the run stopped early because a state left its bounds
+``diverged``               the run stopped early because a state left the simulator's bounds, or ran
+                           away from its task (``divergence`` ``'runaway'`` or ``'estimate'``)
 ``divergence``             ``None`` (no divergence), ``'numerical'`` (the plant's explicit step
                            ``dt / n_sub`` broke the rule of :mod:`obsdesign.sim.numerics`, so
                            the integrator, not the design, blew up), ``'measurement'`` (the
                            measured displacement left the bounds while the plant stayed within
-                           them: the sensor noise or quantization is out of scale) or
-                           ``'physical'`` (the step was stable: the loop itself diverged)
+                           them: the sensor noise or quantization is out of scale),
+                           ``'physical'`` (the step was stable: the loop itself diverged),
+                           ``'runaway'`` (the run went on, but ``|e|`` exceeded ``error_bound``)
+                           or ``'estimate'`` (the filtered friction estimate exceeded
+                           ``estimate_bound``)
+``error_bound``            closed loop: 10 x (reference span + band) [m]; ``None`` in open loop
+``estimate_bound``         10 x (``K u_max + |G| + Cf``) of the simulated plant [N]
 ``sim_wall_s``             wall time of the kernel [s]
 ``rms_error_per_band``     tracking only: RMS of ``e`` per chirp-frequency band [m]
 =========================  =====================================================================
@@ -31,20 +46,22 @@ displacement over each hold (``None`` for a hold the run did not reach).
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
 from .scenarios import CHIRP_BAND_LABELS, Scenario, chirp_frequency, hold_samples
-from .step_metrics import last_outside, step_metrics
+from .bands import SETTLE_DWELL, error_bound
+from .step_metrics import settling_sample, step_metrics
 
 __all__ = ["loop_metrics", "METRIC_UNITS", "rms"]
 
 #: Unit of each metric for text output ("-": dimensionless; lists and dicts: of their items).
 METRIC_UNITS = {
-    "rms_error": "m", "max_error": "m", "settling_time": "s", "steady_state_error": "m", "overshoot": "-",
-    "rise_time": "s", "observer_rms_error_v": "m/s", "observer_rms_error_f": "N", "sim_wall_s": "s",
-    "rms_error_per_band": "m",
+    "rms_error": "m", "max_error": "m", "settle_band": "m", "settling_time": "s", "steady_state_error": "m",
+    "overshoot": "-", "rise_time": "s", "observer_rms_error_v": "m/s", "observer_rms_error_f": "N", "sim_wall_s": "s",
+    "rms_error_per_band": "m", "error_bound": "m", "estimate_bound": "N",
 }
 
 
@@ -141,8 +158,9 @@ def _divergence(out: dict[str, np.ndarray], n_written: int, step_stable: bool) -
     return "physical"
 
 
-def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_written: int, settle_tol: float,
-                 wall: float, *, step_stable: bool = True) -> dict[str, Any]:
+def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_written: int, settle_tol: float | None,
+                 wall: float, *, step_stable: bool = True, settle_rule: str = "given",
+                 force_bound: float = math.inf, span: float | None = None) -> dict[str, Any]:
     """The metrics of a run from the kernel's outputs (see the module docstring).
 
     Parameters
@@ -155,12 +173,18 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
         Tracking error x_ref - x [m].
     n_written : int
         Samples the kernel wrote (fewer after a divergence).
-    settle_tol : float
-        Settling band [m].
+    settle_tol : float or None
+        Settling band [m] (None: an open-loop run, which has none).
     wall : float
         Wall time of the kernel [s].
     step_stable : bool
         Whether the plant's integration step met the numerical rule (labels a divergence).
+    settle_rule : str
+        Where the band comes from (:class:`obsdesign.sim.bands.SettleBand`), stated in the metrics.
+    force_bound : float
+        The estimate's runaway bound [N] (:func:`obsdesign.sim.bands.force_bound`).
+    span : float, optional
+        Peak-to-peak of the reference the run followed [m] (default: the scenario's ``x_ref``).
     """
     dt = sc.dt
     valid = slice(0, n_written)
@@ -173,35 +197,50 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
     # the kernel).
     buffers = np.empty((2, len(e)))
     scratch = buffers[0]
+    closed = not sc.spec.open_loop
+    if span is None:
+        span = float(np.max(sc.x_ref) - np.min(sc.x_ref)) if closed and len(sc.x_ref) else 0.0
+    max_error = float(max(np.max(e_valid), -np.min(e_valid))) if n_written else None
     m: dict[str, Any] = {
         "rms_error": rms(e_valid, finite=finite, scratch=scratch),
-        "max_error": float(max(np.max(e_valid), -np.min(e_valid))) if n_written else None,
+        "max_error": max_error,
+        "settle_band": settle_tol,
+        "settle_band_rule": settle_rule if settle_tol is not None else None,
         "settling_time": [],
+        "settled": [],
         "steady_state_error": [],
+        "steady_state_in_band": [],
         "overshoot": [],
         "rise_time": [],
         "observer_rms_error_v": _rms_of_difference(out["v_hat"][valid], out["v"][valid], finite, scratch),
         "observer_rms_error_f": _rms_of_difference(out["f_hat"][valid], out["f"][valid], finite, scratch),
         "diverged": not finite,
         "divergence": None if finite else _divergence(out, n_written, step_stable),
+        "error_bound": error_bound(span, settle_tol) if closed and settle_tol is not None else None,
+        "estimate_bound": force_bound,
         "sim_wall_s": wall,
     }
+    if finite:  # the run went on to the end: did it run away from its task?
+        ff = out["f_hat_filtered"]
+        if m["error_bound"] is not None and max_error is not None and max_error > m["error_bound"]:
+            m["diverged"], m["divergence"] = True, "runaway"
+        elif ff.size and float(max(np.max(ff), -np.min(ff))) > force_bound:
+            m["diverged"], m["divergence"] = True, "estimate"
+    if sc.holds and settle_tol is None:
+        raise ValueError("settle_tol: expected a band > 0 for a scenario with holds, found None")
+    band = math.inf if settle_tol is None else float(settle_tol)
     for start, end in sc.holds:
         i0, i1 = hold_samples(start, end, dt, len(e))  # at least 2 (build_scenario)
         seg = e[i0:i1]
-        last = last_outside(seg, 0.0, settle_tol, scratch=scratch)
-        if m["diverged"] and i1 - 1 >= n_written:
-            m["settling_time"].append(None)
-        elif last is None:
-            m["settling_time"].append(0.0)
-        elif last == len(seg) - 1:
-            m["settling_time"].append(None)  # never settles within the hold
-        else:
-            m["settling_time"].append(float((last + 1) * dt))
-        _step_response(m, sc, out["x"], i0, i1, start, settle_tol,
-                       reached=not (m["diverged"] and i1 - 1 >= n_written), scratch=buffers)
-        tail = seg[int(0.9 * len(seg)):]
-        m["steady_state_error"].append(float(np.mean(tail)) if np.all(np.isfinite(tail)) else None)
+        reached = finite or i1 - 1 < n_written
+        settled = settling_sample(seg, 0.0, band, dwell=SETTLE_DWELL, scratch=scratch) if reached else None
+        m["settling_time"].append(None if settled is None else (0.0 if settled == 0 else float(settled * dt)))
+        m["settled"].append(settled is not None)
+        _step_response(m, sc, out["x"], i0, i1, start, band, reached=reached, scratch=buffers)
+        tail = seg[int((1.0 - SETTLE_DWELL) * len(seg)):]
+        sse = float(np.mean(tail)) if np.all(np.isfinite(tail)) else None
+        m["steady_state_error"].append(sse)
+        m["steady_state_in_band"].append(None if sse is None else abs(sse) <= band)
     if sc.name == "tracking":
         # The chirp's frequency rises monotonically, so each band is a contiguous run of samples.
         m["rms_error_per_band"] = {}

@@ -86,11 +86,26 @@ class SimResult(ResultDisplay):
     def _rows(self) -> list[tuple[str, str]]:
         from .metrics import METRIC_UNITS
 
-        rows = []
-        for key, value in self.metrics.items():
+        def unit_of(key: str) -> str:
             unit = self.config.units.unit(METRIC_UNITS.get(key, ""))
-            unit = "" if unit == "-" else unit
-            if isinstance(value, list):
+            return "" if unit == "-" else unit
+
+        m, rows = self.metrics, []
+        for key, value in m.items():
+            unit = unit_of(key)
+            if key == "settle_band_rule":
+                continue  # stated beside the band
+            if key == "settling_time" and isinstance(value, list):
+                value = "[" + ", ".join("did not settle" if v is None else with_unit(v, unit, 4) for v in value) + "]"
+            elif key == "settle_band" and value is not None:
+                value = f"{with_unit(value, unit, 4)} ({m.get('settle_band_rule')})"
+            elif key == "divergence" and value in ("runaway", "estimate"):
+                what, bound = (("|e|", "error_bound"), m.get("max_error")) if value == "runaway" else \
+                    (("|f_hat_filtered|", "estimate_bound"), None)
+                b_unit = unit_of(what[1])
+                reached = f" {with_unit(bound, b_unit, 4)}" if bound is not None else ""
+                value = f"{value} ({what[0]}{reached} beyond {what[1]} {with_unit(m.get(what[1]), b_unit, 4)})"
+            elif isinstance(value, list):
                 value = "[" + ", ".join(short(v) for v in value) + "]" + (f" {unit}" if unit else "")
             elif isinstance(value, dict):
                 value = ", ".join(f"{k}: {with_unit(v, unit, 4)}" for k, v in value.items())

@@ -35,6 +35,7 @@ from ..params import Config
 from ..sampled.choices import PLANTS
 from ..sampled.controller import REVERSAL_NOISE_FACTOR, SampledController, sampled_controller
 from . import kernel
+from .bands import force_bound, settle_band
 from .metrics import loop_metrics
 from .numerics import step_is_stable, substeps_for
 from ..friction.registry import FRICTION_MODELS
@@ -57,8 +58,8 @@ class LoopInputs:
         The sampled scenario.
     plant : str
         ``physical`` or ``model``.
-    settle_tol : float
-        Settling band [m].
+    settle_tol : float or None
+        Settling band [m] (None: an open-loop run).
     sampled : SampledController
         The controller that runs (:func:`obsdesign.sampled.sampled_controller`).
     n_sub : int
@@ -77,12 +78,14 @@ class LoopInputs:
         Encoder resolution [m] (0: none).
     plant_config : Config or None
         The plant's own config under model mismatch.
+    settle_rule : str
+        Where the settling band comes from (:func:`obsdesign.sim.bands.settle_band`).
     """
 
     config: Config
     scenario: Scenario = field(repr=False)
     plant: str
-    settle_tol: float
+    settle_tol: float | None
     sampled: SampledController = field(repr=False)
     n_sub: int
     mode: int
@@ -96,6 +99,7 @@ class LoopInputs:
     noise: np.ndarray = field(repr=False)
     quantization: float
     plant_config: Config | None = field(repr=False, default=None)
+    settle_rule: str = "given"
 
     @property
     def n_samples(self) -> int:
@@ -164,7 +168,7 @@ def prepare(
     estimator: "str | DiscreteEstimator" = "paper",
     duration: float | None = None,
     seed: int = 0,
-    settle_tol: float = 2e-6,
+    settle_tol: float | None = None,
     initial_estimate: tuple[float, float] = (0.0, 0.0),
     substeps: int = 10,
 ) -> LoopInputs:
@@ -200,8 +204,10 @@ def prepare(
     seed : int
         Seed of the measurement noise and the excitation (``numpy.random.SeedSequence``), an
         integer >= 0 (``None`` is refused: a run is reproducible from its arguments).
-    settle_tol : float
-        Band [m] for the settling time (default 2 um).
+    settle_tol : float, optional
+        Band [m] for the settling time; default: scaled to the sensor, ``max(2 x quantization,
+        3 x noise_rms)`` (0.1 % of the reference's span for an ideal sensor), see
+        :mod:`obsdesign.sim.bands`. None for an open-loop scenario, which has no reference.
     initial_estimate : (float, float)
         Observer's initial ``(v_hat, f_hat)``; the plant starts at rest.
     substeps : int
@@ -222,7 +228,8 @@ def prepare(
     PLANTS.check(plant)
     if controller is None:
         controller = "open-loop" if spec.open_loop else "pid+observer"
-    settle_tol = POSITIVE.check("settle_tol", settle_tol)
+    if settle_tol is not None:
+        settle_tol = POSITIVE.check("settle_tol", settle_tol)
     seed = check_integer("seed", seed, minimum=0)
     ctrl = sampled_controller(cfg, controller=controller, schedule=stiffness, estimator=estimator,
                               initial_estimate=initial_estimate)
@@ -237,12 +244,16 @@ def prepare(
     sc = build_scenario(spec, dt=dt, duration=duration, seed=signal_seed)
     sensor = cfg.sensor
     noise = band_limited_noise(len(sc.x_ref), dt, sensor.noise_rms, sensor.noise_bandwidth, noise_seed)
+    band = None
+    if settle_tol is not None or not spec.open_loop:
+        band = settle_band(cfg, span=float(np.max(sc.x_ref) - np.min(sc.x_ref)), given=settle_tol)
     friction_code, plant_params = plant_friction_arrays(plant_cfg)
     if plant == "model" and friction_code != 0:
         raise ValueError(f"plant: the 'model' plant has the paper's friction, found [plant_friction] model "
                          f"{plant_cfg.plant_friction.model!r}")
     return LoopInputs(
-        config=cfg, scenario=sc, plant=plant, settle_tol=settle_tol, sampled=ctrl, n_sub=substeps,
+        config=cfg, scenario=sc, plant=plant, settle_tol=None if band is None else band.value, sampled=ctrl,
+        n_sub=substeps, settle_rule="given" if band is None else band.rule,
         mode=PLANTS.code(plant), m=plant_cfg.plant.m, K_plant=plant_cfg.plant.K, G_plant=plant_cfg.plant.G,
         friction_code=friction_code, plant_params=plant_params, x_ref=sc.x_ref, u_open=sc.u_open, noise=noise,
         quantization=sensor.quantization, plant_config=plant_cfg if plant_cfg is not cfg else None,
@@ -359,7 +370,9 @@ def loop_result(loop: LoopInputs, out: dict[str, np.ndarray], n_written: int, wa
     stable_step = step_is_stable(dt=loop.dt, n_sub=loop.n_sub, m=loop.m, sigma=fr.sigma, kappa=fr.kappa,
                                  beta=fr.beta if fr.beta is not None else 0.0,
                                  model_lag=loop.mode == kernel.PLANT_MODEL and loop.lag_model)
-    metrics = loop_metrics(loop.scenario, out, e, n_written, loop.settle_tol, wall, step_stable=stable_step)
+    metrics = loop_metrics(loop.scenario, out, e, n_written, loop.settle_tol, wall, step_stable=stable_step,
+                           settle_rule=loop.settle_rule, force_bound=force_bound(loop.plant_config or loop.config),
+                           span=float(np.max(loop.x_ref) - np.min(loop.x_ref)) if n else 0.0)
     traces = {}
     if keep_trace:
         traces = dict(out, t=np.arange(n) * loop.dt, x_ref=loop.x_ref, e=e)

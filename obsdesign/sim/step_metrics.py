@@ -1,12 +1,13 @@
 """Step-response metrics of one positioning step: overshoot, rise, settling and peak time.
 
-The settling time has the simulator's definition (``_metrics`` of
-:mod:`obsdesign.sim.simulate`): over the samples from the step on, the last sample
-outside the band ``|y - y1| <= settle_band`` (a NaN counts as outside) is found; the
-step has settled at the next sample. No sample outside gives 0, a last sample outside
-gives ``None`` (never settles within the trace). The simulator counts ``(k + 1) dt`` from the
-first sample of the hold; here the time is ``t[settled] - t_step``: the same sample, equal up to
-the rounding of the time stamps.
+The settling time has the simulator's definition (:func:`obsdesign.sim.metrics.loop_metrics`):
+over the samples from the step on, the last sample outside the band ``|y - y1| <= settle_band``
+(a NaN counts as outside) is found; the step has settled at the next sample
+(:func:`settling_sample`). No sample outside gives 0; a last sample outside, or (with ``dwell``)
+fewer than that fraction of the samples inside at the end, gives ``None``: did not settle within
+the trace. The simulator uses ``dwell`` :data:`obsdesign.sim.bands.SETTLE_DWELL` (the window of
+the steady-state error) and counts ``(k + 1) dt`` from the first sample of the hold; here the time
+is ``t[settled] - t_step``: the same sample, equal up to the rounding of the time stamps.
 
 Examples
 --------
@@ -24,7 +25,7 @@ import math
 
 import numpy as np
 
-__all__ = ["step_metrics", "last_outside", "RISE_LIMITS"]
+__all__ = ["step_metrics", "last_outside", "settling_sample", "RISE_LIMITS"]
 
 #: Fractions of the step between which the rise time is measured.
 RISE_LIMITS = (0.1, 0.9)
@@ -83,7 +84,43 @@ def last_outside(y: np.ndarray, center: float, band: float, *, scratch: np.ndarr
     return None if inside[-1 - j] else inside.size - 1 - j
 
 
-def step_metrics(t, y, *, t_step: float, y0: float, y1: float, settle_band: float,
+def settling_sample(y: np.ndarray, center: float, band: float, *, dwell: float = 0.0,
+                    scratch: np.ndarray | None = None) -> int | None:
+    """Index of the sample from which ``y`` stays within ``|y - center| <= band`` to its end, or None:
+    did not settle (its last sample outside, or fewer than ``dwell`` x ``y.size`` samples inside at the end).
+
+    Parameters
+    ----------
+    y : ndarray, shape (n,)
+        The samples from the step on (NaN counts as outside).
+    center, band : float
+        Centre and half-width of the band.
+    dwell : float
+        Fraction of the samples, in [0, 1), that must lie within the band at the end: settled only if
+        the last ``n - int((1 - dwell) n)`` samples are (at least one).
+    scratch : ndarray, shape (>= n,), optional
+        As :func:`last_outside`.
+
+    Examples
+    --------
+    >>> y = np.array([3.0, 2.0, 0.5, 0.2, 0.1, 0.0, 0.0, 0.0, 0.0, 0.0])
+    >>> settling_sample(y, 0.0, 1.0), settling_sample(y, 0.0, 1.0, dwell=0.5)
+    (2, 2)
+    >>> settling_sample(y, 0.0, 1.0, dwell=0.9) is None                 # inside for 8 of the 9 it needs
+    True
+    >>> settling_sample(np.array([1.0, 0.0, 2.0]), 0.0, 0.5) is None    # ends outside: did not settle
+    True
+    """
+    last = last_outside(y, center, band, scratch=scratch)
+    first_inside = 0 if last is None else last + 1
+    n = y.size
+    tail = int((1.0 - dwell) * n)  # the first sample of the window that must be inside (the steady-state window)
+    if first_inside >= n or first_inside > tail:
+        return None
+    return first_inside
+
+
+def step_metrics(t, y, *, t_step: float, y0: float, y1: float, settle_band: float, dwell: float = 0.0,
                  scratch: np.ndarray | None = None) -> dict:
     """Overshoot, rise time, settling time and peak time of a step from ``y0`` to ``y1`` at ``t_step``.
 
@@ -101,6 +138,10 @@ def step_metrics(t, y, *, t_step: float, y0: float, y1: float, settle_band: floa
         Value before and after the step (``y1 != y0``); steps down are handled by symmetry.
     settle_band : float
         Half-width of the settling band around ``y1``, in the units of ``y`` (absolute, > 0).
+    dwell : float
+        Fraction in [0, 1) of the samples from ``t_step`` on that must be within the band at the end
+        (:func:`settling_sample`; the simulator's 0.1); 0 (default): the last sample, as python-control's
+        ``step_info``.
     scratch : ndarray, shape (>= n,), optional
         A float buffer for the intermediate arrays (neither ``t`` nor ``y``): a caller that
         measures many traces spares the allocations (and on Linux the page faults of fresh
@@ -113,7 +154,8 @@ def step_metrics(t, y, *, t_step: float, y0: float, y1: float, settle_band: floa
         fraction of ``|y1 - y0|`` (0 if none);
         ``rise_time`` : float or None -- time from 10 % to 90 % of the step [s], each crossing
         interpolated linearly between samples (None if 90 % is never reached);
-        ``settling_time`` : float or None -- as in the simulator, see the module notes [s];
+        ``settling_time`` : float or None -- as in the simulator, see the module notes [s]
+        (None: did not settle);
         ``peak_time`` : float -- time of the largest value in the step direction [s].
 
     Raises
@@ -146,6 +188,9 @@ def step_metrics(t, y, *, t_step: float, y0: float, y1: float, settle_band: floa
     settle_band = _finite("settle_band", settle_band)
     if settle_band <= 0:
         raise ValueError(f"settle_band: expected a number > 0, found {settle_band!r}")
+    dwell = _finite("dwell", dwell)
+    if not 0.0 <= dwell < 1.0:
+        raise ValueError(f"dwell: expected a fraction in [0, 1), found {dwell!r}")
     if y1 == y0:
         raise ValueError(f"y1: expected a value different from y0 = {y0!r} (a step of nonzero size)")
     first = int(np.searchsorted(t, t_step - 0.5 * float(dt.min()), side="left"))  # t increases: a suffix
@@ -159,13 +204,8 @@ def step_metrics(t, y, *, t_step: float, y0: float, y1: float, settle_band: floa
     r[np.isnan(r)] = -np.inf  # r_peak: a lost sample is no peak
     i_peak = int(np.argmax(r))
     overshoot = max(0.0, float(r[i_peak]) - 1.0)
-    last = last_outside(ys, y1, settle_band, scratch=scratch)
-    if last is None:
-        settling = 0.0
-    elif last == ys.size - 1:
-        settling = None
-    else:
-        settling = float(ts[last + 1] - t_step)
+    settled = settling_sample(ys, y1, settle_band, dwell=dwell, scratch=scratch)
+    settling = None if settled is None else (0.0 if settled == 0 else float(ts[settled] - t_step))
     return {
         "overshoot": overshoot,
         "rise_time": None if t10 is None or t90 is None else t90 - t10,

@@ -61,7 +61,7 @@ def metric_columns(scenario: str) -> list[str]:
     """
     cols = ["stable", *_METRIC_KEYS]
     if scenario == "positioning":
-        cols += ["settling_time_1", "settling_time_2", "steady_state_error_1", "steady_state_error_2",
+        cols += ["settle_band", "settling_time_1", "settling_time_2", "steady_state_error_1", "steady_state_error_2",
                  "overshoot_1", "overshoot_2", "rise_time_1", "rise_time_2"]
     if scenario == "tracking":
         cols += [band_column(label) for label, _, _ in CHIRP_BAND_LABELS]
@@ -93,6 +93,8 @@ def run_one(cfg: Config, scenario: str, spec: RunSpec, options: dict) -> dict:
         res = simulate(cfg_r, scenario, seed=spec.seed, keep_trace=False, **options)
         m = res.metrics
         row.update({key: m[key] for key in _METRIC_KEYS})
+        if m["settling_time"]:  # the band the settling times are measured in (obsdesign.sim.bands); empty: did not settle
+            row["settle_band"] = m["settle_band"]
         for i, value in enumerate(m["settling_time"], 1):
             row[f"settling_time_{i}"] = value
         for i, value in enumerate(m["steady_state_error"], 1):
@@ -103,7 +105,7 @@ def run_one(cfg: Config, scenario: str, spec: RunSpec, options: dict) -> dict:
         for band, value in m.get("rms_error_per_band", {}).items():
             row[band_column(band)] = value
         row["status"] = "diverged" if m["diverged"] else "ok"
-        row["error"] = ""
+        row["error"] = f"divergence: {m['divergence']}" if m["diverged"] else ""  # e.g. 'runaway'
         row["_wall"] = m["sim_wall_s"]
     except (ValueError, TypeError, ArithmeticError) as e:
         row["status"] = "failed"
