@@ -44,6 +44,17 @@ FIRST_REPORT_S = 90.0
 SIMULATE_OVERHEAD_RATIO = 5.0
 KERNEL_RATIO = 1.1
 
+#: How the rows were measured (printed under the table in RESULTS.md).
+METHOD = ("Method: each measurement alternates with its reference in rounds (`python -c \"import numpy\"` "
+          "before and after each report and each simulate; C, numba, C for the kernel), fresh processes for "
+          "the commands (warm numba cache and result memo: one untimed run first), CPU time of one process "
+          "for the kernel against C; each ratio is the median of the rounds' own ratios, the spread of the "
+          "rounds beside it; the load average is read before and after. The simulate overhead is split "
+          "into numba's floor (a fresh process calling one cached `@njit` function, minus `import numpy`) "
+          "and `import matplotlib.pyplot`, measured in the same rounds. `python benchmarks/run.py --only 37 "
+          "--write` re-runs it and replaces this section; `python benchmarks/bench_speed.py --cold` adds "
+          "the first report of a fresh checkout (empty numba cache, memo and matplotlib cache).")
+
 NUMPY = [sys.executable, "-c", "import numpy"]
 CLI = [sys.executable, "-m", "obsdesign"]
 REPORT = ["report", "--preset", "vcm", "-o", "report.html"]

@@ -49,6 +49,9 @@ SUITES = {
 }
 
 
+#: A suite's method, printed under its table.
+NOTES = {"Speed contract: report, simulate, kernel (issue 37)": bench_speed.METHOD}
+
 #: The section of RESULTS.md that benchmarks/parity.py owns.
 PARITY_HEADING = "## Controller export parity (issue 16)"
 
@@ -72,7 +75,7 @@ def _section(title: str, rows: list[dict]) -> list[str]:
     for r in rows:
         lines.append(f"| {r['benchmark']} | {r['value']} | {r['reference']} | {r['ratio']} | {r['target']} | "
                      f"{'yes' if r['ok'] else 'NO'} |")
-    return lines + [""]
+    return lines + ([""] + [NOTES[title]] if title in NOTES else []) + [""]
 
 
 def replace_sections(old: str, sections: dict[str, str]) -> str:

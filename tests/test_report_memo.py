@@ -14,7 +14,7 @@ import pytest
 
 import obsdesign as od
 from obsdesign import _memo
-from obsdesign.report import figures
+from obsdesign.report import figures, kept
 from obsdesign.report.markup import is_figure_svg
 
 
@@ -57,26 +57,49 @@ def test_a_kept_figure_is_the_drawn_figure_byte_for_byte(which, memo_dir, monkey
     }[which]()
     calls: list = []
     counted = _counted(make, calls)
-    fresh, filled, kept = _three(monkeypatch, lambda: figures.kept_svg(counted, *args, units=cfg.units, **kwargs))
+    fresh, filled, read = _three(monkeypatch, lambda: kept.kept_svg(counted, *args, units=cfg.units, **kwargs))
     assert fresh == figures.inline_svg(make(*args, **kwargs), cfg.units)  # the page's drawing, independently
-    assert fresh == filled == kept and len(calls) == 2  # the third came from disk
-    assert is_figure_svg(kept)
+    assert fresh == filled == read and len(calls) == 2  # the third came from disk
+    assert is_figure_svg(read)
 
 
-def test_the_key_sees_the_data_the_units_and_the_rc_but_not_a_wall_time():
+def test_the_key_sees_the_data_the_units_and_the_function_but_not_a_wall_time():
     cfg = od.load_preset("vcm")
     y = {"x": np.arange(4.0), "sim_wall_s": 0.1}
-    key = figures.figure_key(np.sum, (y,), {}, cfg.units)
-    assert figures.figure_key(np.sum, ({"x": np.arange(4.0), "sim_wall_s": 0.2},), {}, cfg.units) == key
-    assert figures.figure_key(np.sum, ({"x": np.arange(4.0) + 1e-300, "sim_wall_s": 0.1},), {}, cfg.units) != key
-    assert figures.figure_key(np.sum, (y,), {}, None) != key
-    assert figures.figure_key(np.max, (y,), {}, cfg.units) != key
-    with figures.matplotlib.rc_context({"lines.linewidth": 3.0}):
-        assert figures.figure_key(np.sum, (y,), {}, cfg.units) != key
+    key = kept.figure_key(np.sum, (y,), {}, cfg.units)
+    assert kept.figure_key(np.sum, ({"x": np.arange(4.0), "sim_wall_s": 0.2},), {}, cfg.units) == key
+    assert kept.figure_key(np.sum, ({"x": np.arange(4.0) + 1e-300, "sim_wall_s": 0.1},), {}, cfg.units) != key
+    assert kept.figure_key(np.sum, (y,), {}, None) != key
+    assert kept.figure_key(np.max, (y,), {}, cfg.units) != key
     with pytest.raises(TypeError, match="module-level"):
-        figures.figure_key(lambda: None, (), {})
+        kept.figure_key(lambda: None, (), {})
     with pytest.raises(TypeError, match="cannot digest"):
-        figures.figure_key(np.sum, (iter([1]),), {})
+        kept.figure_key(np.sum, (iter([1]),), {})
+
+
+def test_the_key_sees_the_matplotlibrc(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    keys = [kept.figure_key(np.sum, (1.0,), {})]
+    (tmp_path / "matplotlibrc").write_text("lines.linewidth: 3\n")
+    keys.append(kept.figure_key(np.sum, (1.0,), {}))
+    monkeypatch.setenv("MPLCONFIGDIR", str(tmp_path / "elsewhere"))
+    keys.append(kept.figure_key(np.sum, (1.0,), {}))
+    assert len({k[2] for k in keys}) == 3 and len({k[:2] for k in keys}) == 1
+
+
+def test_a_changed_rc_is_drawn_not_read(memo_dir):
+    import matplotlib
+
+    from obsdesign.design import check_stability
+    from obsdesign.report import page
+
+    cfg = od.load_preset("vcm")
+    design = check_stability(cfg).design
+    plain = kept.kept_svg(page._eigen_figure, design, units=cfg.units)  # kept
+    with matplotlib.rc_context({"lines.linewidth": 3.0}):
+        wide = kept.kept_svg(page._eigen_figure, design, units=cfg.units)
+        assert wide == figures.inline_svg(page._eigen_figure(design), cfg.units)
+    assert wide != plain and kept.kept_svg(page._eigen_figure, design, units=cfg.units) == plain
 
 
 @pytest.mark.parametrize("bad", [
@@ -101,10 +124,10 @@ def test_a_kept_figure_that_is_not_matplotlibs_svg_is_refused(bad, memo_dir):
     from obsdesign.report import page
 
     design = check_stability(cfg).design
-    key = figures.figure_key(page._eigen_figure, (design,), {}, cfg.units)
+    key = kept.figure_key(page._eigen_figure, (design,), {}, cfg.units)
     _memo.memo("report_figure", key, lambda: bad)  # signed with the folder's secret: only the schema can refuse it
     with pytest.warns(_memo.MemoWarning, match="does not have the shape"):
-        svg = figures.kept_svg(page._eigen_figure, design, units=cfg.units)
+        svg = kept.kept_svg(page._eigen_figure, design, units=cfg.units)
     assert svg == figures.inline_svg(page._eigen_figure(design), cfg.units)
 
 
@@ -113,9 +136,9 @@ def test_kept_circle_rows_equal_a_fresh_run(memo_dir, monkeypatch):
 
     cfg = od.load_preset("vcm")
     # 20 mm/s (the shortest contour) as a feed that is not the picture's: its rows are kept
-    fresh, filled, kept = _three(monkeypatch, lambda: feed_runs(cfg, 2e-2, feeds=(2e-2,), figure_feed=6.32e-3))
+    fresh, filled, read = _three(monkeypatch, lambda: feed_runs(cfg, 2e-2, feeds=(2e-2,), figure_feed=6.32e-3))
     assert isinstance(fresh, list) and len(fresh) >= 4
-    assert fresh == filled == kept and all("result" not in r for r in kept)
+    assert fresh == filled == read and all("result" not in r for r in read)
     assert len(list((memo_dir / "report_circle_feed").iterdir())) == 1
     # another config is another key (a run differs)
     other = feed_runs(cfg.override(rho=cfg.observer.rho * 1.5), 2e-2, feeds=(2e-2,), figure_feed=6.32e-3)
@@ -137,9 +160,9 @@ def test_the_kept_convergence_part_is_the_studys(memo_dir, monkeypatch):
     from obsdesign.report.html import convergence_part
     from obsdesign.report.study_figures import convergence_figure
 
-    filled, kept = convergence_part(), convergence_part()  # the fill is the fresh computation
+    filled, read = convergence_part(), convergence_part()  # the fill is the fresh computation
     conv = studies.convergence_study(seeds=3)  # and once more, independently of the memo
-    assert filled == kept == (list(conv.claims), inline_svg(convergence_figure(conv)))
+    assert filled == read == (list(conv.claims), inline_svg(convergence_figure(conv)))
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        assert is_figure_svg(kept[1])
+        assert is_figure_svg(read[1])

@@ -27,7 +27,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 #: No creation date in the files, so that identical figures are identical files.
 _METADATA = {"svg": {"Date": None}, "png": {}, "pdf": {"CreationDate": None}}
 
-__all__ = ["trace_figure", "save_figure", "save_trace_figure", "trace_figure_svg", "figure_svg", "inline_svg", "kept_svg", "figure_key",
+__all__ = ["trace_figure", "save_figure", "save_trace_figure", "trace_figure_svg", "figure_svg", "inline_svg",
            "envelope", "relabel", "legible", "regrid", "prefix_ids", "PAGE_WIDTH_PX", "MIN_TEXT_PX"]
 
 #: Width [CSS px] of the report's content column (its ``max-width``): a figure wider than this is drawn smaller.
@@ -397,68 +397,6 @@ def inline_svg(fig, units=None) -> str:
         text = figure_svg(legible(relabel(fig, units)))
     text = re.sub(r"<metadata>.*?</metadata>", "", text[text.index("<svg"):], flags=re.S)
     return prefix_ids(text, "f" + hashlib.sha256(text.encode("utf-8")).hexdigest()[:10] + "-")
-
-
-#: Dictionary entries left out of a figure's key: a run's wall time is not data (no figure shows it).
-_VOLATILE = ("sim_wall_s",)
-
-
-def kept_svg(make, *args, units=None, **kwargs) -> str:
-    """:func:`inline_svg` of ``make(*args, **kwargs)``, kept in the result memo (:mod:`obsdesign._memo`).
-
-    The key is the figure function's name, a digest of everything reachable from its arguments and
-    ``units`` (:func:`obsdesign._memo.data_digest`; the runs' wall times ``sim_wall_s`` left out), matplotlib's version and every rcParam: a figure function is a pure function
-    of those and of the package's code (which is in every key), so a kept figure is the same bytes as a
-    drawn one (tests/test_report_memo.py). Arguments that cannot be digested are drawn every time.
-    A kept figure is put on the page only if :func:`obsdesign.report.markup.is_figure_svg` holds (else drawn again, with a
-    :class:`~obsdesign._memo.MemoWarning`).
-
-    Parameters
-    ----------
-    make : callable
-        Returns a :class:`matplotlib.figure.Figure` from ``args``.
-    *args, **kwargs
-        Its arguments (data: numbers, arrays, results).
-    units : AxisSpec, optional
-        As for :func:`inline_svg`.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> def line(y):
-    ...     fig, ax = plt.subplots()
-    ...     ax.plot(y)
-    ...     return fig
-    >>> kept_svg(line, np.arange(3.0)) == inline_svg(line(np.arange(3.0)))
-    True
-    """
-    from .._memo import memo
-    from .markup import is_figure_svg
-
-    def draw() -> str:
-        return inline_svg(make(*args, **kwargs), units)
-
-    try:
-        key = figure_key(make, args, kwargs, units)
-    except TypeError:
-        return draw()
-    return memo("report_figure", key, draw, valid=is_figure_svg)
-
-
-def figure_key(make, args: tuple, kwargs: dict, units=None) -> tuple[str, str, str, str]:
-    """The memo key of :func:`kept_svg`: the figure function's qualified name, the digest of its arguments
-    (the runs' wall times left out), matplotlib's version and the digest of every rcParam.
-
-    Raises :class:`TypeError` when an argument cannot be digested (:func:`obsdesign._memo.data_digest`).
-    """
-    from .._memo import data_digest
-
-    digest = data_digest((args, kwargs, units), _VOLATILE)
-    rc = data_digest(sorted((k, repr(v)) for k, v in matplotlib.rcParams.items()))
-    name = f"{getattr(make, '__module__', '')}.{getattr(make, '__qualname__', '')}"
-    if "<" in name:  # a lambda or a local function: its name does not say which one
-        raise TypeError(f"kept_svg: make must be a module-level function, found {name}")
-    return name, digest, matplotlib.__version__, rc
 
 
 def trace_figure_svg(res) -> str:

@@ -23,11 +23,9 @@ from ..design.pid import kept_response
 from ..params import Config
 from .circle_section import FEEDS as CIRCLE_FEEDS
 from .circle_section import ballbar_figure, circle_section, feed_runs
-from .data_section import data_section
 from .explorer import explorer_context, explorer_json
-from .figures import kept_svg
+from .kept import kept_svg
 from .markup import _CSP_MARK, _quantity, _with_csp, derivation_tree, is_derivation_tree, render_derivation
-from .study_figures import experiments_figure, friction_loops_figure
 
 __all__ = ["render_page", "loops_part", "circle_part", "derivation_markup", "css_string"]
 
@@ -138,7 +136,8 @@ def loops_part(cfg: Config, experiments) -> tuple[list, str]:
         :func:`obsdesign.studies.experiments_study` of ``cfg``.
     """
     loops = studies.friction_loops_study(cfg, experiments=experiments)
-    return list(loops.claims), kept_svg(friction_loops_figure, loops, units=cfg.units)
+    return list(loops.claims), kept_svg("obsdesign.report.study_figures:friction_loops_figure", loops,
+                                        units=cfg.units)
 
 
 def circle_part(cfg: Config, runs: dict) -> dict:
@@ -233,7 +232,7 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     exp = studies.experiments_study(cfg)
     claims += exp.claims
     ctx["experiments"] = exp
-    ctx["experiments_svg"] = kept_svg(experiments_figure, exp, units=units)
+    ctx["experiments_svg"] = kept_svg("obsdesign.report.study_figures:experiments_figure", exp, units=units)
     bar.update()
 
     # what runs here before the helper's results are asked for: the noise study and the circle's other
@@ -268,8 +267,12 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     bar.set_postfix_str("render")
     ctx.update(explorer_context(cfg, certificate=rep.certificate))
     ctx["sweep"] = sweep_section
-    ctx["data"] = data_section(data, cfg, moving_speed=moving_speed,
-                               label=f"the report's config ({source_label})") if data is not None else None
+    ctx["data"] = None
+    if data is not None:
+        from .data_section import data_section
+
+        ctx["data"] = data_section(data, cfg, moving_speed=moving_speed,
+                                   label=f"the report's config ({source_label})")
     ctx["comparison"] = compare_section
     ctx["elapsed"] = time.perf_counter() - t0
     env = Environment(loader=PackageLoader("obsdesign.report", "templates"), undefined=StrictUndefined,
