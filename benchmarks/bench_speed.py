@@ -18,7 +18,7 @@ Method (the machine may be shared): every measurement alternates with its refere
 rounds of the round's own ratio, and the spread (smallest and largest round) is printed beside it. The load
 average (1 minute) before and after is printed with every row.
 
-``python benchmarks/bench_speed.py [--rounds N] [--cold]``; ``python benchmarks/run.py --only 37 --write``
+``python benchmarks/bench_speed.py [--rounds N] [--cold] [--baseline DIR]``; ``python benchmarks/run.py --only 37 --write``
 runs it and records its section in ``benchmarks/RESULTS.md``.
 """
 
@@ -92,9 +92,11 @@ def _spread(values: list[float]) -> str:
     return f"{min(values):.2f}-{max(values):.2f}"
 
 
-def report_rows(rounds: int, cold: bool) -> list[dict]:
-    """Issue 37 point 1: the warm report against ``import numpy``, alternating; the cold one optionally."""
+def report_rows(rounds: int, cold: bool, baseline: str | None = None) -> list[dict]:
+    """Issue 37 point 1: the warm report against ``import numpy``, alternating; the cold one optionally;
+    with ``baseline`` (a source tree put first on ``PYTHONPATH``) that tree's report in the same rounds."""
     rows = []
+    base_env = {**os.environ, "PYTHONPATH": baseline} if baseline else None
     with tempfile.TemporaryDirectory() as tmp:
         load0 = _load()
         if cold:
@@ -109,11 +111,15 @@ def report_rows(rounds: int, cold: bool) -> list[dict]:
                          "value": f"{first:.1f} s", "reference": f"import numpy {ref:.3f} s (load {load0:.1f}-{_load():.1f})",
                          "ratio": f"{first / ref:.0f}", "target": f"< {FIRST_REPORT_S:g} s", "ok": first < FIRST_REPORT_S})
         _wall(CLI + REPORT, tmp)  # warm: numba cache, memo, file system
+        if baseline:
+            _wall(CLI + REPORT, tmp, base_env)
         load0 = _load()
-        ratios, walls, refs = [], [], []
+        ratios, walls, refs, base = [], [], [], []
         for _ in range(rounds):
             ref = _numpy(tmp)
             wall = _wall(CLI + REPORT, tmp)[0]
+            if baseline:
+                base.append(_wall(CLI + REPORT, tmp, base_env)[0])
             ref = (ref + _numpy(tmp)) / 2
             ratios.append(wall / ref)
             walls.append(wall)
@@ -125,6 +131,13 @@ def report_rows(rounds: int, cold: bool) -> list[dict]:
                      "reference": f"import numpy {statistics.median(refs):.3f} s ({_spread(refs)}); "
                                   f"round ratios {_spread(ratios)}; load {load0:.1f}-{_load():.1f}",
                      "ratio": f"{ratio:.1f}", "target": f"<= {REPORT_RATIO:g}", "ok": ratio <= REPORT_RATIO})
+        if baseline:
+            b_ratio = statistics.median(b / r for b, r in zip(base, refs))
+            rows.append({"benchmark": f"  the same report of the tree before ({baseline}), same rounds",
+                         "value": f"{statistics.median(base):.2f} s ({_spread(base)})",
+                         "reference": f"import numpy, the same references; this tree / before: "
+                                      f"{statistics.median(w / b for w, b in zip(walls, base)):.2f}",
+                         "ratio": f"{b_ratio:.1f}", "target": "", "ok": True})
     return rows
 
 
@@ -197,9 +210,11 @@ def kernel_rows(rounds: int) -> list[dict]:
              "ratio": f"{ratio:.2f}", "target": f"<= {KERNEL_RATIO:g}", "ok": ratio <= KERNEL_RATIO and same < 1e-9}]
 
 
-def run(rounds: int = 5, cold: bool = False) -> list[dict]:
-    """The rows of issue 37's section of RESULTS.md."""
-    return report_rows(rounds, cold) + simulate_rows(rounds) + kernel_rows(rounds)
+def run(rounds: int = 5, cold: bool = False, baseline: str | None = None) -> list[dict]:
+    """The rows of issue 37's section of RESULTS.md (``OBSDESIGN_BENCH_BASELINE``: a tree before, for
+    the report's before/after row)."""
+    baseline = baseline or os.environ.get("OBSDESIGN_BENCH_BASELINE") or None
+    return report_rows(rounds, cold, baseline) + simulate_rows(rounds) + kernel_rows(rounds)
 
 
 if __name__ == "__main__":
@@ -209,8 +224,11 @@ if __name__ == "__main__":
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--cold", action="store_true", help="also the first report (empty caches; minutes)")
     ap.add_argument("--only", choices=("report", "simulate", "kernel"))
+    ap.add_argument("--baseline", metavar="DIR", help="also time the report of the source tree DIR (before)")
     opts = ap.parse_args()
-    rows = ({"report": lambda: report_rows(opts.rounds, opts.cold), "simulate": lambda: simulate_rows(opts.rounds),
-             "kernel": lambda: kernel_rows(opts.rounds)}[opts.only]() if opts.only else run(opts.rounds, opts.cold))
+    rows = ({"report": lambda: report_rows(opts.rounds, opts.cold, opts.baseline),
+             "simulate": lambda: simulate_rows(opts.rounds),
+             "kernel": lambda: kernel_rows(opts.rounds)}[opts.only]() if opts.only
+            else run(opts.rounds, opts.cold, opts.baseline))
     for row in rows:
         print(row)

@@ -3,7 +3,7 @@
 Usage: ``python benchmarks/run.py [--write] [--only TEXT]`` (``make bench`` runs it with --write).
 ``--only TEXT`` runs the suites whose title contains TEXT (``--only 37``: the speed contract of issue 37:
 the report, simulate's overhead and the kernel against C); with ``--write`` their sections of RESULTS.md
-are replaced (or added before the parity section) and the rest of the file is kept.
+are replaced (or added at the end) and the rest of the file is kept.
 """
 
 from __future__ import annotations
@@ -79,8 +79,8 @@ def _section(title: str, rows: list[dict]) -> list[str]:
 
 
 def replace_sections(old: str, sections: dict[str, str]) -> str:
-    r"""``old`` (RESULTS.md) with each ``## title`` section replaced by its new text, or added before the
-    parity section (or at the end) when it is not there yet.
+    r"""``old`` (RESULTS.md) with each ``## title`` section replaced by its new text, or added at the end
+    when it is not there yet.
 
     >>> replace_sections("# R\n\n## a\n\nold\n\n## b\n\nkept\n", {"a": "## a\n\nnew\n"})
     '# R\n\n## a\n\nnew\n\n## b\n\nkept\n'
@@ -94,9 +94,6 @@ def replace_sections(old: str, sections: dict[str, str]) -> str:
             start = text.index(head)
             end = text.find("\n## ", start + len(head))
             text = text[:start] + body.rstrip("\n") + ("\n\n" + text[end + 1:] if end >= 0 else "\n")
-        elif PARITY_HEADING in text:
-            at = text.index(PARITY_HEADING)
-            text = text[:at] + body.rstrip("\n") + "\n\n" + text[at:]
         else:
             text = text.rstrip("\n") + "\n\n" + body.rstrip("\n") + "\n"
     return text

@@ -50,7 +50,7 @@ def _matplotlib_setup() -> str:
     with the variables themselves."""
     import importlib.util
 
-    from .._memo import data_digest
+    from .._digest import data_digest
 
     spec = importlib.util.find_spec("matplotlib")
     if spec is None or not spec.origin:
@@ -66,7 +66,7 @@ def _matplotlib_setup() -> str:
     for var in ("MATPLOTLIBRC", "MPLCONFIGDIR"):
         if env[var]:
             candidates += [Path(env[var]), Path(env[var]) / "matplotlibrc"]
-    files = []
+    files: list[tuple[str, bytes | str | None]] = []
     for path in candidates:
         try:
             files.append((str(path), path.read_bytes() if path.is_file() else None))
@@ -90,12 +90,26 @@ def _rc_as_read() -> bool:
 
 def figure_key(make: str | Callable, args: tuple, kwargs: dict, units: Any = None) -> tuple[str, str, str]:
     """The memo key of :func:`kept_svg`: the figure function's qualified name, the digest of its arguments
-    and ``units`` (:func:`obsdesign._memo.data_digest`; the runs' wall times left out) and of matplotlib's
+    and ``units`` (:func:`obsdesign._digest.data_digest`; the runs' wall times left out) and of matplotlib's
     set-up (:func:`_matplotlib_setup`). The package's code is in every memo key.
 
-    Raises :class:`TypeError` when an argument cannot be digested.
+    Parameters
+    ----------
+    make : callable or str
+        The figure function, or ``"module:function"``.
+    args : tuple
+        Its positional arguments.
+    kwargs : dict
+        Its keyword arguments.
+    units : AxisSpec, optional
+        The units the figure's labels name.
+
+    Raises
+    ------
+    TypeError
+        An argument cannot be digested, or ``make`` is a lambda or a local function.
     """
-    from .._memo import data_digest
+    from .._digest import data_digest
 
     return _name(make), data_digest((args, kwargs, units), VOLATILE), _matplotlib_setup()
 
