@@ -128,16 +128,40 @@ def feed_runs(cfg, feed: float, *, feeds=FEEDS, seeds=SEEDS, radius: float = RAD
     from ..sim.circle import DIRECTIONS, circle_modes
 
     seeds = _run_seeds(cfg, seeds)
-    try:
-        return circle_modes(cfg, feeds=(feed,), directions=DIRECTIONS if feed in feeds else DIRECTIONS[:1],
-                            seeds=seeds if feed in feeds else seeds[:1], radius=radius,
-                            keep_trace=feed == figure_feed)
-    except ValueError as err:
-        return str(err)
+
+    def compute():
+        try:
+            return circle_modes(cfg, feeds=(feed,), directions=DIRECTIONS if feed in feeds else DIRECTIONS[:1],
+                                seeds=seeds if feed in feeds else seeds[:1], radius=radius,
+                                keep_trace=feed == figure_feed)
+        except ValueError as err:
+            return str(err)
+
+    if feed == figure_feed:  # its runs carry their traces (the figure's): computed
+        return compute()
+    from .._memo import config_key, memo
+
+    # the other feeds' rows are numbers: kept in the result memo, keyed by everything they depend on
+    return memo("report_circle_feed", (config_key(cfg), feed, tuple(feeds), tuple(seeds), radius, figure_feed),
+                compute, valid=_is_feed_rows)
+
+
+#: The fields of a kept circle row and their types.
+_ROW_TYPES = {"mode": str, "feed": float, "direction": str, "seed": int, "glitch_peak": float,
+              "circularity": float, "radial_rms": float}
+
+
+def _is_feed_rows(value) -> bool:
+    """The schema of :func:`feed_runs`'s kept value: a refusal's message or rows of :data:`_ROW_TYPES`."""
+    if isinstance(value, str):
+        return True
+    return isinstance(value, list) and all(
+        isinstance(r, dict) and set(r) == set(_ROW_TYPES)
+        and all(isinstance(r[k], t) and not isinstance(r[k], bool) for k, t in _ROW_TYPES.items()) for r in value)
 
 
 def circle_section(cfg, *, feeds=FEEDS, seeds=SEEDS, radius: float = RADIUS, figure_feed: float = FIGURE_FEED,
-                   runs=None) -> dict:
+                   runs=None, figure: bool = True) -> dict:
     """The report's circle test of the compensation modes on the axis of ``cfg``.
 
     Runs :func:`~obsdesign.sim.circle.circle_modes` (every mode, both directions) per feed; a feed the
@@ -158,6 +182,9 @@ def circle_section(cfg, *, feeds=FEEDS, seeds=SEEDS, radius: float = RADIUS, fig
     runs : mapping, optional
         Feed -> :func:`feed_runs` of the same arguments, computed elsewhere (the report's helper
         process); the other feeds run here.
+    figure : bool
+        Draw the ballbar figure (``figure``); False leaves it ``None`` and returns its runs instead
+        (``pictured``: mode -> result, for :func:`ballbar_figure`; the report keeps the drawn figure).
 
     Returns
     -------
@@ -199,6 +226,9 @@ def circle_section(cfg, *, feeds=FEEDS, seeds=SEEDS, radius: float = RADIUS, fig
             g = np.asarray(by_feed.get(feed, []))
             cells.append({"mean": float(g.mean()), "min": float(g.min()), "max": float(g.max())} if g.size else None)
         table.append({"mode": mode, "cells": cells})
-    figure = ballbar_figure(pictured) if pictured else None
-    return {"radius": radius, "feeds": tuple(feeds), "seeds": seeds, "directions": DIRECTIONS, "noisy": noisy,
-            "rows": table, "notes": notes, "figure": figure, "figure_feed": figure_feed}
+    section = {"radius": radius, "feeds": tuple(feeds), "seeds": seeds, "directions": DIRECTIONS, "noisy": noisy,
+               "rows": table, "notes": notes, "figure": ballbar_figure(pictured) if pictured and figure else None,
+               "figure_feed": figure_feed}
+    if not figure:
+        section["pictured"] = pictured
+    return section

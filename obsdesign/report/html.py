@@ -49,12 +49,28 @@ def convergence_part() -> tuple[list, str]:
     Imports only what the study and its figure need, in the helper (not python-control, not the page's
     template), while this process imports the page.
     """
-    from .. import studies
-    from .figures import inline_svg
-    from .study_figures import convergence_figure
+    import dataclasses
 
-    conv = studies.convergence_study(seeds=3)
-    return list(conv.claims), inline_svg(convergence_figure(conv))
+    from .. import studies
+    from .._memo import memo
+    from .markup import is_figure_svg
+
+    def compute() -> list:
+        from .figures import inline_svg
+        from .study_figures import convergence_figure
+
+        conv = studies.convergence_study(seeds=3)
+        return [[list(dataclasses.astuple(c)) for c in conv.claims], inline_svg(convergence_figure(conv))]
+
+    fields = len(dataclasses.fields(studies.Claim))
+
+    def valid(value) -> bool:
+        return (isinstance(value, list) and len(value) == 2 and isinstance(value[0], list)
+                and all(isinstance(r, list) and len(r) == fields for r in value[0]) and is_figure_svg(value[1]))
+
+    # a pure function of the package's code (the study's settings are the code's): kept in the result memo
+    rows, svg = memo("report_convergence", (3,), compute, valid=valid)
+    return [studies.Claim(*r) for r in rows], svg
 
 
 def _feed_task(cfg: Config, feed: float) -> dict:

@@ -16,7 +16,7 @@ from html.parser import HTMLParser
 
 from .._format import with_unit
 
-__all__ = ["ReportContentError", "derivation_tree", "is_derivation_tree", "render_derivation"]
+__all__ = ["ReportContentError", "derivation_tree", "is_derivation_tree", "render_derivation", "is_figure_svg"]
 
 #: What :func:`obsdesign.symbolic.printing.derivation_html` writes: an HTML table of MathML presentation
 #: elements. A derivation tree read back from the result memo (a file on disk) must hold nothing else.
@@ -247,3 +247,48 @@ def _with_csp(html: str) -> str:
     policy = (f"default-src 'none'; script-src 'sha256-{digest}'; style-src 'unsafe-inline'; img-src data:; "
               "base-uri 'none'; form-action 'none'")
     return html.replace(_CSP_MARK, policy, 1)
+
+
+#: The elements a kept figure may hold: what matplotlib's SVG backend writes (an allow-list; a kept figure
+#: holding anything else, a script or an event handler, is refused and drawn again).
+_SVG_ELEMENTS = frozenset({"svg", "g", "use", "path", "text", "tspan", "defs", "clipPath", "rect", "style", "line",
+                           "circle", "ellipse", "polyline", "polygon", "image", "title", "desc", "pattern", "mask",
+                           "linearGradient", "radialGradient", "stop", "marker", "symbol"})
+_TAG = re.compile(r"<\s*/?\s*([A-Za-z][\w:.-]*)")
+_ATTR = re.compile(r"\s([A-Za-z_:][\w:.-]*)\s*=\s*(\"[^\"]*\"|'[^']*')")
+
+
+def is_figure_svg(text) -> bool:
+    """Whether ``text`` is an ``<svg>`` element as :func:`inline_svg` writes it: only the elements of
+    matplotlib's SVG backend, no event-handler attribute, every link within the figure (``#id``) or a
+    PNG data URL, no ``javascript:``, no CSS import or URL outside the figure, no CDATA section or
+    declaration (comments are allowed: matplotlib writes a label's TeX source in one).
+
+    The check of a figure read back from the result memo (:func:`kept_svg`) before it is put on a page.
+
+    Parameters
+    ----------
+    text : object
+
+    Examples
+    --------
+    >>> is_figure_svg('<svg><g id="a"><use xlink:href="#a"/></g></svg>')
+    True
+    >>> is_figure_svg('<svg><g onload="alert(1)"/></svg>'), is_figure_svg('<svg><script>x</script></svg>')
+    (False, False)
+    """
+    if not isinstance(text, str) or not text.startswith("<svg") or not text.rstrip().endswith("</svg>"):
+        return False
+    if any(m.group(1) not in _SVG_ELEMENTS for m in _TAG.finditer(text)):
+        return False
+    lowered = text.lower()
+    if "javascript:" in lowered or "@import" in lowered or "<?" in lowered or re.search(r"<!(?!--)", text):
+        return False  # comments (matplotlib writes each label's TeX source in one) but no CDATA or declaration
+    if re.search(r"url\(\s*['\"]?(?!#)", lowered):
+        return False
+    for name, value in _ATTR.findall(text):
+        if name.lower().startswith("on"):
+            return False
+        if name.lower().endswith("href") and not (value[1:].startswith("#") or value[1:].startswith("data:image/png;base64,")):
+            return False
+    return True

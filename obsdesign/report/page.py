@@ -22,12 +22,10 @@ from ..design import check_stability, noise_analysis, pid_from_config
 from ..design.pid import kept_response
 from ..params import Config
 from .circle_section import FEEDS as CIRCLE_FEEDS
-from .circle_section import circle_section, feed_runs
-from .data_section import data_section
+from .circle_section import ballbar_figure, circle_section, feed_runs
 from .explorer import explorer_context, explorer_json
-from .figures import inline_svg
+from .kept import kept_svg
 from .markup import _CSP_MARK, _quantity, _with_csp, derivation_tree, is_derivation_tree, render_derivation
-from .study_figures import experiments_figure, friction_loops_figure
 
 __all__ = ["render_page", "loops_part", "circle_part", "derivation_markup", "css_string"]
 
@@ -83,6 +81,13 @@ def css_string(text) -> str:
     return "".join(ch if ch.isascii() and ch.isalnum() else f"\\{ord(ch):06x}" for ch in str(text))
 
 
+def _loop_view_figure(view):
+    """The loop view's figure on the page's grid (:func:`_loop_grid` of :func:`obsdesign.design.loop.loop_figure`)."""
+    from ..design.loop import loop_figure
+
+    return _loop_grid(loop_figure(view))
+
+
 def _loop_grid(fig):
     """The loop view's five panels (Bode magnitude and phase, Nyquist, sensitivities, closed-loop poles:
     :func:`obsdesign.design.loop.loop_figure`) on a grid that fills the page's width: magnitude | phase,
@@ -131,7 +136,8 @@ def loops_part(cfg: Config, experiments) -> tuple[list, str]:
         :func:`obsdesign.studies.experiments_study` of ``cfg``.
     """
     loops = studies.friction_loops_study(cfg, experiments=experiments)
-    return list(loops.claims), inline_svg(friction_loops_figure(loops), cfg.units)
+    return list(loops.claims), kept_svg("obsdesign.report.study_figures:friction_loops_figure", loops,
+                                        units=cfg.units)
 
 
 def circle_part(cfg: Config, runs: dict) -> dict:
@@ -144,9 +150,10 @@ def circle_part(cfg: Config, runs: dict) -> dict:
     runs : dict
         Feed [m/s] -> runs already computed (by the helper), as :func:`obsdesign.report.circle_section.feed_runs`.
     """
-    section = circle_section(cfg, runs=runs)
-    fig = section.pop("figure")
-    section["svg"] = inline_svg(fig, cfg.units) if fig is not None else None
+    section = circle_section(cfg, runs=runs, figure=False)
+    pictured = section.pop("pictured")
+    section.pop("figure")
+    section["svg"] = kept_svg(ballbar_figure, pictured, units=cfg.units) if pictured else None
     return section
 
 
@@ -176,9 +183,6 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     variant = cfg.observer.variant
     units = cfg.units  # every unit the report prints is written for this axis
 
-    def svg(fig):
-        return inline_svg(fig, units)
-
     conv_job, helper_feeds = jobs["convergence"], jobs["circle"]
     bar = progress_bar(progress, iterable=steps, desc="obsdesign report", leave=False)  # no thread without a bar
     ctx: dict = {"cfg": cfg, "version": __version__, "source_label": source_label,
@@ -196,25 +200,26 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
         warnings.simplefilter("default", MemoWarning)  # a refused memo entry is still said
         rep = check_stability(cfg)
     ctx["stability"] = rep
-    ctx["eigen_svg"] = svg(_eigen_figure(rep.design))
+    ctx["eigen_svg"] = kept_svg(_eigen_figure, rep.design, units=units)
     bar.update()
 
     bar.set_postfix_str(steps[2])
     pid = pid_from_config(cfg)
     ctx["pid"] = pid
-    ctx["pid_svg"] = svg(_bode_figure([("|S| = |H/(1+HC)|", pid, "S")], bound=1 / pid.k, ylabel="|S| [m/V]"))
-    from ..design.loop import loop_analysis, loop_figure
+    ctx["pid_svg"] = kept_svg(_bode_figure, [("|S| = |H/(1+HC)|", pid, "S")], bound=1 / pid.k, ylabel="|S| [m/V]",
+                              units=units)
+    from ..design.loop import loop_analysis
 
     ctx["loop_view"] = loop_analysis(cfg)
-    ctx["loop_svg"] = svg(_loop_grid(loop_figure(ctx["loop_view"])))
+    ctx["loop_svg"] = kept_svg(_loop_view_figure, ctx["loop_view"], units=units)
     bar.update()
 
     bar.set_postfix_str(steps[3])
     na = noise_analysis(cfg)
     ctx["noise"] = na
-    ctx["noise_svg"] = svg(_bode_figure([("noise -> friction estimate", na, "G_friction"),
-                                          ("after the low-pass eq:3:4:5", na, "G_friction_filtered")],
-                                         ylabel="gain [N/m]"))
+    ctx["noise_svg"] = kept_svg(_bode_figure, [("noise -> friction estimate", na, "G_friction"),
+                                               ("after the low-pass eq:3:4:5", na, "G_friction_filtered")],
+                                ylabel="gain [N/m]", units=units)
     bar.update()
 
     claims = []
@@ -227,7 +232,7 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     exp = studies.experiments_study(cfg)
     claims += exp.claims
     ctx["experiments"] = exp
-    ctx["experiments_svg"] = svg(experiments_figure(exp))
+    ctx["experiments_svg"] = kept_svg("obsdesign.report.study_figures:experiments_figure", exp, units=units)
     bar.update()
 
     # what runs here before the helper's results are asked for: the noise study and the circle's other
@@ -262,8 +267,12 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     bar.set_postfix_str("render")
     ctx.update(explorer_context(cfg, certificate=rep.certificate))
     ctx["sweep"] = sweep_section
-    ctx["data"] = data_section(data, cfg, moving_speed=moving_speed,
-                               label=f"the report's config ({source_label})") if data is not None else None
+    ctx["data"] = None
+    if data is not None:
+        from .data_section import data_section
+
+        ctx["data"] = data_section(data, cfg, moving_speed=moving_speed,
+                                   label=f"the report's config ({source_label})")
     ctx["comparison"] = compare_section
     ctx["elapsed"] = time.perf_counter() - t0
     env = Environment(loader=PackageLoader("obsdesign.report", "templates"), undefined=StrictUndefined,
