@@ -141,7 +141,7 @@ def test_study_statistics_equal_an_exact_computation(study):
     res, rows, _ = study
     assert res.runs == 23 and len(rows) == 23
     assert res.counts == {s: sum(r["status"] == s for r in rows) for s in ("ok", "diverged", "failed")}
-    assert res.counts == {"ok": 20, "diverged": 2, "failed": 1}  # the draw covers every status
+    assert all(n > 0 for n in res.counts.values()), res.counts  # the draw covers every status
     ok = [r for r in rows if r["status"] == "ok"]
     for metric in ("rms_error", "max_error", "observer_rms_error_f"):
         values = np.array([r[metric] for r in ok], dtype=float)
