@@ -37,7 +37,7 @@ import numpy as np
 
 from ..sampled.choices import ESTIMATORS, SCHEDULES
 from ..sampled.controller import SampledController
-from .controller import SCHEDULE_ZERO, controller_constants, exported_controller, sanitize_comment, _environment
+from .controller import SCHEDULE_ZERO, check_waits, controller_constants, exported_controller, sanitize_comment, _environment
 from . import TARGETS
 from .codegen import axis_note
 from .mcu_tables import COEFFICIENT_NAMES, _CHECK_POINTS, log_polynomial, stiffness_table
@@ -85,7 +85,7 @@ def _check(ctrl: SampledController) -> float:
 
 
 def mcu_controller_files(cfg, *, controller: str | None = None, schedule: str | None = None,
-                         estimator: str | None = None, segments: int = 16) -> dict[str, str]:
+                         estimator: str | None = None, segments: int = 16, waits: bool = False) -> dict[str, str]:
     """``obsdesign_controller.h`` and ``.c`` of the ``cortex-m4f`` target (float32, counts, tabulated).
 
     Parameters
@@ -98,6 +98,10 @@ def mcu_controller_files(cfg, *, controller: str | None = None, schedule: str | 
         :data:`MCU_ESTIMATORS`.
     segments : int
         Cubic segments of the stiffness table (:func:`~obsdesign.export.mcu_tables.stiffness_table`).
+    waits : bool
+        The controller that waits, for a bench without the drive's delay (as in
+        :func:`obsdesign.export.controller.controller_files`). With the drive's delay d > 0 the state
+        holds a ring of the last d commands for the estimator (4 d + 4 bytes more).
 
     Returns
     -------
@@ -114,6 +118,7 @@ def mcu_controller_files(cfg, *, controller: str | None = None, schedule: str | 
     """
     ctrl = exported_controller(cfg, controller=controller, schedule=schedule, estimator=estimator)
     res = _check(ctrl)
+    delay = check_waits(waits, ctrl)
     host = controller_constants(ctrl)  # the numbers of the simulator's controller, in double
     table = stiffness_table(ctrl, segments=segments)
     log = log_polynomial()
@@ -141,6 +146,7 @@ def mcu_controller_files(cfg, *, controller: str | None = None, schedule: str | 
         "SEGMENTS_PER_KAPPA": table.segments / table.kappa, "SQRT2": math.sqrt(2.0), "LN2": math.log(2.0),
         "LP_PHI_0M1": host["LP_PHI_0"] - 1.0, "LP_PHI_3M1": host["LP_PHI_3"] - 1.0,
         **{f"LP_{name}": host[f"LP_{name}"] for name in ("PHI_1", "PHI_2", "G0_0", "G0_1", "G1_0", "G1_1")},
+        **({"DRIVE_HOLD": host["DRIVE_HOLD"]} if delay else {}),
     }
     consts = {key: float_literal(v) for key, v in floats.items()}
     consts["SEGMENTS"] = str(table.segments)
@@ -165,6 +171,7 @@ def mcu_controller_files(cfg, *, controller: str | None = None, schedule: str | 
         "consts": consts, "table": rows, "log_horner": horner, "schedule_code": schedule_code,
         "comp_on": comp_on, "comp_default": comp.gain == 1.0 and not comp.viscous and comp.deadzone == 0.0,
         "comp_deadzone": comp_on and comp.deadzone > 0.0, "comp_viscous": comp_on and comp.viscous,
+        "delay": delay, "waits": waits,
     }
     env = _environment(cfg.units)
     return {name: env.get_template(name.replace(".", "_m4f.") + ".j2").render(**ctx)

@@ -41,7 +41,7 @@ from ..params import Config
 from ..sampled.choices import SCHEDULES
 from .codegen import axis_note, export_spec
 from . import WHAT
-from .controller import SCHEDULE_ZERO, _environment, _literal, controller_constants, exported_controller
+from .controller import SCHEDULE_ZERO, _environment, _literal, check_waits, controller_constants, exported_controller
 from .literals import KEYWORDS, ST_LANGUAGE, comment_text
 
 __all__ = ["ST_KEYWORDS", "FB_NAME", "OBSERVER_FB_NAME", "st_files", "st_literal", "check_st_identifier"]
@@ -208,7 +208,7 @@ _SCHEDULE_TEMPS = (_lreal("t1", "t2", "ks", "fnew", "dx", "a11", "a12", "a21", "
                    + (_Var("sq", "DINT"), _Var("i", "DINT"), _Var("j", "DINT")))
 
 
-def _block(ctrl, units) -> _Pou:
+def _block(ctrl, units, waits: bool = False) -> _Pou:
     consts = controller_constants(ctrl)
     baseline = ctrl.baseline is not None
     ffmode = ctrl.controller == "pid+observer" and ctrl.compensation.mode != "observer"
@@ -235,6 +235,11 @@ def _block(ctrl, units) -> _Pou:
         state += _array(4, "phi") + _array(2, "bu", "gx0", "gx1") + _lreal("zf1", "zf2", "f_hat_prev")
         temps = _SCHEDULE_TEMPS
     state += _lreal("integ", "deriv", "e_prev", "u")
+    delay = ctrl.delay_samples
+    if delay:  # the last d commands: the drive's delay, the estimator's input only
+        state += (_Var("ring", f"ARRAY[0..{delay - 1}] OF LREAL", None, f"the last {delay} commands [{u('V')}]"),
+                  _Var("ring_i", "DINT", "0", "the oldest command of the ring"))
+        temps += _lreal("applied") + (_Var("ri", "DINT"),)
     if blend:
         state += _lreal("zb1", "zb2", "fb_prev")
         temps += _lreal("fo")
@@ -250,7 +255,7 @@ def _block(ctrl, units) -> _Pou:
     body = env.get_template("obsdesign_controller_body.st.j2").render(
         observer_only=False, baseline=baseline, nz=int(consts.get("E_NZ", 0)), controller=ctrl.controller, ffmode=ffmode, blend=blend,
         blend_viscous=ctrl.config.observer.variant == "lag", compensation=ctrl.compensation, schedule_kind=kind,
-        schedule_label=ctrl.schedule if ctrl.estimator == "paper" else "none: k = 0")
+        schedule_label=ctrl.schedule if ctrl.estimator == "paper" else "none: k = 0", delay=delay, waits=waits)
     sections = (("VAR_INPUT", inputs), ("VAR_OUTPUT", outputs), ("VAR", state), ("VAR_TEMP", temps),
                 ("VAR CONSTANT", constants))
     return _Pou(FB_NAME, "FUNCTION_BLOCK", sections, body)
@@ -389,19 +394,21 @@ def _plcopen(pous: tuple[_Pou, ...], header: str) -> str:
 
 
 def st_files(cfg, *, what: str = "controller", controller: str | None = None, schedule: str | None = None,
-             estimator: str | None = None) -> dict[str, str]:
+             estimator: str | None = None, waits: bool = False) -> dict[str, str]:
     """``obsdesign_controller.st`` and its PLCopen XML ``obsdesign_controller.xml`` (or ``obsdesign_observer.*``).
 
     Parameters
     ----------
     cfg : Config or SampledController
-        The design, or the controller itself (the drive's ``[hardware] delay_samples`` is not in it).
+        The design, or the controller itself. With the drive's delay (``[hardware] delay_samples`` d > 0)
+        the block keeps its last d commands for its estimator (the command it returns is not delayed).
     what : {'controller', 'observer'}
         ``controller`` (default): ``FB_ObsdesignController``, the whole sampled controller;
         ``observer``: ``FB_ObsdesignObserver``, the observer export's step (inputs ``u_prev``,
         ``x_meas``; outputs ``v_hat``, ``f_hat``; the simulator's default ``estimated`` schedule).
-    controller, schedule, estimator : str, optional
-        As in :func:`obsdesign.export.controller.controller_files`.
+    controller, schedule, estimator, waits : optional
+        As in :func:`obsdesign.export.controller.controller_files` (``waits``: the block that waits, for a
+        bench without the drive's delay; controller only).
 
     Returns
     -------
@@ -415,8 +422,8 @@ def st_files(cfg, *, what: str = "controller", controller: str | None = None, sc
         errors of :func:`~obsdesign.export.controller.controller_files`.
     """
     if check_choice("what", what, _WHAT) == "observer":
-        given = {k: v for k, v in (("controller", controller), ("schedule", schedule), ("estimator", estimator))
-                 if v is not None}
+        given = {k: v for k, v in (("controller", controller), ("schedule", schedule), ("estimator", estimator),
+                                   ("waits", waits or None)) if v is not None}
         if given:
             name = next(iter(given))
             raise ValueError(f"{name}: applies to what='controller' only, found {given[name]!r} with what='observer'")
@@ -429,12 +436,21 @@ def st_files(cfg, *, what: str = "controller", controller: str | None = None, sc
                          f"x_meas [{u('m')}]; outputs v_hat [{u('m/s')}], f_hat [{u('N')}].")
     else:
         ctrl = exported_controller(cfg, controller=controller, schedule=schedule, estimator=estimator)
-        pous = (*_FUNCTIONS, _block(ctrl, ctrl.config.units))
+        d = check_waits(waits, ctrl)
+        pous = (*_FUNCTIONS, _block(ctrl, ctrl.config.units, waits))
         cfg, u = ctrl.config, ctrl.config.units.unit
+        plural = "s" if d > 1 else ""
+        delay_note = (f" The drive's delay of {d} cycle{plural} ([hardware] delay_samples) is the hardware's: the "
+                      f"command is not delayed here, the estimator is fed the command the drive applies (that of "
+                      f"{d} cycle{plural} earlier)." if d and not waits else "")
+        if waits:
+            delay_note = (f" THE BLOCK WAITS: it returns the command of {d} cycle{plural} earlier (export "
+                          "--controller-waits), for a bench WITHOUT the drive's delay; hardware that has the delay "
+                          "must not run it (the loop would have twice the delay).")
         header = _header(cfg, "controller", f"controller {ctrl.controller}, estimator {ctrl.estimator}, schedule "
                          f"{ctrl.schedule}, compensation {ctrl.compensation.mode}", FB_NAME,
                          f"Inputs x_ref, x_meas [{u('m')}]; output command [{u('V')}] (saturated, with the load "
-                         "feed-forward G/K), applied until the next call.")
+                         "feed-forward G/K), applied until the next call." + delay_note)
     _check_names(pous)
     module = pous[-1].name.removeprefix("FB_Obsdesign").lower()
     return {f"obsdesign_{module}.st": _st_text(pous, header), f"obsdesign_{module}.xml": _plcopen(pous, header)}
