@@ -204,3 +204,37 @@ def test_run_external_errors(loop, step, match):
     loop = prepare(VCM, SCENARIO, duration=0.6) if loop is None else loop
     with pytest.raises(TypeError, match=match):
         run_external(loop, step)
+
+
+def _cli(capsys, *argv):
+    from obsdesign.cli import main
+
+    status = main(list(argv))
+    out, err = capsys.readouterr()
+    return status, out, err.strip().splitlines()
+
+
+@pytest.mark.parametrize("fmt, target, name", [("python", "host", "obsdesign_controller.py"),
+                                               ("c", "cortex-m4f", "obsdesign_controller.c"),
+                                               ("st", "host", "obsdesign_controller.st")])
+def test_cli_controller_waits_warns_and_needs_a_delay(fmt, target, name, tmp_path, capsys):
+    config = tmp_path / "delayed.toml"
+    config.write_text(VCM.override(delay_samples=2).to_toml())
+    out = tmp_path / "gen"
+    code, stdout, err = _cli(capsys, "export", "--what", "controller", "--format", fmt, "--target", target,
+                             "--config", str(config), "--controller-waits", "-o", str(out))
+    assert code == 0 and len(err) == 1
+    assert "--controller-waits" in err[0] and "hardware that has the delay must not run it" in err[0]
+    assert "WAITS" in (out / name).read_text()
+    # without the flag: no warning, a controller that does not wait
+    code, _, err = _cli(capsys, "export", "--what", "controller", "--format", fmt, "--target", target,
+                        "--config", str(config), "-o", str(tmp_path / "plain"))
+    assert code == 0 and err == [] and "WAITS" not in (tmp_path / "plain" / name).read_text()
+    # no delay in the config: nothing to wait for; the observer export has no controller
+    code, _, err = _cli(capsys, "export", "--what", "controller", "--format", fmt, "--controller-waits",
+                        "-o", str(tmp_path / "no"))
+    assert code == 2 and len(err) == 1 and "expected delay_samples >= 1 in the config, found 0" in err[0]
+    code, _, err = _cli(capsys, "export", "--format", "python", "--config", str(config), "--controller-waits",
+                        "-o", str(tmp_path / "no"))
+    assert code == 2 and len(err) == 1 and "applies to --what controller only" in err[0]
+    assert not (tmp_path / "no").exists()
