@@ -7,6 +7,7 @@ from pathlib import Path
 
 from ..export import CONTROLLER_FORMATS
 from ..export import FORMATS as EXPORT_FORMATS
+from ..export import TARGET_FORMATS
 from ..export import TARGETS as EXPORT_TARGETS
 from ..export import WHAT as EXPORT_WHAT
 from ..params import PARAMETERS, VARIANTS
@@ -30,9 +31,9 @@ def _cmd_export(args: argparse.Namespace) -> int:
                         ("--estimator", args.estimator), ("--controller-waits", args.controller_waits or None)):
         if value is not None and args.what != "controller":
             raise UsageError(f"obsdesign export: argument {flag}: applies to --what controller only, found {value!r}")
-    if args.target != "host" and (args.what != "controller" or args.format != "c"):
+    if args.target != "host" and (args.what != "controller" or args.format != TARGET_FORMATS[args.target]):
         raise UsageError(f"obsdesign export: argument --target: {args.target} applies to --what controller "
-                         f"--format c only, found --what {args.what} --format {args.format}")
+                         f"--format {TARGET_FORMATS[args.target]} only, found --what {args.what} --format {args.format}")
     cfg = load(args).override(dt=args.dt)  # --rho, --kappa, --variant: applied by load, once
     if args.controller_waits and cfg.hardware.delay_samples == 0:
         raise UsageError("obsdesign export: argument --controller-waits: the controller waits [hardware] "
@@ -102,9 +103,10 @@ def add_commands(sub) -> None:
                    help="with --what controller: the estimator, as in simulate (default paper; the baselines "
                         "tuned by the fair noise rule)")
     p.add_argument("--target", choices=EXPORT_TARGETS, default="host",
-                   help="with --what controller --format c: host (double, bit-exact with simulate; default) or "
-                        "cortex-m4f (float32, encoder counts of sensor.quantization, fixed cost a sample; "
-                        "docs/on-the-drive.md)")
+                   help="with --what controller: host (double, bit-exact with simulate; default), cortex-m4f "
+                        "(--format c: float32, encoder counts of sensor.quantization, fixed cost a sample; "
+                        "docs/on-the-drive.md) or real (--format st: the same float32 arithmetic in REAL; "
+                        "docs/plc-export.md)")
     p.add_argument("--controller-waits", action="store_true",
                    help="with --what controller: the controller that waits, for a bench WITHOUT the drive's delay: "
                         "it returns its command of [hardware] delay_samples samples earlier, so the bench runs the "

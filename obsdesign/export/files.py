@@ -29,7 +29,7 @@ from pathlib import Path
 
 from .._io import atomic_write
 from ..params import Config
-from . import CONTROLLER_FORMATS, FORMATS, TARGETS, WHAT
+from . import CONTROLLER_FORMATS, FORMATS, TARGET_FORMATS, TARGETS, WHAT
 from .codegen import c_files, export_spec, js_module, latex_document, octave_files, python_module
 
 __all__ = ["export"]
@@ -76,9 +76,10 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
         ``v_max``, ``velocities``, ``motor_constant``).
 
     target : str
-        With ``what='controller'`` and format ``c``: a name of :data:`obsdesign.export.TARGETS`;
-        ``host`` (double, bit-exact with :func:`obsdesign.simulate`) or ``cortex-m4f`` (float32, encoder
-        counts, a fixed cost a sample: :func:`obsdesign.export.mcu.mcu_controller_files`).
+        With ``what='controller'``: a name of :data:`obsdesign.export.TARGETS`; ``host`` (double, bit-exact
+        with :func:`obsdesign.simulate`; every format), ``cortex-m4f`` (format ``c``: float32, encoder
+        counts, a fixed cost a sample: :func:`obsdesign.export.mcu.mcu_controller_files`) or ``real``
+        (format ``st``: the same float32 arithmetic in ``REAL``, :mod:`obsdesign.export.st_real`).
     waits : bool
         With ``what='controller'``: the controller that waits (returns its command of d samples earlier),
         for a bench WITHOUT the drive's delay (:func:`obsdesign.export.controller.controller_files`).
@@ -94,9 +95,9 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
         raise ValueError(f"what: expected one of {', '.join(WHAT)}, found {what!r}")
     if not isinstance(target, str) or target not in TARGETS:
         raise ValueError(f"target: expected one of {', '.join(TARGETS)}, found {target!r}")
-    if target != "host" and (what != "controller" or fmt != "c"):
-        raise ValueError(f"target: {target!r} applies to what='controller' in format 'c' only, found "
-                         f"what={what!r}, format={fmt!r}")
+    if target != "host" and (what != "controller" or fmt != TARGET_FORMATS[target]):
+        raise ValueError(f"target: {target!r} applies to what='controller' in format {TARGET_FORMATS[target]!r} "
+                         f"only, found what={what!r}, format={fmt!r}")
     if what == "friction-table":
         if fmt != "c":
             raise ValueError(f"format: the friction table is written as CSV and a C array; expected c, found {fmt!r}")
@@ -125,6 +126,11 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
 
             out = {FMU_NAME: fmu_archive(cfg, controller=controller, schedule=schedule, estimator=estimator,
                                          waits=waits)}
+        elif target == "real":
+            from .st_real import real_block_files
+
+            out = dict(real_block_files(cfg, controller=controller, schedule=schedule, estimator=estimator,
+                                        waits=waits))
         elif fmt == "st":
             from .st import st_files
 

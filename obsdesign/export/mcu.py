@@ -32,6 +32,7 @@ ValueError: sensor.quantization: the cortex-m4f target reads the position in enc
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -42,7 +43,7 @@ from . import TARGETS
 from .codegen import axis_note
 from .mcu_tables import COEFFICIENT_NAMES, _CHECK_POINTS, log_polynomial, stiffness_table
 
-__all__ = ["mcu_controller_files", "TARGETS", "MCU_ESTIMATORS", "float_literal"]
+__all__ = ["mcu_controller_files", "float32_profile", "Float32Profile", "TARGETS", "MCU_ESTIMATORS", "float_literal"]
 
 #: The estimators the ``cortex-m4f`` target runs: the paper's entries of the registry (not the baselines).
 MCU_ESTIMATORS = tuple(name for name in ESTIMATORS.names() if not ESTIMATORS[name].baseline)
@@ -84,6 +85,91 @@ def _check(ctrl: SampledController) -> float:
     return res
 
 
+@dataclass(frozen=True)
+class Float32Profile:
+    """The numbers of the float32 controller (the ``cortex-m4f`` C and the ST ``REAL`` block): one definition.
+
+    Attributes
+    ----------
+    resolution : float
+        The encoder count [m].
+    host : dict
+        :func:`~obsdesign.export.controller.controller_constants` of the controller (double).
+    table : StiffnessTable
+        The cubic segments of the discretisation (:func:`~.mcu_tables.stiffness_table`).
+    log : LogPolynomial
+        The logarithm on the mantissa (:func:`~.mcu_tables.log_polynomial`).
+    floats : dict
+        Every constant of the step (quotients computed here in double), to be rounded to float32.
+    schedule_code : str
+        ``hysteresis``, ``raw``, ``constant`` or ``zero``.
+    reversal_counts : int
+        The reversal threshold [counts].
+    """
+
+    resolution: float
+    host: dict
+    table: object
+    log: object
+    floats: dict
+    schedule_code: str
+    reversal_counts: int
+
+
+def float32_profile(ctrl: SampledController, *, segments: int = 16) -> Float32Profile:
+    """The float32 profile's numbers of ``ctrl`` (checked: paper observer, mode ``observer``, an encoder count).
+
+    Parameters
+    ----------
+    ctrl : SampledController
+        The exported controller (:func:`~obsdesign.export.controller.exported_controller`).
+    segments : int
+        Cubic segments of the stiffness table.
+
+    Returns
+    -------
+    Float32Profile
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> p = float32_profile(exported_controller(od.load_preset("vcm")))
+    >>> p.schedule_code, p.floats["RES"], p.table.segments
+    ('raw', 1e-06, 16)
+    """
+    res = _check(ctrl)
+    delay = ctrl.delay_samples
+    host = controller_constants(ctrl)  # the numbers of the simulator's controller, in double
+    table = stiffness_table(ctrl, segments=segments)
+    log = log_polynomial()
+    # the shape of the generated schedule, from the code the host export runs (paper-k0: SCHEDULE_ZERO)
+    code = int(host["SCHEDULE"])
+    # choice subset: the template's three shapes of the runnable schedules
+    shapes = {SCHEDULES.code("estimated"): "hysteresis", SCHEDULES.code("estimated-raw"): "raw",
+              SCHEDULES.code("constant"): "constant", SCHEDULE_ZERO: "zero"}
+    schedule_code = shapes[code]
+    threshold = host["REVERSAL_THRESHOLD"] / res  # [counts]; a reversal needs more than that
+    near = round(threshold)
+    reversal_counts = int(near) if abs(threshold - near) <= 1e-9 * max(1.0, threshold) else int(math.floor(threshold))
+    if reversal_counts >= 2**31 - 1:
+        raise ValueError(f"sensor.noise_rms: the reversal threshold must be below 2^31 counts, found {reversal_counts}")
+    K, dt = host["K"], host["DT"]
+    floats = {
+        "RES": res, "DT": dt, "K": K, "G": host["G"], "INV_K": 1.0 / K, "G_OVER_K": host["G"] / K,
+        "U_MAX": host["U_MAX"], "SIGMA": host["SIGMA"], "V_HAT0": host["V_HAT0"], "F_HAT0": host["F_HAT0"],
+        "KP": host["KP"], "KI": host["KI"], "KD": host["KD"], "ALPHA_D": host["ALPHA_D"],
+        "DERIV_GAIN": (1.0 - host["ALPHA_D"]) / dt, "COMP_GAIN": host["COMP_GAIN"],
+        "INV_COMP_DEADZONE": 1.0 / host["COMP_DEADZONE"] if host["COMP_DEADZONE"] > 0 else 0.0,
+        "KAPPA": host["KAPPA"], "S_RES": host["S"] * res, "MINUS_S_CF": -host["S"] * host["CF"],
+        "SEGMENTS_PER_KAPPA": table.segments / table.kappa, "SQRT2": math.sqrt(2.0), "LN2": math.log(2.0),
+        "LP_PHI_0M1": host["LP_PHI_0"] - 1.0, "LP_PHI_3M1": host["LP_PHI_3"] - 1.0,
+        **{f"LP_{name}": host[f"LP_{name}"] for name in ("PHI_1", "PHI_2", "G0_0", "G0_1", "G1_0", "G1_1")},
+        **({"DRIVE_HOLD": host["DRIVE_HOLD"]} if delay else {}),
+    }
+    return Float32Profile(resolution=res, host=host, table=table, log=log, floats=floats,
+                          schedule_code=schedule_code, reversal_counts=reversal_counts)
+
+
 def mcu_controller_files(cfg, *, controller: str | None = None, schedule: str | None = None,
                          estimator: str | None = None, segments: int = 16, waits: bool = False) -> dict[str, str]:
     """``obsdesign_controller.h`` and ``.c`` of the ``cortex-m4f`` target (float32, counts, tabulated).
@@ -117,37 +203,12 @@ def mcu_controller_files(cfg, *, controller: str | None = None, schedule: str | 
         count (``sensor.quantization = 0``), a constant beyond float32's range.
     """
     ctrl = exported_controller(cfg, controller=controller, schedule=schedule, estimator=estimator)
-    res = _check(ctrl)
     delay = check_waits(waits, ctrl)
-    host = controller_constants(ctrl)  # the numbers of the simulator's controller, in double
-    table = stiffness_table(ctrl, segments=segments)
-    log = log_polynomial()
-    comp = ctrl.compensation
-    comp_on = ctrl.controller == "pid+observer"
-    # the shape of the generated schedule, from the code the host export runs (paper-k0: SCHEDULE_ZERO)
-    code = int(host["SCHEDULE"])
-    # choice subset: the template's three shapes of the runnable schedules
-    shapes = {SCHEDULES.code("estimated"): "hysteresis", SCHEDULES.code("estimated-raw"): "raw",
-              SCHEDULES.code("constant"): "constant", SCHEDULE_ZERO: "zero"}
-    schedule_code = shapes[code]
-    threshold = host["REVERSAL_THRESHOLD"] / res  # [counts]; a reversal needs more than that
-    near = round(threshold)
-    reversal_counts = int(near) if abs(threshold - near) <= 1e-9 * max(1.0, threshold) else int(math.floor(threshold))
-    if reversal_counts >= 2**31 - 1:
-        raise ValueError(f"sensor.noise_rms: the reversal threshold must be below 2^31 counts, found {reversal_counts}")
-    K, dt = host["K"], host["DT"]
-    floats = {
-        "RES": res, "DT": dt, "K": K, "G": host["G"], "INV_K": 1.0 / K, "G_OVER_K": host["G"] / K,
-        "U_MAX": host["U_MAX"], "SIGMA": host["SIGMA"], "V_HAT0": host["V_HAT0"], "F_HAT0": host["F_HAT0"],
-        "KP": host["KP"], "KI": host["KI"], "KD": host["KD"], "ALPHA_D": host["ALPHA_D"],
-        "DERIV_GAIN": (1.0 - host["ALPHA_D"]) / dt, "COMP_GAIN": host["COMP_GAIN"],
-        "INV_COMP_DEADZONE": 1.0 / host["COMP_DEADZONE"] if host["COMP_DEADZONE"] > 0 else 0.0,
-        "KAPPA": host["KAPPA"], "S_RES": host["S"] * res, "MINUS_S_CF": -host["S"] * host["CF"],
-        "SEGMENTS_PER_KAPPA": table.segments / table.kappa, "SQRT2": math.sqrt(2.0), "LN2": math.log(2.0),
-        "LP_PHI_0M1": host["LP_PHI_0"] - 1.0, "LP_PHI_3M1": host["LP_PHI_3"] - 1.0,
-        **{f"LP_{name}": host[f"LP_{name}"] for name in ("PHI_1", "PHI_2", "G0_0", "G0_1", "G1_0", "G1_1")},
-        **({"DRIVE_HOLD": host["DRIVE_HOLD"]} if delay else {}),
-    }
+    p = float32_profile(ctrl, segments=segments)
+    res, host, table, log, floats = p.resolution, p.host, p.table, p.log, p.floats
+    schedule_code, reversal_counts = p.schedule_code, p.reversal_counts
+    dt = host["DT"]
+    comp, comp_on = ctrl.compensation, ctrl.controller == "pid+observer"
     consts = {key: float_literal(v) for key, v in floats.items()}
     consts["SEGMENTS"] = str(table.segments)
     consts["REVERSAL_COUNTS"] = f"{reversal_counts}L" if reversal_counts > 32767 else str(reversal_counts)
