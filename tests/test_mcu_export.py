@@ -170,7 +170,7 @@ def test_export_target_errors(kwargs, match, tmp_path):
     kw = {"fmt": "c", **kwargs}
     with pytest.raises(ValueError, match=match):
         export(VCM, kw.pop("fmt"), tmp_path, target="cortex-m4f", **kw)
-    with pytest.raises(ValueError, match="target: expected one of host, cortex-m4f, found 'avr'"):
+    with pytest.raises(ValueError, match="target: expected one of host, cortex-m4f, real, found 'avr'"):
         export(VCM, "c", tmp_path, what="controller", target="avr")
     assert not any(tmp_path.iterdir())
 
