@@ -41,7 +41,7 @@ from ..sampled.controller import SampledController
 from .controller import SCHEDULE_ZERO, check_waits, controller_constants, exported_controller, sanitize_comment, _environment
 from . import TARGETS
 from .codegen import axis_note
-from .mcu_tables import COEFFICIENT_NAMES, _CHECK_POINTS, log_polynomial, stiffness_table
+from .mcu_tables import COEFFICIENT_NAMES, _CHECK_POINTS, LogPolynomial, StiffnessTable, log_polynomial, stiffness_table
 
 __all__ = ["mcu_controller_files", "float32_profile", "Float32Profile", "TARGETS", "MCU_ESTIMATORS", "float_literal"]
 
@@ -109,8 +109,8 @@ class Float32Profile:
 
     resolution: float
     host: dict
-    table: object
-    log: object
+    table: StiffnessTable
+    log: LogPolynomial
     floats: dict
     schedule_code: str
     reversal_counts: int
