@@ -87,7 +87,8 @@ def test_export_writes_the_real_block_for_the_controller_only(tmp_path):
 
 
 @pytest.mark.slow  # blark parses the block with its 512-entry table in about a minute
-@pytest.mark.parametrize("cfg", [VCM, VCM.override(delay_samples=1)], ids=["vcm", "vcm-delay-1"])
+@pytest.mark.parametrize("cfg", [VCM, VCM.override(delay_samples=1), VCM.override(noise_rms=1.1e-6)],
+                         ids=["vcm", "vcm-delay-1", "vcm-noisy-hysteresis"])
 def test_the_real_block_in_float32_matches_the_double_controller_and_the_m4f_c(cfg, tmp_path):
     q = cfg.sensor.quantization
     res = od.simulate(cfg, od.sim.Positioning(step_up=0.1, step_down=0.4), duration=0.6, controller="pid+observer")
