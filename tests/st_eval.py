@@ -7,12 +7,19 @@ WHILE; arithmetic, comparisons, AND/OR/XOR/NOT; calls of the program's functions
 LN, EXP, DINT_TO_LREAL. Anything else raises NotImplementedError, so the export cannot slip a
 construct past the test. Each node is compiled once into a Python closure; LREAL is Python's float
 (IEEE 754 double, the operations in the text's order), DINT a Python int.
+
+``Program(text, real32=True)`` runs ``REAL`` in float32: every REAL variable, array element and function
+result is a ``numpy.float32``, a literal combines with it as float32 (NumPy's scalar promotion: a Python
+float is weak), so each operation rounds to float32 as a single-precision FPU does. It adds ``TRUNC``
+(toward zero, to DINT), ``DINT_TO_REAL`` and array initializers ``[a, b, ...]`` (the REAL block's table).
 """
 
 from __future__ import annotations
 
 import math
 import operator
+
+import numpy as np
 
 try:  # the test extra; the tests that use this module skip without it (pytest imports it for doctests too)
     import blark
@@ -34,16 +41,34 @@ _BINARY = {"+": operator.add, "-": operator.sub, "*": operator.mul, "/": _div, "
            "AND": lambda a, b: a and b, "OR": lambda a, b: a or b, "XOR": operator.xor}
 
 
-def _array_thunk(n):
+def _array_thunk(n, zero=0.0, values=None):
     def fresh():
-        return [0.0] * n
+        return list(values) if values is not None else [zero] * n
     return fresh
+
+
+def _flatten(init):
+    """The leaves of blark's (nested) array initializer."""
+    if isinstance(init, tf.ArrayInitialization):
+        return [leaf for element in init.elements for leaf in _flatten(element)]
+    if isinstance(init, tf.ArrayInitialElement):
+        if init.count is not None:
+            raise NotImplementedError("repeated array elements")
+        return _flatten(init.element)
+    return [init]
 
 
 def _value_thunk(expr, default):
     def fresh():
         return expr({}) if expr is not None else default
     return fresh
+
+
+def _float32(thunk):
+    """``thunk`` with its result rounded to float32 (a store into a REAL)."""
+    def rounded(env):
+        return np.float32(thunk(env))
+    return rounded
 
 
 class _Return(Exception):
@@ -53,12 +78,18 @@ class _Return(Exception):
 class Program:
     """The POUs of one ST source; ``Program(text).block(name)`` is a fresh function-block instance."""
 
-    def __init__(self, source: str):
+    def __init__(self, source: str, *, real32: bool = False):
         result = blark.parse_source_code(source)
         if result.exception is not None:
             raise result.exception
         self.pous = {str(item.name).upper(): item for item in result.transform().items}
         self._compiled: dict[str, tuple] = {}
+        self.real32 = real32
+        self._real_names: set[str] = set()  # the REAL names of the POU being compiled (real32 only)
+        self._builtins = dict(_BUILTINS)
+        if real32:
+            self._builtins.update({"DINT_TO_REAL": np.float32, "TRUNC": lambda a: int(math.trunc(float(a))),
+                                   "ABS": lambda a: np.float32(abs(a)) if isinstance(a, np.floating) else abs(a)})
 
     # --- declarations -------------------------------------------------------------------------
     def _declarations(self, pou):
@@ -77,23 +108,41 @@ class Program:
                 if isinstance(init, tf.ArrayTypeInitialization):
                     (rng,) = init.spec.subranges
                     lo, hi = int(str(rng.start.value)), int(str(rng.stop.value))
-                    if lo != 0 or init.value is not None:
+                    real = self.real32 and str(init.spec.type.type_name).upper() == "REAL"
+                    if lo != 0 or (init.value is not None and not self.real32):
                         raise NotImplementedError("array bounds other than 0..n or an array initializer")
-                    thunk = _array_thunk(hi + 1)
+                    values = None
+                    if init.value is not None:
+                        values = [self._expr(leaf)({}) for leaf in _flatten(init.value)]
+                        if len(values) != hi + 1:
+                            raise ValueError(f"array initializer: expected {hi + 1} values, found {len(values)}")
+                        values = [np.float32(v) for v in values] if real else values
+                    thunk = _array_thunk(hi + 1, np.float32(0.0) if real else 0.0, values)
                 else:
                     type_name = str(init.spec.type).upper()
+                    real = self.real32 and type_name == "REAL"
                     default = {"LREAL": 0.0, "REAL": 0.0, "BOOL": False, "DINT": 0, "INT": 0}[type_name]
                     thunk = _value_thunk(self._expr(init.value) if init.value is not None else None, default)
+                    if real:
+                        thunk = (lambda fresh: lambda: np.float32(fresh()))(thunk)
                 for var in item.variables:
-                    out.append((kind, str(var.variable.name).upper(), thunk))
+                    name = str(var.variable.name).upper()
+                    if real:
+                        self._real_names.add(name)
+                    out.append((kind, name, thunk))
         return out
 
     def _pou(self, name):
         key = name.upper()
         if key not in self._compiled:
             pou = self.pous[key]
+            outer = self._real_names
+            self._real_names = set()
+            if self.real32 and str(getattr(pou, "return_type", "") or "").upper() == "REAL":
+                self._real_names.add(key)  # the function's result
             decls = self._declarations(pou)
             self._compiled[key] = (decls, self._statements(pou.body))
+            self._real_names = outer
         return self._compiled[key]
 
     def block(self, name: str) -> Block:
@@ -172,12 +221,16 @@ class Program:
     def _store(self, target, value):
         if isinstance(target, tf.SimpleVariable):
             name = str(target.name).upper()
+            if name in self._real_names:
+                value = _float32(value)
 
             def store(env):
                 env[name] = value(env)
             return store
         if isinstance(target, tf.MultiElementVariable):
             array, index = self._element(target)
+            if array in self._real_names:
+                value = _float32(value)
 
             def store_element(env):
                 env[array][index(env)] = value(env)
@@ -223,8 +276,8 @@ class Program:
             if any(p.name is not None for p in e.parameters):
                 raise NotImplementedError("formal (named) arguments")
             args = [self._expr(p.value) for p in e.parameters]
-            if name in _BUILTINS:
-                fn = _BUILTINS[name]
+            if name in self._builtins:
+                fn = self._builtins[name]
                 return lambda env: fn(*(a(env) for a in args))
             if name not in self.pous:
                 raise NotImplementedError(f"function {name}")

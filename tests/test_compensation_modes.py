@@ -66,7 +66,7 @@ def _comp_of_sample(cfg, v_ref, w_ff, n=0, ctrl_state=None):
     """Compensation [N] of one kernel sample with zero error and zero measurement (the PID adds 0)."""
     obs, est, c = sampled_controller(cfg).kernel_args()
     cst = sk.CONTROLLER_STATE if ctrl_state is None else ctrl_state
-    _, _, cmd, *_ = sk.controller_sample(cst, sk.OBSERVER_STATE, np.zeros(1), n, 0.0, v_ref, w_ff, 0.0, 0.0,
+    _, _, cmd, *_ = sk.controller_sample(cst, sk.OBSERVER_STATE, np.zeros(1), np.zeros(1), n, 0.0, v_ref, w_ff, 0.0, 0.0,
                                          0.0, obs, est, c)
     return cmd * cfg.plant.K - cfg.plant.G
 

@@ -107,12 +107,71 @@ def test_a_controller_that_waits_in_a_plant_that_waits_is_the_loop_of_twice_the_
     assert sampled_loop(cfg).phase_margin_deg - sampled_loop(cfg.override(delay_samples=2)).phase_margin_deg > 0
 
 
-def test_no_export_carries_a_delay():
-    cfg = VCM.override(delay_samples=3)
+def test_no_export_delays_its_command_and_d0_has_no_ring():
+    """The command is not delayed (test above); d = 0 generates no ring in C, Python and Octave (the
+    JavaScript reads ``DRIVE_DELAY`` from its constants, which the report's explorer sets from its field);
+    d > 0 adds the ring's constants."""
     for language in ("python", "c", "octave", "js"):
-        for name, text in controller_files(cfg, language).items():
-            assert "ubuf" not in text and "DELAY" not in text, (language, name)
-        assert controller_files(cfg, language) == controller_files(VCM, language)
+        for name, text in controller_files(VCM, language).items():
+            assert "DRIVE_" not in text or language == "js", (language, name)
+            assert "DRIVE_DELAY:" not in text, (language, name)
+        with3 = controller_files(VCM.override(delay_samples=3), language)
+        assert any("DRIVE_HOLD" in text for text in with3.values()), language
+        assert all("ubuf" not in text for text in with3.values()), language
+
+
+@pytest.mark.parametrize("delay", [1, 3])
+def test_the_estimator_is_fed_the_command_the_drive_applies(delay):
+    """With the drive's delay the controller keeps its last d commands for its estimator: the estimate in
+    ``simulate`` equals the observer run over the recorded measurement and the force the plant felt
+    (:func:`obsdesign.sampled.kernel.observe_loop`, the estimator fed from outside), and the exported controller's
+    estimator input ``u`` is K times the command of d samples earlier, less G (the drive's hold before)."""
+    from obsdesign.sampled import sampled_controller
+    from obsdesign.sampled.kernel import observe_loop
+
+    cfg = VCM.override(delay_samples=delay)
+    res = od.simulate(cfg, SCENARIO, controller="pid+observer", duration=0.6)
+    obs, est, _ = sampled_controller(cfg).kernel_args()
+    n = len(res.x_meas)
+    seen = {name: np.empty(n) for name in ("v_hat", "f_hat", "f_hat_filtered", "stiffness")}
+    observe_loop(obs, est, np.asarray(res.x_meas), np.asarray(res.u), np.zeros(n), *seen.values())
+    for name in ("v_hat", "f_hat", "f_hat_filtered"):
+        np.testing.assert_array_equal(seen[name], getattr(res, name), err_msg=name)
+    # the exported controller's estimator input over the run
+    (name, text), = controller_files(cfg, "python").items()
+    namespace: dict = {}
+    exec(compile(text, name, "exec"), namespace)
+    ctrl = namespace["Controller"]()
+    pl = cfg.plant
+    commands, inputs = [], []
+    for x_ref, xm in zip(res.x_ref, res.x_meas):
+        commands.append(ctrl.step(float(x_ref), float(xm)))
+        inputs.append(ctrl.u)
+    commands = np.array(commands)
+    np.testing.assert_array_equal(np.array(inputs[delay:]), pl.K * commands[:-delay] - pl.G)
+    np.testing.assert_array_equal(np.array(inputs[:delay]), pl.K * (pl.G / pl.K) - pl.G)
+
+
+@pytest.mark.parametrize("language", list(LANGUAGES))
+def test_the_controller_that_waits_in_an_undelayed_plant_is_simulate_with_the_delay(language, tmp_path):
+    """The opt-in for a bench without the drive's delay: the exported controller returns its command of d
+    samples earlier; in the plant without a delay it runs the loop that ``simulate`` runs with d."""
+    make, available = LANGUAGES[language]
+    if not available:
+        pytest.skip(f"{language}: toolchain not installed")
+    cfg = VCM.override(delay_samples=2)
+    res = od.simulate(cfg, SCENARIO, controller="pid+observer", duration=0.6)
+    bench = prepare(cfg.override(delay_samples=0), SCENARIO, controller="pid+observer", duration=0.6)
+    ext = run_external(bench, make(cfg, tmp_path, waits=True))
+    for name in ("x", "x_meas", "u"):
+        np.testing.assert_array_equal(getattr(ext, name), getattr(res, name), err_msg=name)
+
+
+def test_waits_needs_a_delay():
+    with pytest.raises(ValueError, match="waits: .* expected delay_samples >= 1, found 0"):
+        controller_files(VCM, "python", waits=True)
+    with pytest.raises(TypeError, match="waits: expected a bool, found int"):
+        controller_files(VCM.override(delay_samples=1), "python", waits=1)
 
 
 def without_hardware(text):
@@ -148,3 +207,37 @@ def test_run_external_errors(loop, step, match):
     loop = prepare(VCM, SCENARIO, duration=0.6) if loop is None else loop
     with pytest.raises(TypeError, match=match):
         run_external(loop, step)
+
+
+def _cli(capsys, *argv):
+    from obsdesign.cli import main
+
+    status = main(list(argv))
+    out, err = capsys.readouterr()
+    return status, out, err.strip().splitlines()
+
+
+@pytest.mark.parametrize("fmt, target, name", [("python", "host", "obsdesign_controller.py"),
+                                               ("c", "cortex-m4f", "obsdesign_controller.c"),
+                                               ("st", "host", "obsdesign_controller.st")])
+def test_cli_controller_waits_warns_and_needs_a_delay(fmt, target, name, tmp_path, capsys):
+    config = tmp_path / "delayed.toml"
+    config.write_text(VCM.override(delay_samples=2).to_toml())
+    out = tmp_path / "gen"
+    code, stdout, err = _cli(capsys, "export", "--what", "controller", "--format", fmt, "--target", target,
+                             "--config", str(config), "--controller-waits", "-o", str(out))
+    assert code == 0 and len(err) == 1
+    assert "--controller-waits" in err[0] and "hardware that has the delay must not run it" in err[0]
+    assert "WAITS" in (out / name).read_text()
+    # without the flag: no warning, a controller that does not wait
+    code, _, err = _cli(capsys, "export", "--what", "controller", "--format", fmt, "--target", target,
+                        "--config", str(config), "-o", str(tmp_path / "plain"))
+    assert code == 0 and err == [] and "WAITS" not in (tmp_path / "plain" / name).read_text()
+    # no delay in the config: nothing to wait for; the observer export has no controller
+    code, _, err = _cli(capsys, "export", "--what", "controller", "--format", fmt, "--controller-waits",
+                        "-o", str(tmp_path / "no"))
+    assert code == 2 and len(err) == 1 and "expected delay_samples >= 1 in the config, found 0" in err[0]
+    code, _, err = _cli(capsys, "export", "--format", "python", "--config", str(config), "--controller-waits",
+                        "-o", str(tmp_path / "no"))
+    assert code == 2 and len(err) == 1 and "applies to --what controller only" in err[0]
+    assert not (tmp_path / "no").exists()

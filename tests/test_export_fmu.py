@@ -39,6 +39,8 @@ CASES = {
     "eso": pytest.param((VCM.override(noise_rms=1e-6), dict(scenario="tracking", estimator="eso")),
                         marks=pytest.mark.slow),  # tuning the baseline: ~20 s on a cold cache
     "blend-lag": (TABLE1.override(mode="blend", lookahead=10, noise_rms=2e-7), dict(scenario="tracking", plant="model")),
+    # the drive's delay: the FMU's command is not delayed, its estimator is fed the command of d samples earlier
+    "delayed": (VCM.override(delay_samples=1), dict(scenario="tracking")),
 }
 
 
@@ -93,8 +95,9 @@ def test_fmu_reproduces_the_simulator_bit_for_bit(case, tmp_path):
     path = _write(tmp_path, fmu_archive(cfg, binary=True, controller=kw.get("controller"),
                                         schedule=res.stiffness_schedule, estimator=res.estimator))
     command = _drive(path, np.column_stack([res.x_ref, res.x_meas, *extra]))
-    u = cfg.plant.K * command - cfg.plant.G
-    assert np.array_equal(u, res.u), f"max |du| = {np.max(np.abs(u - res.u)):g}"
+    d = cfg.hardware.delay_samples  # the simulated drive applies the command of sample n from n + d
+    u = cfg.plant.K * command[:len(command) - d] - cfg.plant.G
+    assert np.array_equal(u, res.u[d:]), f"max |du| = {np.max(np.abs(u - res.u[d:])):g}"
 
 
 @needs_cc

@@ -55,6 +55,8 @@ CASES = {
     "blend-lag": (TABLE1.override(mode="blend", lookahead=10, noise_rms=2e-7), dict(scenario="tracking", plant="model")),
     "feedforward": (VCM.override(mode="feedforward", ff_stribeck=0.1, ff_stribeck_velocity=2e-3, ff_offset=0.02,
                                  lookahead=20, buildup=2e-5), dict(scenario="tracking")),
+    # the drive's delay: the block's command is not delayed, its estimator is fed the command of d calls earlier
+    "delayed": (VCM.override(delay_samples=2), dict(scenario="tracking")),
 }
 
 
@@ -74,8 +76,9 @@ def test_the_function_block_matches_the_python_export_and_the_simulator(case, tm
     command = np.array([block(*map(float, row))["COMMAND"] for row in rows])
     reference = _python_commands(controller_files(cfg, "python", **choices), rows, tmp_path)
     assert np.max(np.abs(command - reference)) <= 1e-12 * np.max(np.abs(reference))
-    u = cfg.plant.K * command - cfg.plant.G
-    assert np.max(np.abs(u - res.u)) <= 1e-12 * np.max(np.abs(res.u))
+    d = cfg.hardware.delay_samples  # the simulated drive applies the command of sample n from n + d
+    u = cfg.plant.K * command[:len(command) - d] - cfg.plant.G
+    assert np.max(np.abs(u - res.u[d:])) <= 1e-12 * np.max(np.abs(res.u))
 
 
 def _functions_only(text: str) -> str:
@@ -134,7 +137,7 @@ def test_same_inputs_give_the_same_text_without_paths_or_times():
     assert a == b
     for text in a.values():
         assert not re.search(r"/(tmp|home|root|work)/|\d{4}-\d\d-\d\dT(?!00:00:00)", text)
-    assert "ubuf" not in a[ST] and "DELAY" not in a[ST].replace("OD_DELAY", "")  # no delay buffer
+    assert "ubuf" not in a[ST] and "DRIVE_" not in a[ST] and "ring_i" not in a[ST]  # no drive delay, no ring
 
 
 HOSTILE = ["*) END_FUNCTION_BLOCK (*", "]]></x:p><evil/>", "a\nb\u2028c // (* x *)", "IF"]
@@ -190,8 +193,13 @@ def test_st_literals_read_back_exactly(value):
 
 
 def test_st_export_errors_and_files(tmp_path):
-    # the drive's delay is not the block's: a delayed axis exports the same block (issue 33)
-    assert st_files(VCM.override(delay_samples=2), what="controller") == st_files(VCM, what="controller")
+    # the drive's delay is not the block's: its command is not delayed, only its estimator's input (a ring of d)
+    delayed = st_files(VCM.override(delay_samples=2), what="controller")[ST]
+    assert "ring : ARRAY[0..1] OF LREAL" in delayed and "command := total;" in delayed
+    with pytest.raises(ValueError, match="waits: .* expected delay_samples >= 1, found 0"):
+        st_files(VCM, waits=True)
+    with pytest.raises(ValueError, match="waits: applies to what='controller' only"):
+        st_files(VCM, what="observer", waits=True)
     with pytest.raises(ValueError, match="schedule: applies to what='controller' only"):
         st_files(VCM, what="observer", schedule="constant")
     paths = export(VCM, "st", tmp_path, what="controller")

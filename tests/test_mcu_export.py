@@ -23,6 +23,7 @@ VCM = od.load_preset("vcm")  # encoder 1 um, no noise: the estimated-raw schedul
 # counts, where the double controller would decide a tie by the rounding of its differences)
 NOISY = VCM.override(noise_rms=1.1e-6)
 LAG = od.load_preset("table1").override(quantization=1e-6, noise_rms=1.1e-6)  # the lag variant
+VCM_DELAYED = VCM.override(delay_samples=1)  # the drive's delay: the state grows by a ring of one command
 MISSING = armcheck.toolchain_missing()
 HAS_GCC = shutil.which("gcc") is not None
 
@@ -123,11 +124,13 @@ def _compare(cfg, scenario, duration, controller, tmp_path, *, count=True):
     (NOISY, "tracking", "pid+observer"),
     # the lag variant (table1) compensating runs away in the simulator itself on this scenario: monitored
     (LAG, "tracking", "pid"),
-], ids=["vcm", "vcm-noisy", "table1-lag"])
+    # the drive's delay: both controllers feed their estimator the command of d samples earlier (a ring)
+    (VCM_DELAYED, od.sim.Positioning(step_up=0.1, step_down=0.6), "pid+observer"),
+], ids=["vcm", "vcm-noisy", "table1-lag", "vcm-delay-1"])
 def test_emulated_step_matches_the_host_double_controller(cfg, scenario, controller, tmp_path):
     res, run, host = _compare(cfg, scenario, 1.0, controller, tmp_path)
     # the host controller on unrounded set-points is the simulator (bit-exact): the reference is not vacuous
-    if cfg is VCM:  # (the set-points of the steps are whole counts)
+    if cfg is VCM or cfg is VCM_DELAYED:  # (the set-points of the steps are whole counts)
         np.testing.assert_array_equal(host.f_hat, res.f_hat)
     Cf = cfg.friction.Cf
     assert np.max(np.abs(run.f_hat - host.f_hat)) <= 1e-3 * Cf
@@ -167,7 +170,7 @@ def test_export_target_errors(kwargs, match, tmp_path):
     kw = {"fmt": "c", **kwargs}
     with pytest.raises(ValueError, match=match):
         export(VCM, kw.pop("fmt"), tmp_path, target="cortex-m4f", **kw)
-    with pytest.raises(ValueError, match="target: expected one of host, cortex-m4f, found 'avr'"):
+    with pytest.raises(ValueError, match="target: expected one of host, cortex-m4f, real, found 'avr'"):
         export(VCM, "c", tmp_path, what="controller", target="avr")
     assert not any(tmp_path.iterdir())
 
@@ -196,3 +199,12 @@ def test_cli_writes_the_target_files(tmp_path, capsys):
     assert main(["export", "--format", "c", "--what", "controller", "--target", "cortex-m4f", "-o", str(tmp_path)]) == 0
     assert "float obsdesign_controller_step(obsdesign_controller *c, int32_t x_ref, int32_t x_meas);" in (
         tmp_path / "obsdesign_controller.h").read_text()
+
+
+@pytest.mark.skipif(MISSING is not None, reason=f"the ARM toolchain: {MISSING}")
+def test_the_ring_of_the_drive_delay_is_in_the_state_and_nowhere_else(tmp_path):
+    """d = 2: the state grows by the ring (2 floats and its index, 12 bytes), no static RAM appears."""
+    base = armcheck.build(mcu_controller_files(VCM), tmp_path / "d0")
+    ring = armcheck.build(mcu_controller_files(VCM.override(delay_samples=2)), tmp_path / "d2")
+    assert ring.state - base.state == 4 * 2 + 4 and ring.ram == base.ram == 0
+    assert "12 bytes of the state" in mcu_controller_files(VCM.override(delay_samples=2))["obsdesign_controller.h"]

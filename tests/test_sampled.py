@@ -61,7 +61,7 @@ def test_run_loop_takes_the_groups_in_the_order_loop_inputs_gives_them():
     assert [type(a) for a in args] == [GROUPS[p] for p in params[:-1]]
     sample = inspect.signature(sk.controller_sample.py_func).parameters
     assert list(sample)[-3:] == ["obs", "est", "ctrl"]
-    assert list(sample)[:4] == ["cst", "ost", "ez", "n"]
+    assert list(sample)[:5] == ["cst", "ost", "ez", "ring", "n"]
 
 
 def test_pid_step_on_a_constant_error_is_its_closed_form():
@@ -75,47 +75,50 @@ def test_pid_step_on_a_constant_error_is_its_closed_form():
     cst, ost = sk.CONTROLLER_STATE, sk.OBSERVER_STATE
     ez = np.zeros(1)
     for n in range(50):
-        cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, n, e0, 0.0, 1.0, 0.0, 0.0, 0.0, obs, est, c)
+        cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, np.zeros(1), n, e0, 0.0, 1.0, 0.0, 0.0, 0.0, obs, est, c)
         expected = c.kp * e0 + c.ki * (n + 1) * e0 * dt + c.G / c.K
         assert cmd == pytest.approx(expected, rel=1e-13)
         assert cst[3] == 0.0  # derivative state
     # a large error saturates: the command is u_max and the integral is not advanced
-    cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, 50, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, obs, est, c)
+    cst, ost, cmd, *_ = sk.controller_sample(cst, ost, ez, np.zeros(1), 50, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, obs, est, c)
     assert cmd == c.u_max
     assert cst[2] == pytest.approx(50 * e0 * dt, rel=1e-13)
     assert cst[0] == c.K * c.u_max - c.G  # the net force the estimator is fed next
 
 
-def test_the_controller_does_not_know_the_drives_delay():
-    """[hardware] delay_samples is the drive's: the controller's arguments carry no delay and are the same
-    for every delay (the exports are built from them)."""
-    assert not any("delay" in name for name in sk.controller_sample.py_func.__code__.co_varnames)
-    assert not any("delay" in name for name in ControllerArgs._fields)
+def test_the_drives_delay_reaches_the_controller_only_as_its_estimators_ring():
+    """[hardware] delay_samples is the drive's: the controller's arguments differ only by the ring's length and
+    its start (the saturated G / K); everything else is the same for every delay (the exports are built from
+    them)."""
     cfg = od.load_preset("vcm")
     ref = sampled_controller(cfg).kernel_args()[2]
+    assert ref.delay == 0
     for d in (1, 3):
-        assert sampled_controller(cfg.override(delay_samples=d)).kernel_args()[2] == ref
+        c = sampled_controller(cfg.override(delay_samples=d)).kernel_args()[2]
+        assert c.delay == d and c._replace(delay=0) == ref
+        assert list(sk.command_ring(c)) == [min(max(c.G / c.K, -c.u_max), c.u_max)] * d
 
 
 @pytest.mark.parametrize("controller", ["pid", "pid+observer"])
 def test_the_simulated_drive_applies_the_command_d_samples_late(controller):
     """In simulate with a drive delay d, the plant's force at sample n is ``K command - G`` of the command
     the controller computed at n - d from the measurements it saw (the saturated feed-forward G / K before);
-    the controller is fed its own command, as on hardware."""
+    the command is not delayed, and the controller feeds its estimator that applied force."""
     cfg = od.load_preset("vcm").override(noise_rms=2e-7, u_max=2.5)
     for d in (1, 3):
         c_cfg = cfg.override(delay_samples=d)
         res = od.simulate(c_cfg, od.sim.Positioning(step_up=0.05, step_down=0.3), controller=controller, duration=0.6)
         obs, est, c = sampled_controller(c_cfg, controller=controller).kernel_args()
-        cst, ost, ez = sk.CONTROLLER_STATE, sk.OBSERVER_STATE, np.zeros(1)
-        cmd = np.empty(len(res.t))
+        cst, ost, ez, ring = sk.CONTROLLER_STATE, sk.OBSERVER_STATE, np.zeros(1), sk.command_ring(c)
+        cmd, fed = np.empty(len(res.t)), np.empty(len(res.t))
         for n in range(len(res.t)):
-            cst, ost, cmd[n], *_ = sk.controller_sample(cst, ost, ez, n, res.x_ref[n], 0.0, 1.0, 0.0, res.x_meas[n],
-                                                        0.0, obs, est, c)
-            assert cst[0] == c.K * cmd[n] - c.G
+            cst, ost, cmd[n], *_ = sk.controller_sample(cst, ost, ez, ring, n, res.x_ref[n], 0.0, 1.0, 0.0,
+                                                        res.x_meas[n], 0.0, obs, est, c)
+            fed[n] = cst[0]
         held = min(max(c.G / c.K, -c.u_max), c.u_max)
         applied = np.concatenate([np.full(d, held), cmd[:-d]])
         assert np.array_equal(res.u, c.K * applied - c.G)
+        assert np.array_equal(fed, c.K * applied - c.G)  # the estimator's input: the force the plant gets
         assert np.sum(np.abs(cmd) == c.u_max) > 5  # the saturation is active in the run
 
 
@@ -127,7 +130,7 @@ def test_derivative_filter_is_first_order_with_pole_alpha():
     assert c.alpha_d == pytest.approx(math.exp(-cfg.observer.dt * c.kp * cfg.pid.derivative_N / c.kd), rel=1e-14)
     cst, ost, ez = sk.CONTROLLER_STATE, sk.OBSERVER_STATE, np.zeros(1)
     for n in range(20):
-        cst, ost, *_ = sk.controller_sample(cst, ost, ez, n, 0.0 if n == 0 else 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, obs, est, c)
+        cst, ost, *_ = sk.controller_sample(cst, ost, ez, np.zeros(1), n, 0.0 if n == 0 else 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, obs, est, c)
         if n >= 1:
             assert cst[3] == pytest.approx((1 - c.alpha_d) * c.alpha_d ** (n - 1) / c.dt, rel=1e-12)
 

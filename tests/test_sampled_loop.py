@@ -93,7 +93,7 @@ def test_discrete_pid_is_the_kernels_recursion(make):
     cst, ost, ez = CONTROLLER_STATE, OBSERVER_STATE, np.zeros(1)
     u = np.empty(e.size)
     for n in range(e.size):  # x_ref = 0, x_meas = -e
-        cst, ost, u[n], *_ = controller_sample(cst, ost, ez, n, 0.0, 0.0, 1.0, 0.0, -e[n], 0.0, obs, est, ctrl)
+        cst, ost, u[n], *_ = controller_sample(cst, ost, ez, np.zeros(1), n, 0.0, 0.0, 1.0, 0.0, -e[n], 0.0, obs, est, ctrl)
     dt = cfg.observer.dt
     C = discrete_pid(kp=sc.kp, ki=sc.ki, kd=sc.kd, tau_d=sc.tau_d, dt=dt)
     y = ct.forced_response(C, np.arange(e.size) * dt, e).outputs.ravel()

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from ..export import CONTROLLER_FORMATS
 from ..export import FORMATS as EXPORT_FORMATS
+from ..export import TARGET_FORMATS
 from ..export import TARGETS as EXPORT_TARGETS
 from ..export import WHAT as EXPORT_WHAT
 from ..params import PARAMETERS, VARIANTS
@@ -27,18 +28,27 @@ def _cmd_export(args: argparse.Namespace) -> int:
         raise UsageError("obsdesign export: argument --format: the controller is exported as one of "
                          f"{', '.join(CONTROLLER_FORMATS)}, found 'latex'")
     for flag, value in (("--controller", args.controller), ("--stiffness", args.stiffness),
-                        ("--estimator", args.estimator)):
+                        ("--estimator", args.estimator), ("--controller-waits", args.controller_waits or None)):
         if value is not None and args.what != "controller":
             raise UsageError(f"obsdesign export: argument {flag}: applies to --what controller only, found {value!r}")
-    if args.target != "host" and (args.what != "controller" or args.format != "c"):
+    if args.target != "host" and (args.what != "controller" or args.format != TARGET_FORMATS[args.target]):
         raise UsageError(f"obsdesign export: argument --target: {args.target} applies to --what controller "
-                         f"--format c only, found --what {args.what} --format {args.format}")
+                         f"--format {TARGET_FORMATS[args.target]} only, found --what {args.what} --format {args.format}")
     cfg = load(args).override(dt=args.dt)  # --rho, --kappa, --variant: applied by load, once
+    if args.controller_waits and cfg.hardware.delay_samples == 0:
+        raise UsageError("obsdesign export: argument --controller-waits: the controller waits [hardware] "
+                         "delay_samples samples; expected delay_samples >= 1 in the config, found 0")
     from ._table import table_options  # --what friction-table: its flags, refused with the others
 
     paths = export(cfg, args.format, args.output, what=args.what, controller=args.controller,
                    schedule=args.stiffness, estimator=args.estimator, table=table_options(args),
-                   target=args.target)
+                   target=args.target, waits=args.controller_waits)
+    if args.controller_waits:
+        d = cfg.hardware.delay_samples
+        print_warnings([f"--controller-waits: the exported controller delays its command by {d} sample"
+                        f"{'s' if d > 1 else ''} ([hardware] delay_samples), for a bench WITHOUT the drive's delay; "
+                        "hardware that has the delay must not run it (the loop would have twice the delay, "
+                        "docs/delay.md)"])
     warn_unstable(cfg, "the exported observer diverges")
     if args.format == "fmu":
         import zipfile
@@ -93,9 +103,14 @@ def add_commands(sub) -> None:
                    help="with --what controller: the estimator, as in simulate (default paper; the baselines "
                         "tuned by the fair noise rule)")
     p.add_argument("--target", choices=EXPORT_TARGETS, default="host",
-                   help="with --what controller --format c: host (double, bit-exact with simulate; default) or "
-                        "cortex-m4f (float32, encoder counts of sensor.quantization, fixed cost a sample; "
-                        "docs/on-the-drive.md)")
+                   help="with --what controller: host (double, bit-exact with simulate; default), cortex-m4f "
+                        "(--format c: float32, encoder counts of sensor.quantization, fixed cost a sample; "
+                        "docs/on-the-drive.md) or real (--format st: the same float32 arithmetic in REAL; "
+                        "docs/plc-export.md)")
+    p.add_argument("--controller-waits", action="store_true",
+                   help="with --what controller: the controller that waits, for a bench WITHOUT the drive's delay: "
+                        "it returns its command of [hardware] delay_samples samples earlier, so the bench runs the "
+                        "loop simulate runs with the delay (hardware with the delay must not use it; docs/delay.md)")
     add_config_flags(p, default_preset="vcm")
     p.add_argument("--variant", choices=VARIANTS, help="override the config's model variant")
     p.add_argument("--rho", type=POSITIVE_ARG, help="gain parameter rho (> 0)")

@@ -25,16 +25,19 @@ FORMATS = ("latex", "python", "c", "octave", "js", "fmu", "st")
 WHAT = ("observer", "controller", "friction-table")
 #: The formats of the whole sampled controller: the code formats (not the derivation's LaTeX).
 CONTROLLER_FORMATS = tuple(fmt for fmt in FORMATS if fmt != "latex")
-#: The targets of the C controller: ``host`` (double, bit-exact with simulate) and ``cortex-m4f``
-#: (float32, encoder counts, fixed cost: :mod:`obsdesign.export.mcu`).
-TARGETS = ("host", "cortex-m4f")
+#: The arithmetic targets of the controller: ``host`` (double, bit-exact with simulate; every format),
+#: ``cortex-m4f`` (float32, encoder counts, fixed cost: :mod:`obsdesign.export.mcu`; format ``c``) and ``real``
+#: (the same float32 arithmetic as IEC 61131-3 ``REAL``: :mod:`obsdesign.export.st_real`; format ``st``).
+TARGETS = ("host", "cortex-m4f", "real")
+#: The one format of each target but ``host``.
+TARGET_FORMATS = {"cortex-m4f": "c", "real": "st"}
 
 #: The formats packaged for a tool, of the controller or the observer: an FMI 2.0 co-simulation FMU
 #: and an IEC 61131-3 function block (not source languages of :func:`~obsdesign.export.controller.controller_files`).
 # choice subset: the exports packaged for an importer or a PLC
 TOOL_FORMATS = ("fmu", "st")
 
-__all__ = ["export", "FORMATS", "WHAT", "CONTROLLER_FORMATS", "TOOL_FORMATS", "TARGETS"]
+__all__ = ["export", "FORMATS", "WHAT", "CONTROLLER_FORMATS", "TOOL_FORMATS", "TARGETS", "TARGET_FORMATS"]
 
 
 def __getattr__(name: str):

@@ -77,7 +77,7 @@ from .codegen import _plain_source, axis_note
 from .literals import NAME_MAX as _NAME_MAX
 from .literals import comment_text
 
-__all__ = ["CompensationSpec", "controller_files", "controller_constants", "exported_controller", "sanitize_comment",
+__all__ = ["CompensationSpec", "controller_files", "controller_constants", "check_waits", "exported_controller", "sanitize_comment",
            "LANGUAGES", "EXPORTED_CONTROLLERS", "SCHEDULE_NAMES", "SCHEDULE_ZERO", "REVERSAL_NOISE_FACTOR"]
 
 #: The controllers that run on an axis (``open-loop`` is a simulation scenario's).
@@ -169,6 +169,45 @@ def exported_controller(cfg, *, controller: str | None = None, compensation: Com
     return sampled_controller(cfg, controller=controller, schedule=schedule, estimator=estimator)
 
 
+def check_waits(waits, ctrl: SampledController) -> int:
+    """The ring length of the generated controller (the drive's delay d); ``waits`` checked against it.
+
+    Parameters
+    ----------
+    waits : bool
+        Whether the generated controller waits (a bench without the drive's delay).
+    ctrl : SampledController
+        The controller exported.
+
+    Returns
+    -------
+    int
+        ``ctrl.delay_samples``.
+
+    Raises
+    ------
+    TypeError
+        ``waits`` is not a bool.
+    ValueError
+        ``waits`` with ``[hardware] delay_samples = 0`` (nothing to wait for).
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> check_waits(True, exported_controller(od.load_preset("vcm")))
+    Traceback (most recent call last):
+    ...
+    ValueError: waits: the controller that waits delays its command by [hardware] delay_samples; expected delay_samples >= 1, found 0
+    """
+    if not isinstance(waits, bool):
+        raise TypeError(f"waits: expected a bool, found {type(waits).__name__}")
+    d = ctrl.delay_samples
+    if waits and d == 0:
+        raise ValueError("waits: the controller that waits delays its command by [hardware] delay_samples; "
+                         "expected delay_samples >= 1, found 0")
+    return d
+
+
 def controller_constants(cfg, *, controller: str | None = None, compensation: CompensationSpec | None = None,
                          schedule: str | None = None, estimator: str | None = None) -> dict[str, float]:
     """Every number of the generated controller: those of the simulator's own sampled controller.
@@ -191,8 +230,10 @@ def controller_constants(cfg, *, controller: str | None = None, compensation: Co
         ``SIGMA``, ``V_HAT0``, ``F_HAT0``, the PID (``KP``, ``KI``, ``KD``, ``ALPHA_D``), the
         compensation (``COMP_ON``, ``COMP_GAIN``, ``COMP_VISCOUS``, ``COMP_DEADZONE``; flags are
         0.0 or 1.0; modes ``feedforward``/``blend`` add ``COMP_MODE``, the model ``FF_CF``,
-        ``FF_STRIBECK``, ``FF_VS``, ``FF_OFFSET`` and ``BLEND_VISCOUS``); no delay (``[hardware]
-        delay_samples`` is the drive's, never the controller's). ``paper``/``paper-k0``: ``CF``, ``S``, ``KAPPA``, ``L1``, ``L2``, the affine observer arrays ``A0_i`` ... ``G1_i``, the low-pass
+        ``FF_STRIBECK``, ``FF_VS``, ``FF_OFFSET`` and ``BLEND_VISCOUS``). With the drive's delay
+        (``[hardware] delay_samples`` d > 0; the command is not delayed, the estimator is fed the
+        command the drive applies): ``DRIVE_DELAY`` (d) and ``DRIVE_HOLD`` [V], the command the drive
+        applies before the first one arrives. ``paper``/``paper-k0``: ``CF``, ``S``, ``KAPPA``, ``L1``, ``L2``, the affine observer arrays ``A0_i`` ... ``G1_i``, the low-pass
         ``LP_*``, ``SCHEDULE`` (the registry's code; :data:`SCHEDULE_ZERO` for ``paper-k0``) and
         ``REVERSAL_THRESHOLD`` [m]. A baseline: ``E_NZ`` and its arrays ``E_PHI_i_j``, ``E_GU_i``,
         ``E_G0_i``, ``E_G1_i``, ``E_CZ_r_j``, ``E_D_r``, ``E_INIT_i_c``.
@@ -227,6 +268,8 @@ def controller_constants(cfg, *, controller: str | None = None, compensation: Co
         "COMP_ON": 1.0 if ctrl.controller == "pid+observer" else 0.0, "COMP_GAIN": c.comp_gain,
         "COMP_VISCOUS": 1.0 if c.comp_viscous else 0.0, "COMP_DEADZONE": c.comp_deadzone,
     }
+    if c.delay > 0:
+        consts.update({"DRIVE_DELAY": c.delay, "DRIVE_HOLD": c.held_command})
     if ctrl.controller == "pid+observer" and ctrl.compensation.mode != "observer":
         consts.update({"COMP_MODE": c.comp_mode, "FF_CF": c.ff_cf, "FF_STRIBECK": c.ff_stribeck, "FF_VS": c.ff_vs,
                        "FF_OFFSET": c.ff_offset, "BLEND_VISCOUS": 1.0 if c.blend_viscous else 0.0})
@@ -305,7 +348,7 @@ LANGUAGES = tuple(_TEMPLATES)
 
 def controller_files(cfg, language: str, *, controller: str | None = None,
                      compensation: CompensationSpec | None = None, schedule: str | None = None,
-                     estimator: str | None = None) -> dict[str, str]:
+                     estimator: str | None = None, waits: bool = False) -> dict[str, str]:
     """The sampled controller of the simulator's closed loop as source files of one language.
 
     Parameters
@@ -331,6 +374,11 @@ def controller_files(cfg, language: str, *, controller: str | None = None,
     estimator : str, optional
         A name of :data:`obsdesign.sampled.choices.ESTIMATORS` (default ``paper``), as the
         simulator's ``estimator``; a baseline is tuned by :func:`obsdesign.estimators.tune`.
+    waits : bool
+        The controller that waits, for a bench WITHOUT the drive's delay: the step returns the command
+        of ``[hardware] delay_samples`` samples earlier, so that the bench runs the loop that
+        ``simulate`` runs with the delay. Hardware that has the delay must not run it (the loop would
+        have twice the delay, docs/delay.md); the CLI warns (``export --controller-waits``).
 
     Returns
     -------
@@ -343,10 +391,10 @@ def controller_files(cfg, language: str, *, controller: str | None = None,
     Raises
     ------
     TypeError
-        ``cfg`` is not a Config or ``compensation`` not a CompensationSpec.
+        ``cfg`` is not a Config, ``compensation`` not a CompensationSpec or ``waits`` not a bool.
     ValueError
         Unknown language, controller, schedule or estimator; ``schedule='true'``; knobs other than
-        the default with ``pid``.
+        the default with ``pid``; ``waits`` with a drive delay of 0.
 
     Examples
     --------
@@ -366,6 +414,7 @@ def controller_files(cfg, language: str, *, controller: str | None = None,
     ctrl = exported_controller(cfg, controller=controller, compensation=compensation, schedule=schedule,
                                estimator=estimator)
     consts = controller_constants(ctrl)
+    delay = check_waits(waits, ctrl)
     cfg, compensation = ctrl.config, ctrl.compensation
     controller, schedule, estimator = ctrl.controller, ctrl.schedule, ctrl.estimator
     baseline = ctrl.baseline is not None
@@ -383,7 +432,7 @@ def controller_files(cfg, language: str, *, controller: str | None = None,
         "ffmode": compensation.mode != "observer" and controller == "pid+observer",
         "blend": compensation.mode == "blend" and controller == "pid+observer",
         "blend_viscous": cfg.observer.variant == "lag",
-        "axis": axis_note(cfg),
+        "axis": axis_note(cfg), "delay": delay, "waits": waits,
     }
     env = _environment(cfg.units)
     return {name: env.get_template(name + ".j2").render(**ctx) for name in _TEMPLATES[language]}

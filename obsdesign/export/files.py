@@ -29,7 +29,7 @@ from pathlib import Path
 
 from .._io import atomic_write
 from ..params import Config
-from . import CONTROLLER_FORMATS, FORMATS, TARGETS, WHAT
+from . import CONTROLLER_FORMATS, FORMATS, TARGET_FORMATS, TARGETS, WHAT
 from .codegen import c_files, export_spec, js_module, latex_document, octave_files, python_module
 
 __all__ = ["export"]
@@ -38,7 +38,8 @@ __all__ = ["export"]
 
 def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "observer",
            controller: str | None = None, schedule: str | None = None,
-           estimator: str | None = None, table: dict | None = None, target: str = "host") -> list[Path]:
+           estimator: str | None = None, table: dict | None = None, target: str = "host",
+           waits: bool = False) -> list[Path]:
     """Write the export files of one format into ``out_dir`` (created if missing).
 
     Parameters
@@ -55,8 +56,9 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
         ``[compensation]`` section, saturation): ``obsdesign_controller.h/.c``, ``obsdesign_controller.py``,
         ``obsdesign_controller*.m``, ``obsdesign_controller.mjs``, ``obsdesign_controller.fmu``
         (:mod:`~obsdesign.export.fmu`: compiled for this platform when a C compiler is found),
-        ``obsdesign_controller.st`` and ``.xml`` (:mod:`~obsdesign.export.st`). No export holds the drive's delay
-        (``[hardware] delay_samples``). The observer's ``fmu`` and ``st`` are
+        ``obsdesign_controller.st`` and ``.xml`` (:mod:`~obsdesign.export.st`). No exported controller delays its
+        command by the drive's delay (``[hardware] delay_samples`` d); with d > 0 it keeps its last d commands
+        and feeds its estimator the one the drive applies. The observer's ``fmu`` and ``st`` are
         ``obsdesign_observer.fmu``, ``obsdesign_observer.st`` and ``.xml``.
     controller : str, optional
         With ``what='controller'``: the controller of :func:`obsdesign.simulate` to generate
@@ -74,9 +76,13 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
         ``v_max``, ``velocities``, ``motor_constant``).
 
     target : str
-        With ``what='controller'`` and format ``c``: a name of :data:`obsdesign.export.TARGETS`;
-        ``host`` (double, bit-exact with :func:`obsdesign.simulate`) or ``cortex-m4f`` (float32, encoder
-        counts, a fixed cost a sample: :func:`obsdesign.export.mcu.mcu_controller_files`).
+        With ``what='controller'``: a name of :data:`obsdesign.export.TARGETS`; ``host`` (double, bit-exact
+        with :func:`obsdesign.simulate`; every format), ``cortex-m4f`` (format ``c``: float32, encoder
+        counts, a fixed cost a sample: :func:`obsdesign.export.mcu.mcu_controller_files`) or ``real``
+        (format ``st``: the same float32 arithmetic in ``REAL``, :mod:`obsdesign.export.st_real`).
+    waits : bool
+        With ``what='controller'``: the controller that waits (returns its command of d samples earlier),
+        for a bench WITHOUT the drive's delay (:func:`obsdesign.export.controller.controller_files`).
 
     Returns
     -------
@@ -89,9 +95,9 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
         raise ValueError(f"what: expected one of {', '.join(WHAT)}, found {what!r}")
     if not isinstance(target, str) or target not in TARGETS:
         raise ValueError(f"target: expected one of {', '.join(TARGETS)}, found {target!r}")
-    if target != "host" and (what != "controller" or fmt != "c"):
-        raise ValueError(f"target: {target!r} applies to what='controller' in format 'c' only, found "
-                         f"what={what!r}, format={fmt!r}")
+    if target != "host" and (what != "controller" or fmt != TARGET_FORMATS[target]):
+        raise ValueError(f"target: {target!r} applies to what='controller' in format {TARGET_FORMATS[target]!r} "
+                         f"only, found what={what!r}, format={fmt!r}")
     if what == "friction-table":
         if fmt != "c":
             raise ValueError(f"format: the friction table is written as CSV and a C array; expected c, found {fmt!r}")
@@ -100,6 +106,8 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
         return _write(table_files(friction_table(cfg, **(table or {}))), out_dir)
     if table is not None:
         raise ValueError(f"table: applies to what='friction-table' only, found {table!r} with what={what!r}")
+    if waits is not False and what != "controller":
+        raise ValueError(f"waits: applies to what='controller' only, found {waits!r} with what={what!r}")
     if what == "controller":
         if fmt not in CONTROLLER_FORMATS:
             raise ValueError(f"format: the controller is exported as one of {', '.join(CONTROLLER_FORMATS)}, "
@@ -112,17 +120,24 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
             from .mcu import mcu_controller_files
 
             out: dict[str, str | bytes] = dict(mcu_controller_files(cfg, controller=controller, schedule=schedule,
-                                                                    estimator=estimator))
+                                                                    estimator=estimator, waits=waits))
         elif fmt == "fmu":
             from .fmu import FMU_NAME, fmu_archive
 
-            out = {FMU_NAME: fmu_archive(cfg, controller=controller, schedule=schedule, estimator=estimator)}
+            out = {FMU_NAME: fmu_archive(cfg, controller=controller, schedule=schedule, estimator=estimator,
+                                         waits=waits)}
+        elif target == "real":
+            from .st_real import real_block_files
+
+            out = dict(real_block_files(cfg, controller=controller, schedule=schedule, estimator=estimator,
+                                        waits=waits))
         elif fmt == "st":
             from .st import st_files
 
-            out = dict(st_files(cfg, controller=controller, schedule=schedule, estimator=estimator))
+            out = dict(st_files(cfg, controller=controller, schedule=schedule, estimator=estimator, waits=waits))
         else:
-            out = dict(controller_files(cfg, fmt, controller=controller, schedule=schedule, estimator=estimator))
+            out = dict(controller_files(cfg, fmt, controller=controller, schedule=schedule, estimator=estimator,
+                                        waits=waits))
         return _write(out, out_dir)
     for name, value in (("controller", controller), ("schedule", schedule), ("estimator", estimator)):
         if value is not None:

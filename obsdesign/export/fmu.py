@@ -139,15 +139,15 @@ def _variables(units, inputs, outputs, consts) -> tuple[list[dict], list[dict], 
     return ins, outs, constants
 
 
-def _controller_model(cfg, choices) -> _Model:
+def _controller_model(cfg, choices, waits: bool = False) -> _Model:
     ctrl = exported_controller(cfg, **choices)
     ffmode = ctrl.controller == "pid+observer" and ctrl.compensation.mode != "observer"
     outputs = [(n, u, d, "m->c." + f) for n, u, d, f in _OUTPUTS]
     variables = _variables(ctrl.config.units, _INPUTS + (_FF_INPUTS if ffmode else ()), outputs,
                            controller_constants(ctrl))
-    return _Model("obsdesign_controller", "controller", ctrl.config, dict(controller_files(ctrl, "c")), *variables,
-                  {"controller": ctrl.controller, "estimator": ctrl.estimator, "schedule": ctrl.schedule,
-                   "compensation": ctrl.compensation.mode})
+    return _Model("obsdesign_controller", "controller", ctrl.config, dict(controller_files(ctrl, "c", waits=waits)),
+                  *variables, {"controller": ctrl.controller, "estimator": ctrl.estimator, "schedule": ctrl.schedule,
+                               "compensation": ctrl.compensation.mode, **({"waits": "yes"} if waits else {})})
 
 
 def _observer_model(cfg, choices) -> _Model:
@@ -241,13 +241,14 @@ def _build(sources: dict[str, str], cc: list[str], identifier: str, module: str)
 
 
 def fmu_archive(cfg, *, what: str = "controller", binary: bool | None = None, controller: str | None = None,
-                schedule: str | None = None, estimator: str | None = None) -> bytes:
+                schedule: str | None = None, estimator: str | None = None, waits: bool = False) -> bytes:
     """The FMU (FMI 2.0 co-simulation) of the exported controller or observer, as the bytes of its zip archive.
 
     Parameters
     ----------
     cfg : Config or SampledController
-        The design, or the controller itself (the drive's ``[hardware] delay_samples`` is not in it).
+        The design, or the controller itself. With the drive's delay (``[hardware] delay_samples`` d > 0)
+        the controller keeps its last d commands for its estimator (its output is not delayed).
     what : {'controller', 'observer'}
         ``controller`` (default): ``obsdesign_controller.fmu`` around the files of ``--format c --what
         controller``; ``observer``: ``obsdesign_observer.fmu`` around those of ``--format c`` (the
@@ -256,8 +257,9 @@ def fmu_archive(cfg, *, what: str = "controller", binary: bool | None = None, co
     binary : bool, optional
         True: compile the shared library for this platform (``$CC`` or ``cc``; an error if there is
         none); False: a source FMU; None (default): compile when a compiler is found.
-    controller, schedule, estimator : str, optional
-        As in :func:`obsdesign.export.controller.controller_files`.
+    controller, schedule, estimator, waits : optional
+        As in :func:`obsdesign.export.controller.controller_files` (``waits``: the controller that waits, for
+        a bench without the drive's delay; controller only).
 
     Returns
     -------
@@ -273,8 +275,12 @@ def fmu_archive(cfg, *, what: str = "controller", binary: bool | None = None, co
         The compiler failed.
     """
     choices = {"controller": controller, "schedule": schedule, "estimator": estimator}
-    model = _observer_model(cfg, choices) if check_choice("what", what, _WHAT) == "observer" \
-        else _controller_model(cfg, choices)
+    if check_choice("what", what, _WHAT) == "observer":
+        if waits:
+            raise ValueError("waits: applies to what='controller' only, found True with what='observer'")
+        model = _observer_model(cfg, choices)
+    else:
+        model = _controller_model(cfg, choices, waits)
     if binary not in (None, True, False):
         raise TypeError(f"binary: expected True, False or None, found {binary!r}")
     cc, platform = _compiler(), fmu_platform()

@@ -32,17 +32,18 @@ ValueError: sensor.quantization: the cortex-m4f target reads the position in enc
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..sampled.choices import ESTIMATORS, SCHEDULES
 from ..sampled.controller import SampledController
-from .controller import SCHEDULE_ZERO, controller_constants, exported_controller, sanitize_comment, _environment
+from .controller import SCHEDULE_ZERO, check_waits, controller_constants, exported_controller, sanitize_comment, _environment
 from . import TARGETS
 from .codegen import axis_note
-from .mcu_tables import COEFFICIENT_NAMES, _CHECK_POINTS, log_polynomial, stiffness_table
+from .mcu_tables import COEFFICIENT_NAMES, _CHECK_POINTS, LogPolynomial, StiffnessTable, log_polynomial, stiffness_table
 
-__all__ = ["mcu_controller_files", "TARGETS", "MCU_ESTIMATORS", "float_literal"]
+__all__ = ["mcu_controller_files", "float32_profile", "Float32Profile", "TARGETS", "MCU_ESTIMATORS", "float_literal"]
 
 #: The estimators the ``cortex-m4f`` target runs: the paper's entries of the registry (not the baselines).
 MCU_ESTIMATORS = tuple(name for name in ESTIMATORS.names() if not ESTIMATORS[name].baseline)
@@ -84,41 +85,63 @@ def _check(ctrl: SampledController) -> float:
     return res
 
 
-def mcu_controller_files(cfg, *, controller: str | None = None, schedule: str | None = None,
-                         estimator: str | None = None, segments: int = 16) -> dict[str, str]:
-    """``obsdesign_controller.h`` and ``.c`` of the ``cortex-m4f`` target (float32, counts, tabulated).
+@dataclass(frozen=True)
+class Float32Profile:
+    """The numbers of the float32 controller (the ``cortex-m4f`` C and the ST ``REAL`` block): one definition.
+
+    Attributes
+    ----------
+    resolution : float
+        The encoder count [m].
+    host : dict
+        :func:`~obsdesign.export.controller.controller_constants` of the controller (double).
+    table : StiffnessTable
+        The cubic segments of the discretisation (:func:`~.mcu_tables.stiffness_table`).
+    log : LogPolynomial
+        The logarithm on the mantissa (:func:`~.mcu_tables.log_polynomial`).
+    floats : dict
+        Every constant of the step (quotients computed here in double), to be rounded to float32.
+    schedule_code : str
+        ``hysteresis``, ``raw``, ``constant`` or ``zero``.
+    reversal_counts : int
+        The reversal threshold [counts].
+    """
+
+    resolution: float
+    host: dict
+    table: StiffnessTable
+    log: LogPolynomial
+    floats: dict
+    schedule_code: str
+    reversal_counts: int
+
+
+def float32_profile(ctrl: SampledController, *, segments: int = 16) -> Float32Profile:
+    """The float32 profile's numbers of ``ctrl`` (checked: paper observer, mode ``observer``, an encoder count).
 
     Parameters
     ----------
-    cfg : Config or SampledController
-        The design (``sensor.quantization`` > 0: the encoder count), or the controller itself
-        (:func:`obsdesign.export.controller.exported_controller`; then none of the choices below).
-    controller, schedule, estimator : str, optional
-        As in :func:`obsdesign.export.controller.controller_files`; the estimator is one of
-        :data:`MCU_ESTIMATORS`.
+    ctrl : SampledController
+        The exported controller (:func:`~obsdesign.export.controller.exported_controller`).
     segments : int
-        Cubic segments of the stiffness table (:func:`~obsdesign.export.mcu_tables.stiffness_table`).
+        Cubic segments of the stiffness table.
 
     Returns
     -------
-    dict of str to str
-        File name to text.
+    Float32Profile
 
-    Raises
-    ------
-    TypeError
-        ``cfg`` is not a Config or SampledController.
-    ValueError
-        A choice the target does not run (a baseline, a feed-forward compensation mode), no encoder
-        count (``sensor.quantization = 0``), a constant beyond float32's range.
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> p = float32_profile(exported_controller(od.load_preset("vcm")))
+    >>> p.schedule_code, p.floats["RES"], p.table.segments
+    ('raw', 1e-06, 16)
     """
-    ctrl = exported_controller(cfg, controller=controller, schedule=schedule, estimator=estimator)
     res = _check(ctrl)
+    delay = ctrl.delay_samples
     host = controller_constants(ctrl)  # the numbers of the simulator's controller, in double
     table = stiffness_table(ctrl, segments=segments)
     log = log_polynomial()
-    comp = ctrl.compensation
-    comp_on = ctrl.controller == "pid+observer"
     # the shape of the generated schedule, from the code the host export runs (paper-k0: SCHEDULE_ZERO)
     code = int(host["SCHEDULE"])
     # choice subset: the template's three shapes of the runnable schedules
@@ -141,7 +164,51 @@ def mcu_controller_files(cfg, *, controller: str | None = None, schedule: str | 
         "SEGMENTS_PER_KAPPA": table.segments / table.kappa, "SQRT2": math.sqrt(2.0), "LN2": math.log(2.0),
         "LP_PHI_0M1": host["LP_PHI_0"] - 1.0, "LP_PHI_3M1": host["LP_PHI_3"] - 1.0,
         **{f"LP_{name}": host[f"LP_{name}"] for name in ("PHI_1", "PHI_2", "G0_0", "G0_1", "G1_0", "G1_1")},
+        **({"DRIVE_HOLD": host["DRIVE_HOLD"]} if delay else {}),
     }
+    return Float32Profile(resolution=res, host=host, table=table, log=log, floats=floats,
+                          schedule_code=schedule_code, reversal_counts=reversal_counts)
+
+
+def mcu_controller_files(cfg, *, controller: str | None = None, schedule: str | None = None,
+                         estimator: str | None = None, segments: int = 16, waits: bool = False) -> dict[str, str]:
+    """``obsdesign_controller.h`` and ``.c`` of the ``cortex-m4f`` target (float32, counts, tabulated).
+
+    Parameters
+    ----------
+    cfg : Config or SampledController
+        The design (``sensor.quantization`` > 0: the encoder count), or the controller itself
+        (:func:`obsdesign.export.controller.exported_controller`; then none of the choices below).
+    controller, schedule, estimator : str, optional
+        As in :func:`obsdesign.export.controller.controller_files`; the estimator is one of
+        :data:`MCU_ESTIMATORS`.
+    segments : int
+        Cubic segments of the stiffness table (:func:`~obsdesign.export.mcu_tables.stiffness_table`).
+    waits : bool
+        The controller that waits, for a bench without the drive's delay (as in
+        :func:`obsdesign.export.controller.controller_files`). With the drive's delay d > 0 the state
+        holds a ring of the last d commands for the estimator (4 d + 4 bytes more).
+
+    Returns
+    -------
+    dict of str to str
+        File name to text.
+
+    Raises
+    ------
+    TypeError
+        ``cfg`` is not a Config or SampledController.
+    ValueError
+        A choice the target does not run (a baseline, a feed-forward compensation mode), no encoder
+        count (``sensor.quantization = 0``), a constant beyond float32's range.
+    """
+    ctrl = exported_controller(cfg, controller=controller, schedule=schedule, estimator=estimator)
+    delay = check_waits(waits, ctrl)
+    p = float32_profile(ctrl, segments=segments)
+    res, host, table, log, floats = p.resolution, p.host, p.table, p.log, p.floats
+    schedule_code, reversal_counts = p.schedule_code, p.reversal_counts
+    dt = host["DT"]
+    comp, comp_on = ctrl.compensation, ctrl.controller == "pid+observer"
     consts = {key: float_literal(v) for key, v in floats.items()}
     consts["SEGMENTS"] = str(table.segments)
     consts["REVERSAL_COUNTS"] = f"{reversal_counts}L" if reversal_counts > 32767 else str(reversal_counts)
@@ -165,6 +232,7 @@ def mcu_controller_files(cfg, *, controller: str | None = None, schedule: str | 
         "consts": consts, "table": rows, "log_horner": horner, "schedule_code": schedule_code,
         "comp_on": comp_on, "comp_default": comp.gain == 1.0 and not comp.viscous and comp.deadzone == 0.0,
         "comp_deadzone": comp_on and comp.deadzone > 0.0, "comp_viscous": comp_on and comp.viscous,
+        "delay": delay, "waits": waits,
     }
     env = _environment(cfg.units)
     return {name: env.get_template(name.replace(".", "_m4f.") + ".j2").render(**ctx)

@@ -25,7 +25,8 @@ Everything the page computes comes from the package's own generated code, nothin
   ``coefficients`` of eq:3:4:5 at the field's dt), the step's samples and substeps
   (:func:`obsdesign.sim.numerics.substeps_for`'s rule on the config's fastest plant rate) at that dt, and the
   drive's delay on the plant side, as :func:`obsdesign.sim.kernel.run_loop` applies it (the command of sample
-  ``n`` acts from ``n + d``, the drive holding the saturated ``G / K`` before); the controller holds no delay.
+  ``n`` acts from ``n + d``, the drive holding the saturated ``G / K`` before); the controller does not delay its
+  command, its estimator is fed the command the drive applies (``DRIVE_DELAY`` of the field).
   The dt verdicts follow the dt field; the certificate stays the config's (the page says so for another dt).
 
 :func:`explorer_context` gathers the numbers; :class:`Explorer` shows the explorer in a notebook.

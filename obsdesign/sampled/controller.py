@@ -174,6 +174,13 @@ class ControllerArgs(NamedTuple):
     blend_viscous : bool
         Whether the observer's estimate contains the viscous force (variant ``lag``): the model
         part ``blend`` subtracts.
+    delay : int
+        The drive's delay [samples] (``[hardware] delay_samples``): the estimator is fed the command
+        the drive applies, that of ``delay`` samples earlier (a ring of the last ``delay`` commands);
+        the command returned is not delayed.
+    held_command : float
+        The command [V] the drive applies before the first computed one arrives (the ring's start):
+        :attr:`SampledController.held_command`.
     """
 
     controller: int
@@ -195,6 +202,8 @@ class ControllerArgs(NamedTuple):
     ff_vs: float
     ff_offset: float
     blend_viscous: bool
+    delay: int
+    held_command: float
 
 
 @dataclass(frozen=True, eq=False)
@@ -248,6 +257,19 @@ class SampledController:
         return self.config.observer.dt
 
     @property
+    def delay_samples(self) -> int:
+        """The drive's delay [samples] (``config.hardware.delay_samples``): the estimator is fed the
+        command of that many samples earlier, the one the drive applies; the output is not delayed."""
+        return self.config.hardware.delay_samples
+
+    @property
+    def held_command(self) -> float:
+        """The command [V] the drive applies before the first computed one arrives: the design's
+        feed-forward ``G / K`` saturated at ``u_max`` (the simulated drive's ring starts there too)."""
+        pl = self.config.plant
+        return min(max(pl.G / pl.K, -pl.u_max), pl.u_max)
+
+    @property
     def alpha_d(self) -> float:
         """Pole of the first-order derivative filter per sample, ``exp(-dt / tau_d)`` (0 without one)."""
         return math.exp(-self.dt / self.tau_d) if self.tau_d > 0.0 else 0.0
@@ -275,7 +297,8 @@ class SampledController:
                            comp_gain=comp.gain, comp_viscous=comp.viscous, comp_deadzone=comp.deadzone,
                            comp_mode=COMPENSATION_MODES.code(comp.mode), ff_cf=fr.Cf, ff_stribeck=comp.ff_stribeck,
                            ff_vs=comp.ff_stribeck_velocity, ff_offset=comp.ff_offset,
-                           blend_viscous=cfg.observer.variant == "lag")
+                           blend_viscous=cfg.observer.variant == "lag", delay=self.delay_samples,
+                           held_command=self.held_command)
         return o, e, c
 
 

@@ -14,13 +14,15 @@ same order):
    ``comp / K`` for ``pid+observer``: mode ``observer`` :func:`compensation_force`; ``feedforward``
    and ``blend`` :func:`reference_compensation` of the reference velocity ``v_ref`` and weight
    ``w_ff`` (inputs of the sample, :func:`obsdesign.sampled.reference.reference_feedforward`);
-3. load feed-forward ``G / K``, saturation at ``u_max``; the command's net force ``K command - G`` is
-   what the estimator is fed at the next sample.
+3. load feed-forward ``G / K``, saturation at ``u_max``; the net force ``K command - G`` of the command
+   the drive applies until the next sample is what the estimator is fed at the next sample: this
+   sample's command without a drive delay; with ``d = [hardware] delay_samples`` the command of sample
+   ``n - d`` (``ring``, the last ``d`` commands, starting at ``ControllerArgs.held_command``).
 
 The controller does not wait: the drive's delay between the sampled position and the applied command
-(``[hardware] delay_samples``) belongs to the plant and is simulated there
-(:func:`obsdesign.sim.kernel.run_loop`), so an exported controller on hardware that has the delay sees
-the loop that was simulated (docs/delay.md).
+belongs to the plant and is simulated there (:func:`obsdesign.sim.kernel.run_loop`), so an exported
+controller on hardware that has the delay sees the loop that was simulated; the controller only keeps
+its last ``d`` commands so that its estimator sees the force the plant gets (docs/delay.md).
 
 :func:`observe_loop` runs step 1 alone over measured data. The arguments come in named groups
 (:class:`~obsdesign.sampled.controller.ObserverArgs`, ``EstimatorArgs``, ``ControllerArgs``) built
@@ -40,7 +42,7 @@ from ..estimators.registry import FIRST_BASELINE_CODE
 from .choices import COMPENSATION_MODES, CONTROLLERS, ESTIMATORS, SCHEDULES
 
 __all__ = ["observer_sample", "controller_sample", "compensation_force", "reference_compensation",
-           "feedforward_model", "observe_loop", "OBSERVER_STATE", "CONTROLLER_STATE"]
+           "feedforward_model", "observe_loop", "command_ring", "OBSERVER_STATE", "CONTROLLER_STATE"]
 
 # Codes read once from the registries; numba freezes module globals at compile time (the registries
 # are append-only: a code never changes meaning).
@@ -207,12 +209,34 @@ def reference_compensation(n, ff, v_ref, w_ff, zb1, zb2, fb_prev, obs, ctrl):
     return ctrl.comp_gain * (f_model + ff - zb1), zb1, zb2, fo
 
 
+@njit(cache=True, error_model="numpy")
+def command_ring(ctrl):
+    """The controller's ring of its last ``d`` commands before the first sample (``d = ctrl.delay``, the
+    drive's delay): ``max(d, 1)`` times ``ctrl.held_command`` [V], what the drive applies until the
+    first computed command arrives.
+
+    Parameters
+    ----------
+    ctrl : ControllerArgs
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> from obsdesign.sampled import sampled_controller
+    >>> ctrl = sampled_controller(od.load_preset("vcm").override(delay_samples=2)).kernel_args()[2]
+    >>> [round(float(u), 4) for u in command_ring(ctrl)]   # G / K = 5.27 / 3.28 V
+    [1.6067, 1.6067]
+    """
+    return np.full(max(ctrl.delay, 1), ctrl.held_command)
+
+
 @njit(cache=True, error_model="numpy", inline="always")
-def controller_sample(cst, ost, ez, n, x_ref, v_ref, w_ff, u_open, xm, k_true, obs, est, ctrl):
+def controller_sample(cst, ost, ez, ring, n, x_ref, v_ref, w_ff, u_open, xm, k_true, obs, est, ctrl):
     """One sample of the whole controller: measurement ``xm`` and reference ``x_ref`` in, command out.
 
     ``cst`` is the controller state (:data:`CONTROLLER_STATE`), ``ost`` the observer's
-    (:data:`OBSERVER_STATE`), ``ez`` the state array of a linear baseline (updated in place); ``v_ref``
+    (:data:`OBSERVER_STATE`), ``ez`` the state array of a linear baseline and ``ring`` the last
+    ``ctrl.delay`` commands (:func:`command_ring`; both updated in place); ``v_ref``
     [m/s] and ``w_ff`` are the reference velocity and feed-forward weight of the sample (read by the
     modes ``feedforward`` and ``blend`` only); ``u_open`` is the open-loop force [N] of the sample
     (``open-loop`` only). Returns ``(cst, ost, command [V]
@@ -246,7 +270,12 @@ def controller_sample(cst, ost, ez, n, x_ref, v_ref, w_ff, u_open, xm, k_true, o
         total = ctrl.u_max
     elif total < -ctrl.u_max:
         total = -ctrl.u_max
-    cst = (K * total - ctrl.G, xm, integ, deriv, e_prev, zb1, zb2, fb_prev)
+    applied = total
+    if ctrl.delay > 0:  # the drive applies the command of sample n - delay: the estimator's next input
+        slot = n % ctrl.delay
+        applied = ring[slot]
+        ring[slot] = total
+    cst = (K * applied - ctrl.G, xm, integ, deriv, e_prev, zb1, zb2, fb_prev)
     return cst, ost, total, vh, fh, ff, k_now
 
 

@@ -34,7 +34,7 @@ from ..friction.kernels import friction_viscous
 from ..friction.presliding import coulomb_normalized, stiffness, track_reversal
 from ..friction.registry import FRICTION_MODELS
 from ..sampled.choices import PLANTS, SCHEDULES
-from ..sampled.kernel import CONTROLLER_STATE, OBSERVER_STATE, controller_sample
+from ..sampled.kernel import CONTROLLER_STATE, OBSERVER_STATE, command_ring, controller_sample
 
 __all__ = ["run_loop", "delay_buffer", "measure", "plant_interval", "plant_friction", "plant_stiffness", "paper_scalars",
            "PlantArgs", "Signals", "Outputs", "empty_outputs", "OUTPUT_NAMES", "PLANT_PHYSICAL", "PLANT_MODEL"]
@@ -301,6 +301,7 @@ def run_loop(obs, est, ctrl, plant, sig, out):
     fst = np.zeros(max(friction_n_state(plant.friction_code, plant.plant_params), 1))  # lugre/dahl/gms state
     ez = np.zeros(est.Phi.shape[0])  # state of a linear estimator
     ubuf = delay_buffer(plant)  # the commands in flight of the drive's delay
+    ring = command_ring(ctrl)  # the controller's copy of them: its estimator's input
     delay = plant.delay
     sc = paper_scalars(plant)
     for n in range(n_samples):
@@ -311,7 +312,7 @@ def run_loop(obs, est, ctrl, plant, sig, out):
         k_true = 0.0
         if obs.schedule == SCHEDULE_TRUE:
             k_true = plant_stiffness(ps, fst, plant, sc, kappa)
-        cst, ost, total, vh, fh, ff, k_now = controller_sample(cst, ost, ez, n, x_ref[n], v_ref[n], w_ff[n],
+        cst, ost, total, vh, fh, ff, k_now = controller_sample(cst, ost, ez, ring, n, x_ref[n], v_ref[n], w_ff[n],
                                                                u_open[n], xm, k_true, obs, est, ctrl)
         # 3. the drive's delay: apply the command of sample n - delay
         if delay > 0:

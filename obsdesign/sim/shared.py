@@ -142,12 +142,14 @@ def same_run(a: LoopInputs, b: LoopInputs) -> bool:
 def _observed(leader: dict[str, np.ndarray], loop: LoopInputs) -> tuple[dict[str, np.ndarray], int, float]:
     """What :func:`obsdesign.sim.simulate.run_kernel` returns for ``loop``, from the shared plant's arrays
     ``leader`` (a run that did not diverge): its plant arrays and this estimator over its measurement."""
-    obs, est, ctrl = loop.sampled.kernel_args()
+    obs, est, _ = loop.sampled.kernel_args()
     n = loop.n_samples
     out = {name: leader[name].copy() for name in PLANT_OUTPUTS}
     vh, fh, ff, k = (np.empty(n) for _ in range(4))
     t0 = time.perf_counter()
-    observe_loop(obs, est, out["x_meas"], _commanded(out["u"], loop, ctrl), np.zeros(n), vh, fh, ff, k)
+    # the estimator is fed the force the plant felt (with the drive's delay, the delayed command: the controller
+    # keeps its last d commands), K applied - G with the design's K and G, which _keys requires the plant's to be
+    observe_loop(obs, est, out["x_meas"], out["u"], np.zeros(n), vh, fh, ff, k)
     wall = time.perf_counter() - t0
     out.update(v_hat=vh, f_hat=fh, f_hat_filtered=ff, stiffness=k)
     # the closed loop's stop rule (run_loop): the first sample whose estimate is not below the bound
@@ -156,18 +158,6 @@ def _observed(leader: dict[str, np.ndarray], loop: LoopInputs) -> tuple[dict[str
     ok = (np.abs(fh) < bound) & (np.abs(vh) < bound) & (np.abs(ff) < bound)
     n_written = n if ok.all() else int(np.argmin(ok)) + 1
     return {name: out[name] for name in kernel.OUTPUT_NAMES}, n_written, wall
-
-
-def _commanded(applied: np.ndarray, loop: LoopInputs, ctrl) -> np.ndarray:
-    """The net force the controller commanded at each sample (what its estimator is fed): the force the
-    plant felt ``d`` samples later (the drive's delay), the last ``d`` ones computed as the kernel's open-loop
-    command does (same operations, so the same bits)."""
-    d = loop.config.hardware.delay_samples
-    if d == 0:
-        return applied
-    K, G, u_max = ctrl.K, ctrl.G, ctrl.u_max
-    tail = np.minimum(np.maximum(loop.u_open[-d:] / K + G / K, -u_max), u_max)
-    return np.concatenate([applied[d:], K * tail - G])
 
 
 def _groups(indices: list[int], together) -> list[list[int]]:

@@ -147,11 +147,10 @@ class LoopInputs:
     def kernel_args(self) -> tuple:
         """The groups of :func:`obsdesign.sim.kernel.run_loop` before its outputs: the controller's
         ``(ObserverArgs, EstimatorArgs, ControllerArgs)``, then ``PlantArgs`` and ``Signals``."""
-        pl = self.config.plant  # the drive holds the design's saturated feed-forward until the first command
         plant = kernel.PlantArgs(n_sub=self.n_sub, mode=self.mode, lag_model=self.lag_model,
                                  m=self.m, K=self.K_plant, G=self.G_plant, friction_code=self.friction_code,
                                  plant_params=self.plant_params, delay=self.config.hardware.delay_samples,
-                                 delay_init=min(max(pl.G / pl.K, -pl.u_max), pl.u_max))
+                                 delay_init=self.sampled.held_command)  # until the first command arrives
         v_ref, w_ff = self.reference_feedforward()
         signals = kernel.Signals(x_ref=self.x_ref, u_open=self.u_open, noise=self.noise,
                                  quantization=self.quantization, v_ref=v_ref, w_ff=w_ff)
