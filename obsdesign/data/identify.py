@@ -34,13 +34,14 @@ import numpy as np
 from ._idim import MAX_BOOTSTRAP, check_int, implausible, positive_number, quantization, second_difference, time_window
 from .choices import INPUT_TIMINGS, MAX_DELAY, STRIBECK_CHOICES
 from .cutoff import choose_filter
-from .estimate import MODEL_SHIFT_FACTOR, NO_INTERVAL_REASON, cautions, estimate, model_shift as _model_shift, widened
-from .friction_fit import check_bounds, check_fix
+from .estimate import (MODEL_SHIFT_FACTOR, STRIBECK_INTERVAL, cautions, estimate, model_shift as _model_shift,
+                       select_stribeck, widened)
+from .friction_fit import check_bounds, check_fix, trusted_speed
 from ._ident_rows import ASYM, FILTER_ORDER, rows
 from .timing import aligned, check_delay, find_timing
 from .presliding import MIN_REVERSALS, MIN_ROWS as MIN_PRESLIDING_ROWS, _reversals, fit_presliding
 from .trace import REVERSAL_THRESHOLD, Trace
-from .uncertainty import N_BOOT, column_noise
+from .uncertainty import N_BOOT, column_noise, noise_variance
 from .units import Units, check_plausible
 
 __all__ = ["Identification", "identify", "MODELS", "FILTER_ORDER", "DEFAULT_DECIMATION",
@@ -50,6 +51,10 @@ MODELS = ("coulomb-viscous", "asymmetric")
 #: Decimation factor at the largest default cut-off (a tenth of the sampling rate): the benchmark's
 #: round(0.8 fnyq / (2 * 20 Hz)) = 10 at 1 kHz. The default is ``round(fs / filter_hz)``.
 DEFAULT_DECIMATION = 10
+#: A Stribeck speed below this many times the slowest trusted speed, with an Fs interval reaching Cf, is dropped
+#: (``auto``): the rows there follow reversals, where LuGre's bristle lag bends the friction like a small drop.
+#: Axes without a drop gave vs at 6 x that speed in 2 of 20 noise draws; true drops at 17 to 86 x it.
+NEAR_FLOOR = 10.0
 #: Default pre-sliding window [m]: the largest travel after a reversal still called pre-sliding.
 PRESLIDING_WINDOW = 1e-4
 
@@ -116,7 +121,12 @@ class Identification:
     fixed : tuple of str
         Parameters held at a given value.
     min_speed : float
-        The speed threshold of the rows of the fit [m/s].
+        The speed threshold of the rows of the fit [m/s] (with the Stribeck term kept: ``stribeck_min_speed``).
+    stribeck_min_speed : float
+        The speed threshold of the rows the Stribeck decision and a Stribeck fit use [m/s]: ``min_speed``
+        lowered to the slowest speed the encoder and the noise make trustworthy
+        (:func:`~obsdesign.data.friction_fit.trusted_speed`), or as given. The rows of a fit with the
+        Stribeck term kept are those above it.
     window : str
         The time window of the fit (empty: the whole record).
     units : Units
@@ -180,6 +190,7 @@ class Identification:
     at_bound: dict = field(default_factory=dict)
     fixed: tuple[str, ...] = ()
     min_speed: float = 0.0
+    stribeck_min_speed: float = 0.0
     window: str = ""
     units: Units = field(default_factory=Units)
     notices: tuple[str, ...] = ()
@@ -192,7 +203,7 @@ class Identification:
              "condition_number", "samples")
     _ASYM = ("sigma_pos", "sigma_neg", "Cf_pos", "Cf_neg")
     _EXTRA = ("s", "s_note", "model", "sample_time", "filter_hz", "filter_rule", "decimation", "stribeck", "selection",
-              "interval_method", "at_bound", "fixed", "min_speed", "window", "input_timing", "delay_samples",
+              "interval_method", "at_bound", "fixed", "min_speed", "stribeck_min_speed", "window", "input_timing", "delay_samples",
               "timing_note")
 
     def to_dict(self) -> dict:
@@ -202,7 +213,7 @@ class Identification:
         condition_number, samples``; with ``asymmetric`` also ``sigma_pos, sigma_neg, Cf_pos,
         Cf_neg``; with the Stribeck term ``Fs, vs, Fs_std, vs_std``; always ``s, s_note, model,
         sample_time, filter_hz, filter_rule, decimation, stribeck, selection, interval_method, at_bound, fixed,
-        min_speed, window, input_timing, delay_samples, timing_note``, ``timing_evidence``, ``model_shift``, ``intervals`` (name -> [low, high]), ``eiv_shift`` and ``units``
+        min_speed, stribeck_min_speed, window, input_timing, delay_samples, timing_note``, ``timing_evidence``, ``model_shift``, ``intervals`` (name -> [low, high]), ``eiv_shift`` and ``units``
         (``axis``, ``input_unit``, ``mass_unit``, ``force_unit``, ``length_unit``, the logged
         ``time``/``position`` units); ``warnings`` (a list of sentences) when the identification is
         not physical, ``notices`` when there are cautions.
@@ -279,7 +290,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
              decimation: int | None = None, presliding_window: float = PRESLIDING_WINDOW, stribeck: str = "auto",
              fix: dict | None = None, bounds: dict | None = None, min_speed: float | None = None,
              window: tuple[float, float] | None = None, n_boot: int = N_BOOT, seed: int = 0,
-             input_timing: str = "auto", delay_samples: int | None = None) -> Identification:
+             input_timing: str = "auto", delay_samples: int | None = None,
+             stribeck_min_speed: float | None = None) -> Identification:
     """Fit ``u = m a + sigma v + Cf sign(v) + offset`` (+ a Stribeck term) to a trace, within bounds.
 
     Parameters
@@ -310,6 +322,12 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
         negative viscous coefficient), ``vs`` between ``min_speed`` and half the peak speed.
     min_speed : float, optional
         Rows with ``|v|`` at or below it [m/s, rad/s] are left out; default 1 % of the peak.
+    stribeck_min_speed : float, optional
+        The threshold of the rows the Stribeck decision (``auto``) and a Stribeck fit look at [m/s, rad/s],
+        at most ``min_speed``. Default: ``min_speed`` when given, else the slowest speed the encoder and the
+        noise make trustworthy, :func:`~obsdesign.data.friction_fit.trusted_speed` (3 standard deviations of
+        the velocity's noise, 2 encoder counts per period of the cut-off), if below the default ``min_speed``:
+        the Stribeck drop lives below ``vs``, which may be below 1 % of the peak speed.
     window : (float, float), optional
         Only the samples with ``t0 <= t <= t1`` [s].
     n_boot : int
@@ -406,6 +424,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     presliding_window = positive_number("presliding_window", presliding_window, 0.0, trace.units.length_unit)
     if min_speed is not None:
         min_speed = positive_number("min_speed", min_speed, 0.0, trace.units.si("speed"))
+    if stribeck_min_speed is not None:
+        stribeck_min_speed = positive_number("stribeck_min_speed", stribeck_min_speed, 0.0, trace.units.si("speed"))
     if not isinstance(input_timing, str) or input_timing not in INPUT_TIMINGS:
         raise ValueError(f"input_timing: expected one of {', '.join(map(repr, INPUT_TIMINGS))}, found {input_timing!r}")
     delay_samples = None if delay_samples is None else check_delay(delay_samples, check_int("delay_samples",
@@ -439,43 +459,90 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
 
     pos, neg = (v > 0).astype(float), (v < 0).astype(float)
     names = ("a", "v", "sign", "one", "v_pos", "v_neg", "pos", "neg", "y")
-    stacked = dec(np.stack([a, v, np.sign(v), np.ones(n), v * pos, v * neg, pos, neg, u_f])[:, keep])
-    cols = dict(zip(names, stacked))
-    y = cols.pop("y")
-    peak = float(np.max(np.abs(cols["v"])))
+    stacked = dict(zip(names, dec(np.stack([a, v, np.sign(v), np.ones(n), v * pos, v * neg, pos, neg, u_f])[:, keep])))
+    peak = float(np.max(np.abs(stacked["v"])))
     threshold = REVERSAL_THRESHOLD * peak if min_speed is None else min_speed
-    moving = np.abs(cols["v"]) > threshold
+    speed = trace.units.si("speed")
+    moving = np.abs(stacked["v"]) > threshold
     if np.count_nonzero(moving) < 10:
         raise ValueError(f"trace: expected motion in at least 10 rows of the fit, found {np.count_nonzero(moving)} "
-                         f"(|v| > {threshold:.3g} {trace.units.si('speed')}; the position barely changes, or "
+                         f"(|v| > {threshold:.3g} {speed}; the position barely changes, or "
                          f"min_speed is too high)")
-    cols = {k: c[moving] for k, c in cols.items()}
-    y = y[moving]
     v_kept = v[keep]
+    quantum = quantization(position)
+    white = float(np.mean((position - x_f)[keep] ** 2))
+    noise_var = column_noise(white, sos, dec_sos, q, dt)
 
-    def shape(vs: float, parts: tuple[str, ...]) -> dict:  # Stribeck columns at the full rate, decimated
-        e = np.sign(v_kept) * np.exp(-((v_kept / vs) ** 2))
-        full = {"S": e, "S_pos": e * (v_kept > 0), "S_neg": e * (v_kept < 0), "dS": e * 2.0 * v_kept**2 / vs**3}
-        wanted = ("S",) + parts
-        return dict(zip(wanted, dec(np.stack([full[k] for k in wanted]))[:, moving]))
+    # the rows of the Stribeck decision: down to the slowest speed the encoder and the noise make trustworthy
+    if stribeck_min_speed is not None:
+        floor, floor_rule = min(stribeck_min_speed, threshold), "given"
+    elif min_speed is not None or stribeck == "off":
+        floor, floor_rule = threshold, "the min speed"
+    else:
+        length = max(4096, 400 * q)
+        eta2 = white / noise_variance(lambda h: h - signal.sosfiltfilt(sos, h), length)
+        sigma_v = math.sqrt(eta2 * noise_variance(lambda h: np.gradient(signal.sosfiltfilt(sos, h), dt), length))
+        trusted, floor_rule = trusted_speed(sigma_v, quantum, filter_hz)
+        floor = min(trusted, threshold)
+        floor_rule = f"trusted speed: {floor_rule}" + ("" if trusted < threshold else ", at least the min speed")
 
-    cols["shape"] = shape
+    def rows_above(limit: float) -> tuple[dict, np.ndarray]:
+        mask = np.abs(stacked["v"]) > limit
+        cols = {k: c[mask] for k, c in stacked.items() if k != "y"}
 
-    noise_var = column_noise(float(np.mean((position - x_f)[keep] ** 2)), sos, dec_sos, q, dt)
+        def shape(vs: float, parts: tuple[str, ...]) -> dict:  # Stribeck columns at the full rate, decimated
+            e = np.sign(v_kept) * np.exp(-((v_kept / vs) ** 2))
+            full = {"S": e, "S_pos": e * (v_kept > 0), "S_neg": e * (v_kept < 0), "dS": e * 2.0 * v_kept**2 / vs**3}
+            wanted = ("S",) + parts
+            return dict(zip(wanted, dec(np.stack([full[k] for k in wanted]))[:, mask]))
+
+        cols["shape"] = shape
+        return cols, stacked["y"][mask]
+
+    cols, y = rows_above(threshold)
     vs_range = (max(threshold, 1e-12), max(0.5 * peak, 2.0 * max(threshold, 1e-12)))
-    est = estimate(cols, y, model=model, stribeck=stribeck, fix=fix, bounds=bounds, vs_range=vs_range,
+    low_cols, low_y = (cols, y) if floor >= threshold else rows_above(floor)
+    low_range = (max(floor, 1e-12), vs_range[1])
+    kept, selection = select_stribeck(low_cols, low_y, stribeck=stribeck, fix=fix, bounds=bounds, vs_range=low_range)
+    where = (f"; rows above {floor:.3g} {speed} ({low_y.size} rows; {floor_rule})" if floor < threshold
+             else "")
+    selection += where
+    base_threshold, base_range = threshold, vs_range
+    if kept:  # the fit with the term on the rows down to the trusted speed: the drop lives below vs
+        cols, y, threshold, vs_range = low_cols, low_y, floor, low_range
+    est = estimate(cols, y, model=model, stribeck="on" if kept else "off", fix=fix, bounds=bounds, vs_range=vs_range,
                    noise_var=noise_var, n_boot=n_boot, seed=seed)
+    if est["selection"].startswith(("Stribeck term fitted as asked", "Stribeck term not fitted")):
+        est["selection"] = selection
     values, std = est["values"], est["std"]
     model_shift = _model_shift(est, cols, y, threshold, model=model, fix=fix, bounds=bounds, vs_range=vs_range,
                                noise_var=noise_var)
     intervals = widened(est["intervals"], values, model_shift)
+    asked = stribeck == "on" or any(k in fix or k in bounds for k in ("Fs", "vs"))
+    if (kept and not asked and "Fs" in intervals and intervals["Fs"][0] <= values["Cf"]
+            and values["vs"] < NEAR_FLOOR * floor):
+        # a drop the data do not resolve, near the slowest rows (on axes without one, a 1.08 Cf "drop" at 6 x the
+        # trusted speed, where the bristles' lag after a reversal bends the friction): the model without it
+        lo_fs, hi_fs = intervals["Fs"]
+        selection = (f"Stribeck term dropped: Fs = {values['Fs']:.4g} has a 95 % interval [{lo_fs:.4g}, {hi_fs:.4g}] "
+                     f"that reaches Cf = {values['Cf']:.4g} and vs = {values['vs']:.3g} is within {NEAR_FLOOR:g} x the "
+                     f"slowest trusted speed, so the drop is not resolved; "
+                     + selection.split(": ", 1)[1])
+        cols, y = rows_above(base_threshold)
+        threshold, vs_range = base_threshold, base_range
+        est = estimate(cols, y, model=model, stribeck="off", fix=fix, bounds=bounds, vs_range=vs_range,
+                       noise_var=noise_var, n_boot=n_boot, seed=seed)
+        est["selection"] = selection
+        values, std = est["values"], est["std"]
+        model_shift = _model_shift(est, cols, y, threshold, model=model, fix=fix, bounds=bounds, vs_range=vs_range,
+                                   noise_var=noise_var)
+        intervals = widened(est["intervals"], values, model_shift)
     shown = ("m", "sigma", "Cf", "offset") + (ASYM if model == "asymmetric" else ()) + (("Fs", "vs") if est["stribeck"] else ())
     result = {k: float(values[k]) for k in shown} | {f"{k}_std": float(std.get(k, 0.0)) for k in shown}
     notes = implausible({k: (None if k in est["at_bound"] else v) for k, v in result.items()}, trace.input_gain)
     for note in notes:
         warnings.warn(note, stacklevel=2)
-    quantum = quantization(position)
-    noise = math.sqrt(max(0.0, float(np.mean((position - x_f)[keep] ** 2)) - quantum**2 / 12.0))
+    noise = math.sqrt(max(0.0, white - quantum**2 / 12.0))
     s, note = fit_presliding(x=position[keep], x_f=x_f[keep], v=v[keep], a=a[keep], u_f=u_f[keep], dt=dt,
                              m=result["m"], sigma=result["sigma"], Cf=result["Cf"], offset=result["offset"],
                              rows=DEFAULT_DECIMATION if decimation is None else q, window=presliding_window,
@@ -489,11 +556,13 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                           reversals=int(_reversals(v, REVERSAL_THRESHOLD * float(np.max(np.abs(v)))).size),
                           source=trace.source, warnings=notes, notices=notices, stribeck=est["stribeck"], selection=est["selection"],
                           intervals=intervals, eiv_shift=est["eiv_shift"], model_shift=model_shift,
-                          at_bound=est["at_bound"], fixed=tuple(sorted(fix)), min_speed=float(threshold), window=span,
+                          at_bound=est["at_bound"], fixed=tuple(sorted(fix)), min_speed=float(threshold),
+                          stribeck_min_speed=float(floor), window=span,
                           interval_method=(f"moving-block bootstrap, {n_boot} replicates, blocks of {est['block_length']} "
                                            "rows, " if n_boot else "1.96 standard errors, ") + "widened by the "
                           "errors-in-variables shift" + (f" and by the model-error shift ({MODEL_SHIFT_FACTOR:g} x the "
                                                          "min speed)" if model_shift else "")
-                          + (f"; {NO_INTERVAL_REASON}" if est["stribeck"] and not {"Fs", "vs"} <= set(fix) else ""),
+                          + (f"; {STRIBECK_INTERVAL}" if est["stribeck"] and n_boot and not {"Fs", "vs"} <= set(fix)
+                             else ""),
                           units=trace.units, input_timing=found.timing, delay_samples=found.delay,
                           timing_note=found.note, timing_evidence=found.evidence)
