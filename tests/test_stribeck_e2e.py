@@ -68,6 +68,7 @@ def test_cli_config_carries_fs_vs_to_the_feedforward(low_vs_log, tmp_path):
     for key in ("Fs", "vs"):
         lo, hi = data["intervals"][key]
         assert lo <= LOW_VS[key] <= hi, (key, lo, hi)
+    assert "95 % interval of Fs" in (tmp_path / "axis.toml").read_text()
     cfg = od.load_config(tmp_path / "axis.toml")
     assert math.isclose(cfg.compensation.ff_stribeck, data["Fs"] - data["Cf"], rel_tol=1e-9)
     assert math.isclose(cfg.compensation.ff_stribeck_velocity, data["vs"], rel_tol=1e-9)

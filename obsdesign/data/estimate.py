@@ -13,7 +13,9 @@ correlated rows carry the evidence of fewer independent ones: ``n_eff = n / tau`
 the integrated autocorrelation time of the residuals of the fit with the term
 (:func:`~obsdesign.data.uncertainty.correlation_time`, at least 1). With ``n`` in place of
 ``n_eff`` a closed-loop record of an axis without a Stribeck drop kept a spurious 3 % one
-(BIC decrease 40 at ``tau`` 4.8; 1.4 against it with ``n_eff``).
+(BIC decrease 40 at ``tau`` 4.8; 1.4 against it with ``n_eff``). :func:`obsdesign.data.identify`
+decides on the rows down to the slowest trusted speed (:func:`~obsdesign.data.friction_fit.trusted_speed`),
+where a drop below the default min speed lives (:func:`select_stribeck`).
 """
 
 from __future__ import annotations
@@ -93,7 +95,7 @@ def _select(cols, y, *, stribeck, fix, bounds, vs_range):
         return base, base, f"Stribeck term dropped: vs at its {rich.at_bound['vs']} bound; {text}"
     if not rich.values["Fs"] > rich.values["Cf"]:
         return base, base, (f"Stribeck term dropped: the fit gives Fs = {rich.values['Fs']:.4g} below Cf = "
-                            f"{rich.values['Cf']:.4g} (friction rising towards standstill is not a Stribeck drop); "
+                            f"{rich.values['Cf']:.4g} (friction falling towards standstill is not a Stribeck drop); "
                             f"{text}")
     if b0 - b1 > BIC_MARGIN:
         return base, rich, f"Stribeck term kept: {text}, a decrease of {b0 - b1:.1f} > {BIC_MARGIN:g}"

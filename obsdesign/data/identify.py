@@ -108,7 +108,8 @@ class Identification:
         The model selection: the BIC with and without the Stribeck term and the decision.
     intervals : dict
         ``name -> (low, high)``: 95 % intervals of every parameter (moving-block bootstrap,
-        widened by the errors-in-variables shift; ``interval_method`` says which), but a fitted ``Fs``, ``vs``.
+        widened by the errors-in-variables shift; ``interval_method`` says which); a fitted ``Fs``, ``vs``:
+        the profile likelihood joined with the bootstrap's, widened likewise.
     interval_method : str
         How :attr:`intervals` were obtained.
     eiv_shift : dict
@@ -313,13 +314,15 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
         Largest travel [m] after a reversal still taken as pre-sliding (default 1e-4 m).
     stribeck : {'auto', 'on', 'off'}
         The Stribeck term ``(Fs - Cf) sign(v) exp(-(v/vs)^2)``: kept by the model selection of
-        :mod:`obsdesign.data.estimate` (``auto``), always fitted, or never.
+        :mod:`obsdesign.data.estimate` (``auto``) on the rows down to ``stribeck_min_speed``, always
+        fitted, or never. A kept ``vs`` below :data:`NEAR_FLOOR` times that speed whose ``Fs`` interval
+        reaches ``Cf`` is dropped (the drop is not resolved).
     fix : dict, optional
         Parameters held at a value, e.g. ``{"sigma": 12.0}`` (names of
         :data:`obsdesign.data.friction_fit.PARAMETERS` and ``ASYMMETRIC``).
     bounds : dict, optional
         ``{name: (low, high)}``; defaults: ``m, sigma, Cf, Fs >= 0`` (a fit never returns a
-        negative viscous coefficient), ``vs`` between ``min_speed`` and half the peak speed.
+        negative viscous coefficient), ``vs`` between ``stribeck_min_speed`` and half the peak speed.
     min_speed : float, optional
         Rows with ``|v|`` at or below it [m/s, rad/s] are left out; default 1 % of the peak.
     stribeck_min_speed : float, optional
@@ -384,7 +387,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
        is therefore taken from the ``coulomb-viscous`` fit of the same rows, and ``Cf_pos``,
        ``Cf_neg`` are the levels minus/plus it (standard errors propagated linearly).
     7. ``intervals``: a moving-block bootstrap widened by the errors-in-variables shift
-       (:mod:`obsdesign.data.uncertainty`); none for a fitted ``Fs`` and ``vs`` (``docs/measured-data.md``).
+       (:mod:`obsdesign.data.uncertainty`); for a fitted ``Fs`` and ``vs`` joined with the profile likelihood
+       (:func:`~obsdesign.data.friction_fit.profile_interval`; ``docs/measured-data.md``).
     8. ``s`` (eq:2:3:1-2:3:5) is fitted only if at least 5 reversals each stay within
        ``presliding_window`` of the reversal point for 5 rows of the fit grid (``5 decimation``
        samples; 50 samples, the benchmark's grid, when ``decimation`` is not given) over at least 5 distinct encoder readings; otherwise ``s = None`` and
