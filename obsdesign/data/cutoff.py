@@ -193,7 +193,9 @@ def choose_filter(position: np.ndarray, sample_time: float, filter_hz: float | N
         tenth of the rate). A force with sharp edges (moves that saturate the drive: 11 % of the samples at
         the limit, minimum-jerk moves whose position spectrum met the noise at 2.3 Hz) needs them: with the
         position's 4.6 Hz the filtered sign(v) column no longer matched the force, and the viscous
-        coefficient came out 11 times too large and the Coulomb level 0; with 228 Hz both within 5 %.
+        coefficient came out 11 times too large and the Coulomb level 0; with 228 Hz both within 5 %. Since the
+        floor condition of :func:`noise_cutoff` (:data:`FLOOR_RATIO`) the position rule gives 400 Hz on that log
+        itself; the force's floor stays for a record whose position noise is high.
 
     Examples
     --------
