@@ -51,8 +51,8 @@ MODELS = ("coulomb-viscous", "asymmetric")
 #: Decimation factor at the largest default cut-off (a tenth of the sampling rate): the benchmark's
 #: round(0.8 fnyq / (2 * 20 Hz)) = 10 at 1 kHz. The default is ``round(fs / filter_hz)``.
 DEFAULT_DECIMATION = 10
-#: A Stribeck speed below this many times the slowest trusted speed, with an Fs interval reaching Cf, is dropped
-#: (``auto``): the rows there follow reversals, where LuGre's bristle lag bends the friction like a small drop.
+#: A Stribeck speed below this many times the slowest trusted speed, with an Fs interval reaching Cf, is not
+#: resolved (``auto``; decided again on the rows above the min speed): the rows there follow reversals, where LuGre's bristle lag bends the friction like a small drop.
 #: Axes without a drop gave vs at 6 x that speed in 2 of 20 noise draws; true drops at 17 to 86 x it.
 NEAR_FLOOR = 10.0
 #: Default pre-sliding window [m]: the largest travel after a reversal still called pre-sliding.
@@ -316,7 +316,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
         The Stribeck term ``(Fs - Cf) sign(v) exp(-(v/vs)^2)``: kept by the model selection of
         :mod:`obsdesign.data.estimate` (``auto``) on the rows down to ``stribeck_min_speed``, always
         fitted, or never. A kept ``vs`` below :data:`NEAR_FLOOR` times that speed whose ``Fs`` interval
-        reaches ``Cf`` is dropped (the drop is not resolved).
+        reaches ``Cf`` is not resolved: the term is then decided on the rows above ``min_speed`` alone.
     fix : dict, optional
         Parameters held at a value, e.g. ``{"sigma": 12.0}`` (names of
         :data:`obsdesign.data.friction_fit.PARAMETERS` and ``ASYMMETRIC``).
@@ -522,20 +522,25 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     model_shift = _model_shift(est, cols, y, threshold, model=model, fix=fix, bounds=bounds, vs_range=vs_range,
                                noise_var=noise_var)
     intervals = widened(est["intervals"], values, model_shift)
+    if est["stribeck"] and threshold < base_threshold:  # what the rows below the min speed moved: a second shift
+        intervals = widened(intervals, values, _slow_rows_shift(est, rows_above(base_threshold), model=model, fix=fix,
+                                                                bounds=bounds, noise_var=noise_var))
     asked = stribeck == "on" or any(k in fix or k in bounds for k in ("Fs", "vs"))
     if (kept and not asked and "Fs" in intervals and intervals["Fs"][0] <= values["Cf"]
             and values["vs"] < NEAR_FLOOR * floor):
         # a drop the data do not resolve, near the slowest rows (on axes without one, a 1.08 Cf "drop" at 6 x the
-        # trusted speed, where the bristles' lag after a reversal bends the friction): the model without it
+        # trusted speed, where the bristles' lag after a reversal bends the friction): decided again on the rows
+        # above the min speed alone
         lo_fs, hi_fs = intervals["Fs"]
-        selection = (f"Stribeck term dropped: Fs = {values['Fs']:.4g} has a 95 % interval [{lo_fs:.4g}, {hi_fs:.4g}] "
-                     f"that reaches Cf = {values['Cf']:.4g} and vs = {values['vs']:.3g} is within {NEAR_FLOOR:g} x the "
-                     f"slowest trusted speed, so the drop is not resolved; "
-                     + selection.split(": ", 1)[1])
         cols, y = rows_above(base_threshold)
         threshold, vs_range = base_threshold, base_range
-        est = estimate(cols, y, model=model, stribeck="off", fix=fix, bounds=bounds, vs_range=vs_range,
-                       noise_var=noise_var, n_boot=n_boot, seed=seed)
+        kept, again = select_stribeck(cols, y, stribeck=stribeck, fix=fix, bounds=bounds, vs_range=vs_range)
+        selection = (f"Stribeck term not resolved on the rows down to {floor:.3g} {speed} (Fs = {values['Fs']:.4g}, "
+                     f"95 % interval [{lo_fs:.4g}, {hi_fs:.4g}] reaching Cf = {values['Cf']:.4g}, vs = "
+                     f"{values['vs']:.3g} within {NEAR_FLOOR:g} x that speed); on the rows above the min speed "
+                     f"{base_threshold:.3g} {speed}: " + again)
+        est = estimate(cols, y, model=model, stribeck="on" if kept else "off", fix=fix, bounds=bounds,
+                       vs_range=vs_range, noise_var=noise_var, n_boot=n_boot, seed=seed)
         est["selection"] = selection
         values, std = est["values"], est["std"]
         model_shift = _model_shift(est, cols, y, threshold, model=model, fix=fix, bounds=bounds, vs_range=vs_range,
@@ -570,3 +575,20 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                              else ""),
                           units=trace.units, input_timing=found.timing, delay_samples=found.delay,
                           timing_note=found.note, timing_evidence=found.evidence)
+
+
+def _slow_rows_shift(est: dict, rows: tuple, *, model: str, fix: dict, bounds: dict, noise_var: dict) -> dict:
+    """The change of m, sigma, Cf, offset when the rows below the min speed (added for the Stribeck term) are left out.
+
+    ``Fs`` and ``vs`` are held at their estimates (on the rows above the min speed a drop below it is not
+    determined); a shift of the size of the interval says the slow rows pull the other parameters, by at least that.
+    """
+    cols, y = rows
+    held = dict(fix, Fs=float(est["values"]["Fs"]), vs=float(est["values"]["vs"]))
+    try:
+        alt = estimate(cols, y, model=model, stribeck="on", fix=held, bounds=bounds, vs_range=(1e-12, 1.0),
+                       noise_var=noise_var, n_boot=0, seed=0)
+    except ValueError:
+        return {}
+    return {k: float(alt["values"][k] - est["values"][k]) for k in est["intervals"]
+            if k in alt["values"] and k not in held}
