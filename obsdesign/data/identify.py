@@ -34,14 +34,14 @@ import numpy as np
 from ._idim import MAX_BOOTSTRAP, check_int, implausible, positive_number, quantization, second_difference, time_window
 from .choices import INPUT_TIMINGS, MAX_DELAY, STRIBECK_CHOICES
 from .cutoff import choose_filter
-from .estimate import (MODEL_SHIFT_FACTOR, STRIBECK_INTERVAL, cautions, estimate, model_shift as _model_shift,
-                       select_stribeck, widened)
-from .friction_fit import check_bounds, check_fix, trusted_speed
+from .estimate import MODEL_SHIFT_FACTOR, STRIBECK_INTERVAL, cautions
+from .friction_fit import check_bounds, check_fix
+from .stribeck_rows import FITTED, fit_rows, row_maker, stribeck_floor
 from ._ident_rows import ASYM, FILTER_ORDER, rows
 from .timing import aligned, check_delay, find_timing
 from .presliding import MIN_REVERSALS, MIN_ROWS as MIN_PRESLIDING_ROWS, _reversals, fit_presliding
 from .trace import REVERSAL_THRESHOLD, Trace
-from .uncertainty import N_BOOT, column_noise, noise_variance
+from .uncertainty import N_BOOT, column_noise
 from .units import Units, check_plausible
 
 __all__ = ["Identification", "identify", "MODELS", "FILTER_ORDER", "DEFAULT_DECIMATION",
@@ -51,10 +51,6 @@ MODELS = ("coulomb-viscous", "asymmetric")
 #: Decimation factor at the largest default cut-off (a tenth of the sampling rate): the benchmark's
 #: round(0.8 fnyq / (2 * 20 Hz)) = 10 at 1 kHz. The default is ``round(fs / filter_hz)``.
 DEFAULT_DECIMATION = 10
-#: A Stribeck speed below this many times the slowest trusted speed, with an Fs interval reaching Cf, is not
-#: resolved (``auto``; decided again on the rows above the min speed): the rows there follow reversals, where LuGre's bristle lag bends the friction like a small drop.
-#: Axes without a drop gave vs at 6 x that speed in 2 of 20 noise draws; true drops at 17 to 86 x it.
-NEAR_FLOOR = 10.0
 #: Default pre-sliding window [m]: the largest travel after a reversal still called pre-sliding.
 PRESLIDING_WINDOW = 1e-4
 
@@ -124,10 +120,7 @@ class Identification:
     min_speed : float
         The speed threshold of the rows of the fit [m/s] (with the Stribeck term kept: ``stribeck_min_speed``).
     stribeck_min_speed : float
-        The speed threshold of the rows the Stribeck decision and a Stribeck fit use [m/s]: ``min_speed``
-        lowered to the slowest speed the encoder and the noise make trustworthy
-        (:func:`~obsdesign.data.friction_fit.trusted_speed`), or as given. The rows of a fit with the
-        Stribeck term kept are those above it.
+        The min speed of the Stribeck decision's rows [m/s] (:mod:`obsdesign.data.stribeck_rows`).
     window : str
         The time window of the fit (empty: the whole record).
     units : Units
@@ -314,9 +307,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
         Largest travel [m] after a reversal still taken as pre-sliding (default 1e-4 m).
     stribeck : {'auto', 'on', 'off'}
         The Stribeck term ``(Fs - Cf) sign(v) exp(-(v/vs)^2)``: kept by the model selection of
-        :mod:`obsdesign.data.estimate` (``auto``) on the rows down to ``stribeck_min_speed``, always
-        fitted, or never. A kept ``vs`` below :data:`NEAR_FLOOR` times that speed whose ``Fs`` interval
-        reaches ``Cf`` is not resolved: the term is then decided on the rows above ``min_speed`` alone.
+        :mod:`obsdesign.data.estimate` (``auto``) on the rows of :mod:`obsdesign.data.stribeck_rows`, always
+        fitted, or never.
     fix : dict, optional
         Parameters held at a value, e.g. ``{"sigma": 12.0}`` (names of
         :data:`obsdesign.data.friction_fit.PARAMETERS` and ``ASYMMETRIC``).
@@ -326,11 +318,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     min_speed : float, optional
         Rows with ``|v|`` at or below it [m/s, rad/s] are left out; default 1 % of the peak.
     stribeck_min_speed : float, optional
-        The threshold of the rows the Stribeck decision (``auto``) and a Stribeck fit look at [m/s, rad/s],
-        at most ``min_speed``. Default: ``min_speed`` when given, else the slowest speed the encoder and the
-        noise make trustworthy, :func:`~obsdesign.data.friction_fit.trusted_speed` (3 standard deviations of
-        the velocity's noise, 2 encoder counts per period of the cut-off), if below the default ``min_speed``:
-        the Stribeck drop lives below ``vs``, which may be below 1 % of the peak speed.
+        The min speed of the rows of the Stribeck decision and fit [m/s, rad/s], at most ``min_speed``; default
+        ``min_speed`` if given, else the slowest trusted speed (:mod:`obsdesign.data.stribeck_rows`).
     window : (float, float), optional
         Only the samples with ``t0 <= t <= t1`` [s].
     n_boot : int
@@ -428,8 +417,6 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     presliding_window = positive_number("presliding_window", presliding_window, 0.0, trace.units.length_unit)
     if min_speed is not None:
         min_speed = positive_number("min_speed", min_speed, 0.0, trace.units.si("speed"))
-    if stribeck_min_speed is not None:
-        stribeck_min_speed = positive_number("stribeck_min_speed", stribeck_min_speed, 0.0, trace.units.si("speed"))
     if not isinstance(input_timing, str) or input_timing not in INPUT_TIMINGS:
         raise ValueError(f"input_timing: expected one of {', '.join(map(repr, INPUT_TIMINGS))}, found {input_timing!r}")
     delay_samples = None if delay_samples is None else check_delay(delay_samples, check_int("delay_samples",
@@ -467,91 +454,25 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     peak = float(np.max(np.abs(stacked["v"])))
     threshold = REVERSAL_THRESHOLD * peak if min_speed is None else min_speed
     speed = trace.units.si("speed")
-    moving = np.abs(stacked["v"]) > threshold
-    if np.count_nonzero(moving) < 10:
-        raise ValueError(f"trace: expected motion in at least 10 rows of the fit, found {np.count_nonzero(moving)} "
-                         f"(|v| > {threshold:.3g} {speed}; the position barely changes, or "
-                         f"min_speed is too high)")
-    v_kept = v[keep]
+    moving = np.count_nonzero(np.abs(stacked["v"]) > threshold)
+    if moving < 10:
+        raise ValueError(f"trace: expected motion in at least 10 rows of the fit, found {moving} (|v| > "
+                         f"{threshold:.3g} {speed}; the position barely changes, or min_speed is too high)")
     quantum = quantization(position)
     white = float(np.mean((position - x_f)[keep] ** 2))
     noise_var = column_noise(white, sos, dec_sos, q, dt)
-
-    # the rows of the Stribeck decision: down to the slowest speed the encoder and the noise make trustworthy
-    if stribeck_min_speed is not None:
-        floor, floor_rule = min(stribeck_min_speed, threshold), "given"
-    elif min_speed is not None or stribeck == "off":
-        floor, floor_rule = threshold, "the min speed"
-    else:
-        length = max(4096, 400 * q)
-        eta2 = white / noise_variance(lambda h: h - signal.sosfiltfilt(sos, h), length)
-        sigma_v = math.sqrt(eta2 * noise_variance(lambda h: np.gradient(signal.sosfiltfilt(sos, h), dt), length))
-        trusted, floor_rule = trusted_speed(sigma_v, quantum, filter_hz)
-        floor = min(trusted, threshold)
-        floor_rule = f"trusted speed: {floor_rule}" + ("" if trusted < threshold else ", at least the min speed")
-
-    def rows_above(limit: float) -> tuple[dict, np.ndarray]:
-        mask = np.abs(stacked["v"]) > limit
-        cols = {k: c[mask] for k, c in stacked.items() if k != "y"}
-
-        def shape(vs: float, parts: tuple[str, ...]) -> dict:  # Stribeck columns at the full rate, decimated
-            e = np.sign(v_kept) * np.exp(-((v_kept / vs) ** 2))
-            full = {"S": e, "S_pos": e * (v_kept > 0), "S_neg": e * (v_kept < 0), "dS": e * 2.0 * v_kept**2 / vs**3}
-            wanted = ("S",) + parts
-            return dict(zip(wanted, dec(np.stack([full[k] for k in wanted]))[:, mask]))
-
-        cols["shape"] = shape
-        return cols, stacked["y"][mask]
-
-    cols, y = rows_above(threshold)
-    vs_range = (max(threshold, 1e-12), max(0.5 * peak, 2.0 * max(threshold, 1e-12)))
-    low_cols, low_y = (cols, y) if floor >= threshold else rows_above(floor)
-    low_range = (max(floor, 1e-12), vs_range[1])
-    kept, selection = select_stribeck(low_cols, low_y, stribeck=stribeck, fix=fix, bounds=bounds, vs_range=low_range)
-    where = (f"; rows above {floor:.3g} {speed} ({low_y.size} rows; {floor_rule})" if floor < threshold
-             else "")
-    selection += where
-    base_threshold, base_range = threshold, vs_range
-    if kept:  # the fit with the term on the rows down to the trusted speed: the drop lives below vs
-        cols, y, threshold, vs_range = low_cols, low_y, floor, low_range
-    est = estimate(cols, y, model=model, stribeck="on" if kept else "off", fix=fix, bounds=bounds, vs_range=vs_range,
-                   noise_var=noise_var, n_boot=n_boot, seed=seed)
-    if est["selection"].startswith(("Stribeck term fitted as asked", "Stribeck term not fitted")):
-        est["selection"] = selection
+    floor, rule = stribeck_floor(threshold=threshold, min_speed=min_speed, stribeck_min_speed=stribeck_min_speed,
+                                 stribeck=stribeck, white=white, sos=sos, dt=dt, q=q, quantum=quantum, filter_hz=filter_hz, speed=speed)
+    fitted = fit_rows(row_maker(stacked, v[keep], dec), threshold=threshold, floor=floor, floor_rule=rule,
+                      peak=peak, speed=speed, model=model, stribeck=stribeck, fix=fix, bounds=bounds,
+                      noise_var=noise_var, n_boot=n_boot, seed=seed)
+    est, intervals, model_shift, cols, y, threshold = (fitted[k] for k in FITTED)
     values, std = est["values"], est["std"]
-    model_shift = _model_shift(est, cols, y, threshold, model=model, fix=fix, bounds=bounds, vs_range=vs_range,
-                               noise_var=noise_var)
-    intervals = widened(est["intervals"], values, model_shift)
-    if est["stribeck"] and threshold < base_threshold:  # what the rows below the min speed moved: a second shift
-        intervals = widened(intervals, values, _slow_rows_shift(est, rows_above(base_threshold), model=model, fix=fix,
-                                                                bounds=bounds, noise_var=noise_var))
-    asked = stribeck == "on" or any(k in fix or k in bounds for k in ("Fs", "vs"))
-    if (kept and not asked and "Fs" in intervals and intervals["Fs"][0] <= values["Cf"]
-            and values["vs"] < NEAR_FLOOR * floor):
-        # a drop the data do not resolve, near the slowest rows (on axes without one, a 1.08 Cf "drop" at 6 x the
-        # trusted speed, where the bristles' lag after a reversal bends the friction): decided again on the rows
-        # above the min speed alone
-        lo_fs, hi_fs = intervals["Fs"]
-        cols, y = rows_above(base_threshold)
-        threshold, vs_range = base_threshold, base_range
-        kept, again = select_stribeck(cols, y, stribeck=stribeck, fix=fix, bounds=bounds, vs_range=vs_range)
-        selection = (f"Stribeck term not resolved on the rows down to {floor:.3g} {speed} (Fs = {values['Fs']:.4g}, "
-                     f"95 % interval [{lo_fs:.4g}, {hi_fs:.4g}] reaching Cf = {values['Cf']:.4g}, vs = "
-                     f"{values['vs']:.3g} within {NEAR_FLOOR:g} x that speed); on the rows above the min speed "
-                     f"{base_threshold:.3g} {speed}: " + again)
-        est = estimate(cols, y, model=model, stribeck="on" if kept else "off", fix=fix, bounds=bounds,
-                       vs_range=vs_range, noise_var=noise_var, n_boot=n_boot, seed=seed)
-        est["selection"] = selection
-        values, std = est["values"], est["std"]
-        model_shift = _model_shift(est, cols, y, threshold, model=model, fix=fix, bounds=bounds, vs_range=vs_range,
-                                   noise_var=noise_var)
-        intervals = widened(est["intervals"], values, model_shift)
     shown = ("m", "sigma", "Cf", "offset") + (ASYM if model == "asymmetric" else ()) + (("Fs", "vs") if est["stribeck"] else ())
     result = {k: float(values[k]) for k in shown} | {f"{k}_std": float(std.get(k, 0.0)) for k in shown}
     notes = implausible({k: (None if k in est["at_bound"] else v) for k, v in result.items()}, trace.input_gain)
     for note in notes:
         warnings.warn(note, stacklevel=2)
-    noise = math.sqrt(max(0.0, white - quantum**2 / 12.0))
     s, note = fit_presliding(x=position[keep], x_f=x_f[keep], v=v[keep], a=a[keep], u_f=u_f[keep], dt=dt,
                              m=result["m"], sigma=result["sigma"], Cf=result["Cf"], offset=result["offset"],
                              rows=DEFAULT_DECIMATION if decimation is None else q, window=presliding_window,
@@ -561,34 +482,18 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     return Identification(model=model, **result, nrmse_percent=est["nrmse"], condition_number=est["condition_number"],
                           samples=int(y.size), s=s, s_note=note, sample_time=dt, filter_hz=float(filter_hz),
                           filter_rule=filter_rule, decimation=q, input_gain=trace.input_gain, force_peak=float(np.max(np.abs(force))),
-                          noise_rms=noise, quantization=quantum,
+                          noise_rms=math.sqrt(max(0.0, white - quantum**2 / 12.0)), quantization=quantum,
                           reversals=int(_reversals(v, REVERSAL_THRESHOLD * float(np.max(np.abs(v)))).size),
                           source=trace.source, warnings=notes, notices=notices, stribeck=est["stribeck"], selection=est["selection"],
                           intervals=intervals, eiv_shift=est["eiv_shift"], model_shift=model_shift,
                           at_bound=est["at_bound"], fixed=tuple(sorted(fix)), min_speed=float(threshold),
-                          stribeck_min_speed=float(floor), window=span,
-                          interval_method=(f"moving-block bootstrap, {n_boot} replicates, blocks of {est['block_length']} "
-                                           "rows, " if n_boot else "1.96 standard errors, ") + "widened by the "
-                          "errors-in-variables shift" + (f" and by the model-error shift ({MODEL_SHIFT_FACTOR:g} x the "
-                                                         "min speed)" if model_shift else "")
-                          + (f"; {STRIBECK_INTERVAL}" if est["stribeck"] and n_boot and not {"Fs", "vs"} <= set(fix)
-                             else ""),
+                          stribeck_min_speed=float(floor), window=span, interval_method=_method(est, n_boot, model_shift, fix),
                           units=trace.units, input_timing=found.timing, delay_samples=found.delay,
                           timing_note=found.note, timing_evidence=found.evidence)
 
 
-def _slow_rows_shift(est: dict, rows: tuple, *, model: str, fix: dict, bounds: dict, noise_var: dict) -> dict:
-    """The change of m, sigma, Cf, offset when the rows below the min speed (added for the Stribeck term) are left out.
-
-    ``Fs`` and ``vs`` are held at their estimates (on the rows above the min speed a drop below it is not
-    determined); a shift of the size of the interval says the slow rows pull the other parameters, by at least that.
-    """
-    cols, y = rows
-    held = dict(fix, Fs=float(est["values"]["Fs"]), vs=float(est["values"]["vs"]))
-    try:
-        alt = estimate(cols, y, model=model, stribeck="on", fix=held, bounds=bounds, vs_range=(1e-12, 1.0),
-                       noise_var=noise_var, n_boot=0, seed=0)
-    except ValueError:
-        return {}
-    return {k: float(alt["values"][k] - est["values"][k]) for k in est["intervals"]
-            if k in alt["values"] and k not in held}
+def _method(est: dict, n_boot: int, model_shift: dict, fix: dict) -> str:
+    return ((f"moving-block bootstrap, {n_boot} replicates, blocks of {est['block_length']} rows, " if n_boot
+             else "1.96 standard errors, ") + "widened by the errors-in-variables shift"
+            + (f" and by the model-error shift ({MODEL_SHIFT_FACTOR:g} x the min speed)" if model_shift else "")
+            + (f"; {STRIBECK_INTERVAL}" if est["stribeck"] and n_boot and not {"Fs", "vs"} <= set(fix) else ""))
