@@ -76,3 +76,12 @@ def test_cli_config_carries_fs_vs_to_the_feedforward(low_vs_log, tmp_path):
     _, _, args = sampled_controller(cfg.override(mode="feedforward")).kernel_args()
     assert (args.ff_cf, args.ff_stribeck, args.ff_vs) == (cfg.friction.Cf, cfg.compensation.ff_stribeck,
                                                          cfg.compensation.ff_stribeck_velocity)
+
+
+@pytest.mark.slow
+def test_report_data_section_lists_fs_and_vs(low_vs_log):
+    from obsdesign.report.data_section import data_section
+
+    rows = data_section(axis_trace(LOW_VS, low_vs_log))["parameters"]
+    assert [r[0] for r in rows][-2:] == ["Fs", "vs"] and [r[3] for r in rows][-2:] == ["N m", "rad/s"]
+    assert rows[-1][1] == pytest.approx(LOW_VS["vs"], rel=0.3)
