@@ -14,7 +14,7 @@ model-error shift.
 from __future__ import annotations
 
 import math
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
@@ -137,7 +137,7 @@ def fit_rows(rows_above: Callable, *, threshold: float, floor: float, floor_rule
     model, stribeck, fix, bounds, noise_var, n_boot, seed :
         As for :func:`~obsdesign.data.estimate.estimate`.
     """
-    kw = dict(model=model, fix=fix, bounds=bounds, noise_var=noise_var)
+    kw: dict[str, Any] = dict(model=model, fix=fix, bounds=bounds, noise_var=noise_var)
     cols, y = rows_above(threshold)
     vs_range = (max(threshold, 1e-12), max(0.5 * peak, 2.0 * max(threshold, 1e-12)))
     low_cols, low_y = (cols, y) if floor >= threshold else rows_above(floor)
