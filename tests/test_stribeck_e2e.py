@@ -46,6 +46,7 @@ def test_auto_keeps_a_drop_below_the_min_speed(low_vs_log):
         assert lo <= LOW_VS[key] <= hi and lo <= getattr(ident, key) <= hi, (key, lo, hi, getattr(ident, key))
 
 
+@pytest.mark.slow
 def test_auto_drops_the_term_on_an_axis_without_a_drop():
     spec = AXES["rotary-4k-hold-d2"]
     ident = identify(axis_trace(spec, noisy_log(spec, simulate_axis(spec), seed=0)), n_boot=0)
