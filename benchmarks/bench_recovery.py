@@ -1,7 +1,8 @@
 """Known-truth recovery of ``identify`` (issue 32): bias, coverage, Cramer-Rao bound and efficiency.
 
-Usage: ``python benchmarks/bench_recovery.py [--draws 20] [--axes NAME,...] [--write]``. ``--write``
-replaces the section ``## Known-truth recovery (issue 32)`` of benchmarks/RESULTS.md.
+Usage: ``python benchmarks/bench_recovery.py [--draws 20] [--axes NAME,...] [--write]`` (``--axes`` a
+comma-separated selection of :data:`AXES`). ``--write`` replaces the section ``## Known-truth recovery
+(issue 32)`` of benchmarks/RESULTS.md.
 
 The axes are those of ``tests/_axis_logs.py`` (:data:`AXES`, a shipped generator: a rigid axis with LuGre
 friction and a Stribeck drop in a closed loop, sub-stepped, the position logged ``delay`` samples late
@@ -214,7 +215,7 @@ def main(argv=None) -> int:
         if HEADING in old:
             start = old.index(HEADING)
             nxt = old.find("\n## ", start + len(HEADING))
-            new = old[:start] + body + (old[nxt + 1:] if nxt >= 0 else "")
+            new = old[:start] + body + ("\n" + old[nxt + 1:] if nxt >= 0 else "")
         else:
             new = old.rstrip("\n") + "\n\n" + body
         path.write_text(new, encoding="utf-8")

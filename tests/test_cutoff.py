@@ -65,3 +65,25 @@ def test_a_short_record_sees_no_crossing_below_four_bins():
     f, _ = position_psd(x, 1.0 / FS)
     assert cut.crossing_hz == pytest.approx(4 * f[0]) and cut.filter_hz == pytest.approx(8 * f[0])
     assert 30.0 * FS / cut.filter_hz < x.size  # identify's border and rows fit
+
+
+def test_a_slowly_falling_motion_far_above_the_noise_is_not_its_floor():
+    """A motion whose spectrum falls by only sqrt(2) per octave up to 20 Hz (a loop's answer to friction's edges),
+    then as f^-6, at 1000 times the white noise at 20 Hz: the spectra meet at 20 * 1000^(1/6) = 63 Hz (closed form),
+    not where the slow fall starts (the rule without the floor condition stopped at its first band)."""
+    n, fk, level = 2**18, 20.0, 1000.0
+    rng = np.random.default_rng(3)
+    f = np.fft.rfftfreq(n, 1.0 / FS)
+    g = np.maximum(f, f[1]) / fk
+    shape = np.where(g < 1.0, g**-0.5, g**-6.0)  # the motion's PSD relative to its value at fk
+    spec = (rng.standard_normal(f.size) + 1j * rng.standard_normal(f.size)) * np.sqrt(shape)
+    # irfft of X has the one-sided PSD 2 |X|^2 / (n FS), E|X|^2 = 2 shape: scaled to level x the noise's 2 / FS at fk
+    motion = math.sqrt(level * n / 2.0) * np.fft.irfft(spec, n)
+    x = motion + rng.standard_normal(n)  # white noise: PSD 2 / FS
+    crossing = fk * level ** (1.0 / 6.0)
+    cut = noise_cutoff(x, 1.0 / FS)
+    assert crossing / 2**0.5 <= cut.crossing_hz <= crossing * 2**0.5, (cut, crossing)
+    f_psd, p = position_psd(x, 1.0 / FS)
+    low = (f_psd > 5.0) & (f_psd < 10.0)
+    high = (f_psd > 10.0) & (f_psd < 20.0)
+    assert np.median(p[low]) < 2.0 * np.median(p[high])  # the slow fall the old rule took for the floor

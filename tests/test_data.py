@@ -173,8 +173,8 @@ def test_identify_exact_model_closed_form():
     assert set(ident.to_dict()) == {"m", "sigma", "Cf", "offset", "m_std", "sigma_std", "Cf_std", "offset_std",
                                     "nrmse_percent", "condition_number", "samples", "s", "s_note", "model",
                                     "sample_time", "filter_hz", "filter_rule", "decimation", "stribeck", "selection",
-                                    "interval_method", "at_bound", "fixed", "min_speed", "window", "intervals",
-                                    "eiv_shift", "units", "input_timing", "delay_samples", "timing_note",
+                                    "interval_method", "at_bound", "fixed", "min_speed", "stribeck_min_speed", "window",
+                                    "intervals", "eiv_shift", "units", "input_timing", "delay_samples", "timing_note",
                                     "timing_evidence", "model_shift"}
     assert (ident.input_timing, ident.delay_samples) == ("sample", 0)  # the force is the exact inverse model
     # the rows of the fit: decimated by 10 after cutting 50 samples at both ends, minus low-velocity rows

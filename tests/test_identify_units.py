@@ -85,7 +85,8 @@ def test_the_slow_log_needs_the_stribeck_term(logs):
     trace = Trace(t=log["t"], position=log["x"], force=log["i"] * GAIN, sample_time=DT)
     # white residuals (correlation time 1) at 200 Hz / decimation 10, so the BIC's effective rows are all the rows
     kw = dict(n_boot=0, filter_hz=200.0, decimation=10)
-    rich, plain = identify(trace, **kw), identify(trace, stribeck="off", **kw)
+    rich = identify(trace, **kw)
+    plain = identify(trace, stribeck="off", min_speed=rich.min_speed, **kw)  # the rows of the Stribeck fit
     assert rich.stribeck and not plain.stribeck
     assert identify(trace, n_boot=0).stribeck  # the default cut-off keeps the term too
     assert rich.Fs == pytest.approx(TRUTH["Fs"], rel=0.02) and rich.vs == pytest.approx(TRUTH["vs"], rel=0.05)
@@ -97,15 +98,18 @@ def test_the_slow_log_needs_the_stribeck_term(logs):
     assert delta > 10 and f"a decrease of {delta:.1f}" in rich.selection and f"; {n} rows)" in rich.selection
 
 
-def test_stribeck_parameters_get_no_interval_unless_fixed():
-    """Fitted Fs, vs: no 95 % interval (the noise biases them beyond the bootstrap), said in interval_method."""
+def test_stribeck_parameters_get_intervals_that_hold_the_truth():
+    """Fitted Fs, vs: 95 % intervals from the profile likelihood (with the bootstrap's), holding truth and estimate."""
     trace = _slow_trace()
     ident = identify(trace, n_boot=50)
-    assert ident.stribeck and "Fs" not in ident.intervals and "vs" not in ident.intervals
-    assert "none for Fs and vs" in ident.interval_method and "[95 %" not in str(ident).split("Fs", 1)[1].split("\n")[0]
+    assert ident.stribeck and "profile likelihood" in ident.interval_method
+    for key in ("Fs", "vs"):
+        lo, hi = ident.intervals[key]
+        assert lo <= TRUTH[key] <= hi and lo <= getattr(ident, key) <= hi, (key, lo, hi)
+    assert "[95 %" in str(ident).split("\n  Fs", 1)[1].split("\n")[0]
     fixed = identify(trace, fix={"Fs": 3.0, "vs": 2e-3}, n_boot=50)
     assert fixed.intervals["Fs"] == (3.0, 3.0) and fixed.intervals["vs"] == (2e-3, 2e-3)
-    assert "none for Fs" not in fixed.interval_method
+    assert "profile" not in fixed.interval_method
 
 
 def test_stribeck_is_dropped_where_it_explains_nothing():

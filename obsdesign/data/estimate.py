@@ -13,7 +13,9 @@ correlated rows carry the evidence of fewer independent ones: ``n_eff = n / tau`
 the integrated autocorrelation time of the residuals of the fit with the term
 (:func:`~obsdesign.data.uncertainty.correlation_time`, at least 1). With ``n`` in place of
 ``n_eff`` a closed-loop record of an axis without a Stribeck drop kept a spurious 3 % one
-(BIC decrease 40 at ``tau`` 4.8; 1.4 against it with ``n_eff``).
+(BIC decrease 40 at ``tau`` 4.8; 1.4 against it with ``n_eff``). :func:`obsdesign.data.identify`
+decides on the rows down to the slowest trusted speed (:func:`~obsdesign.data.friction_fit.trusted_speed`),
+where a drop below the default min speed lives (:func:`select_stribeck`).
 """
 
 from __future__ import annotations
@@ -24,18 +26,18 @@ import numpy as np
 
 from ._idim import ols
 from .choices import STRIBECK_CHOICES
-from .friction_fit import PHYSICAL, fit_model
+from .friction_fit import PHYSICAL, fit_model, profile_interval
 from .uncertainty import block_length, bootstrap, correlation_time, eiv_shift, intervals, make_index_sets
 
-__all__ = ["estimate", "cautions", "model_shift", "widened", "MODEL_SHIFT_FACTOR", "BIC_MARGIN", "STRIBECK_CHOICES", "NO_INTERVAL"]
+__all__ = ["estimate", "cautions", "model_shift", "widened", "MODEL_SHIFT_FACTOR", "BIC_MARGIN", "STRIBECK_CHOICES", "STRIBECK_INTERVAL",
+           "select_stribeck"]
 
-#: Parameters given no interval (unless fixed): the Stribeck level and speed. Their columns are
-#: nonlinear functions of the filtered velocity; position noise that moves its zero crossings by a
-#: sample garbles them and biases ``Fs`` and ``vs`` beyond the bootstrap's spread (measured 95 %
-#: "intervals" covered the truth in 55-90 % of synthetic records, docs/measured-data.md).
-NO_INTERVAL = ("Fs", "vs")
-NO_INTERVAL_REASON = ("none for Fs and vs: position noise at the velocity's zero crossings biases the Stribeck "
-                      "columns beyond the bootstrap's spread")
+#: How the Stribeck level and speed get their intervals: the profile likelihood over each (the other parameters
+#: re-fitted), joined with the bootstrap's and widened by the shifts like the others. Their columns are nonlinear
+#: functions of the filtered velocity, so the one-step bootstrap alone (55-90 % coverage on synthetic records
+#: before the record's own cut-off) understated them.
+STRIBECK_INTERVAL = ("Fs and vs: the profile likelihood (n_eff ln(RSS/RSS_min) < 3.84, the others re-fitted) "
+                     "joined with the bootstrap's")
 #: The BIC decrease the Stribeck term must bring to be kept (``stribeck='auto'``).
 BIC_MARGIN = 10.0
 
@@ -93,11 +95,30 @@ def _select(cols, y, *, stribeck, fix, bounds, vs_range):
         return base, base, f"Stribeck term dropped: vs at its {rich.at_bound['vs']} bound; {text}"
     if not rich.values["Fs"] > rich.values["Cf"]:
         return base, base, (f"Stribeck term dropped: the fit gives Fs = {rich.values['Fs']:.4g} below Cf = "
-                            f"{rich.values['Cf']:.4g} (friction rising towards standstill is not a Stribeck drop); "
+                            f"{rich.values['Cf']:.4g} (friction falling towards standstill is not a Stribeck drop); "
                             f"{text}")
     if b0 - b1 > BIC_MARGIN:
         return base, rich, f"Stribeck term kept: {text}, a decrease of {b0 - b1:.1f} > {BIC_MARGIN:g}"
     return base, base, f"Stribeck term dropped: {text}, a decrease of {b0 - b1:.1f} <= {BIC_MARGIN:g}"
+
+
+def select_stribeck(cols: dict, y: np.ndarray, *, stribeck: str, fix: dict, bounds: dict,
+                    vs_range: tuple[float, float]) -> tuple[bool, str]:
+    """Whether the Stribeck term is in the model on the rows ``cols``, ``y``, and why (one line; module docstring).
+
+    Parameters
+    ----------
+    cols, y :
+        The rows the decision looks at (:func:`obsdesign.data.identify`: down to the trusted speed).
+    stribeck : str
+        One of :data:`STRIBECK_CHOICES`.
+    fix, bounds : dict
+        Checked fixed values and bounds (a fixed or bounded ``Fs``/``vs`` asks for the term).
+    vs_range : (float, float)
+        Default bounds of ``vs``.
+    """
+    _, chosen, text = _select(cols, y, stribeck=stribeck, fix=fix, bounds=bounds, vs_range=vs_range)
+    return "Fs" in chosen.values, text
 
 
 def estimate(cols: dict, y: np.ndarray, *, model: str, stribeck: str, fix: dict, bounds: dict,
@@ -189,11 +210,21 @@ def estimate(cols: dict, y: np.ndarray, *, model: str, stribeck: str, fix: dict,
             if p in reps and q in reps:
                 reps[mean] = 0.5 * (reps[p] + reps[q])
                 shifts[mean] = 0.5 * (shifts.get(p, 0.0) + shifts.get(q, 0.0))
+    profiles = {}
+    if kept and n_boot > 0:  # the Stribeck level and speed: the profile likelihood, the others re-fitted
+        n_eff = sym.residual.size / correlation_time(sym.residual)
+        for name in ("Fs", "vs"):
+            if name not in fix:
+                profiles[name] = profile_interval(cols, y, sym, name, n_eff, fix=fix, bounds=bounds, vs_range=vs_range,
+                                                  step=std.get(name))
     ivals = {}
     for name, value in values.items():
-        if name in NO_INTERVAL and name not in fix:
-            continue
-        if name in reps:
+        if name in profiles:
+            lo, hi = intervals(reps[name][:, None], np.array([0.0])) if name in reps else (value, value)
+            s = shifts.get(name, 0.0) if math.isfinite(shifts.get(name, 0.0)) else 0.0
+            ivals[name] = (min(float(np.min(lo)), profiles[name][0]) + min(s, 0.0),
+                           max(float(np.max(hi)), profiles[name][1]) + max(s, 0.0))
+        elif name in reps:
             lo, hi = intervals(reps[name][:, None], np.array([shifts.get(name, 0.0)]))
             ivals[name] = (float(lo[0]), float(hi[0]))
         elif name in fix:

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["fit_model", "Fit", "PARAMETERS", "ASYMMETRIC", "PHYSICAL", "check_fix", "check_bounds",
-           "stribeck_shape"]
+           "stribeck_shape", "trusted_speed", "profile_interval", "NOISE_SIGMAS", "COUNTS_PER_PERIOD", "CHI2_95"]
 
 #: Parameters of the symmetric model, in order; ``Fs`` and ``vs`` only with the Stribeck term.
 PARAMETERS = ("m", "sigma", "Cf", "offset", "Fs", "vs")
@@ -46,6 +46,41 @@ PHYSICAL = {"m": (0.0, math.inf), "sigma": (0.0, math.inf), "Cf": (0.0, math.inf
             "Fs": (0.0, math.inf), "vs": (0.0, math.inf), "sigma_pos": (0.0, math.inf),
             "sigma_neg": (0.0, math.inf), "Cf_pos": (0.0, math.inf), "Cf_neg": (0.0, math.inf)}
 _GRID = 10
+#: The slowest row of the Stribeck fit moves at least this many standard deviations of the velocity's noise.
+NOISE_SIGMAS = 3.0
+#: ... and at least this many encoder counts per period of the low-pass's cut-off.
+COUNTS_PER_PERIOD = 2.0
+#: The 95 % point of chi-square with one degree of freedom (the profile's threshold).
+CHI2_95 = 3.841458820694124
+
+
+def trusted_speed(velocity_noise: float, quantum: float, filter_hz: float) -> tuple[float, str]:
+    """The lowest speed whose rows the Stribeck fit may use, and the rule as applied (one line).
+
+    Rule: ``max(NOISE_SIGMAS sigma_v, COUNTS_PER_PERIOD q f_c)``. Below ``3 sigma_v`` (the standard
+    deviation of the low-passed velocity's noise at the full rate, where ``sign(v)`` and the Stribeck
+    column are taken) the sign of a row is a coin toss in more than one sample of a thousand; below two
+    encoder counts per period of the cut-off ``f_c`` the count's staircase (of frequency ``|v| / q``)
+    passes the low-pass with more than 0.4 % of its power, so the filtered velocity ripples with it.
+
+    Parameters
+    ----------
+    velocity_noise : float
+        ``sigma_v`` [m/s or rad/s].
+    quantum : float
+        The encoder step ``q`` [m or rad] (0: not quantized).
+    filter_hz : float
+        The cut-off ``f_c`` [Hz].
+
+    Examples
+    --------
+    >>> round(trusted_speed(1e-3, 6e-6, 400.0)[0], 9)  # 3 x 1 mrad/s against 2 x 6 urad x 400 Hz = 4.8 mrad/s
+    0.0048
+    """
+    by_noise, by_counts = NOISE_SIGMAS * velocity_noise, COUNTS_PER_PERIOD * quantum * filter_hz
+    rule = (f"{NOISE_SIGMAS:g} x the velocity's noise {velocity_noise:.3g} = {by_noise:.3g}, {COUNTS_PER_PERIOD:g} "
+            f"encoder counts per period of the {filter_hz:.4g} Hz cut-off = {by_counts:.3g}: the larger")
+    return float(max(by_noise, by_counts)), rule
 
 
 def stribeck_shape(v: np.ndarray, vs: float) -> np.ndarray:
@@ -324,3 +359,84 @@ def fit_model(cols: dict, y: np.ndarray, *, model: str = "coulomb-viscous", stri
         ordered["offset"] = float(offset)
     return Fit(values=ordered, free=tuple(free), jacobian=jac, residual=resid, at_bound=at_bound,
                bounds={n: tuple(rng[n]) for n in free})
+
+
+def profile_interval(cols: dict, y: np.ndarray, fit: Fit, name: str, n_eff: float, *, fix: dict | None = None,
+                     bounds: dict | None = None, vs_range: tuple[float, float] = (1e-6, 1.0),
+                     level: float = CHI2_95, step: float | None = None) -> tuple[float, float]:
+    """The profile-likelihood interval of ``Fs`` or ``vs`` of a Stribeck ``fit`` (the symmetric model).
+
+    Every other parameter is re-fitted at each value of ``name`` (for ``vs`` the linear ones; for ``Fs``
+    also ``vs``), and the interval is where ``n_eff ln(RSS / RSS_min)`` stays below ``level`` (the
+    95 % point of chi-square with one degree of freedom): ``n_eff`` rows carrying the evidence of
+    independent ones (the correlated rows' effective number). Unlike the covariance it follows a
+    profile that is not quadratic (``vs`` near a bound, a flat side); an end at a bound stays there.
+
+    Parameters
+    ----------
+    cols, y :
+        The rows of the fit.
+    fit : Fit
+        The Stribeck fit (:func:`fit_model` with ``stribeck=True``).
+    name : {'Fs', 'vs'}
+    n_eff : float
+        Effective number of independent rows.
+    fix, bounds, vs_range :
+        As for the fit.
+    level : float
+        The profile's threshold.
+    step : float, optional
+        The first step from the estimate (default 1e-4 of it; a standard error saves evaluations); the
+        steps double until the profile crosses the threshold, which is then found by Brent's method.
+
+    Returns
+    -------
+    (low, high)
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> v = np.concatenate([np.linspace(-0.02, -2e-4, 500), np.linspace(2e-4, 0.02, 500)])
+    >>> a = rng.normal(0.0, 0.5, v.size)
+    >>> y = 1.8 * a + 12 * v + 2.4 * np.sign(v) + 0.6 * stribeck_shape(v, 2e-3) + 0.3 + rng.normal(0, 0.01, v.size)
+    >>> cols = {"a": a, "v": v, "sign": np.sign(v)}
+    >>> fit = fit_model(cols, y, stribeck=True, vs_range=(2e-4, 0.01))
+    >>> lo, hi = profile_interval(cols, y, fit, "vs", v.size, vs_range=(2e-4, 0.01))
+    >>> bool(lo < 2e-3 < hi and lo < fit.values["vs"] < hi and hi / lo < 1.1)
+    True
+    """
+    from scipy.optimize import brentq
+
+    fix = dict(fix or {})
+    lo_b, hi_b = (tuple(vs_range) if name == "vs" else PHYSICAL["Fs"])
+    if bounds and name in bounds:
+        lo_b, hi_b = bounds[name]
+    best = fit.values[name]
+    rss0 = fit.rss
+
+    def excess(value: float) -> float:
+        alt = fit_model(cols, y, stribeck=True, fix=dict(fix, **{name: value}), bounds=bounds, vs_range=vs_range)
+        return n_eff * math.log(max(alt.rss, rss0) / rss0) - level
+
+    out = []
+    first = step
+    for side in (-1.0, 1.0):
+        step = first
+        edge = lo_b if side < 0 else hi_b
+        step = 1e-4 * max(abs(best), 1e-300) if not step or not math.isfinite(step) else 0.5 * abs(step)
+        inner, found = best, None
+        for _ in range(60):
+            trial = best + side * step
+            if (side < 0 and trial <= edge) or (side > 0 and trial >= edge) or not math.isfinite(trial):
+                break
+            if name == "vs" and trial <= 0:
+                break
+            if excess(trial) > 0:
+                found = trial
+                break
+            inner, step = trial, 2.0 * step
+        if found is None:
+            out.append(float(edge))
+        else:
+            out.append(float(brentq(excess, min(inner, found), max(inner, found), xtol=1e-4 * abs(best), rtol=1e-4)))
+    return out[0], out[1]

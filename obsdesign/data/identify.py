@@ -34,8 +34,9 @@ import numpy as np
 from ._idim import MAX_BOOTSTRAP, check_int, implausible, positive_number, quantization, second_difference, time_window
 from .choices import INPUT_TIMINGS, MAX_DELAY, STRIBECK_CHOICES
 from .cutoff import choose_filter
-from .estimate import MODEL_SHIFT_FACTOR, NO_INTERVAL_REASON, cautions, estimate, model_shift as _model_shift, widened
+from .estimate import MODEL_SHIFT_FACTOR, STRIBECK_INTERVAL, cautions
 from .friction_fit import check_bounds, check_fix
+from .stribeck_rows import FITTED, fit_rows, row_maker, stribeck_floor
 from ._ident_rows import ASYM, FILTER_ORDER, rows
 from .timing import aligned, check_delay, find_timing
 from .presliding import MIN_REVERSALS, MIN_ROWS as MIN_PRESLIDING_ROWS, _reversals, fit_presliding
@@ -103,7 +104,8 @@ class Identification:
         The model selection: the BIC with and without the Stribeck term and the decision.
     intervals : dict
         ``name -> (low, high)``: 95 % intervals of every parameter (moving-block bootstrap,
-        widened by the errors-in-variables shift; ``interval_method`` says which), but a fitted ``Fs``, ``vs``.
+        widened by the errors-in-variables shift; ``interval_method`` says which); a fitted ``Fs``, ``vs``:
+        the profile likelihood joined with the bootstrap's, widened likewise.
     interval_method : str
         How :attr:`intervals` were obtained.
     eiv_shift : dict
@@ -116,7 +118,9 @@ class Identification:
     fixed : tuple of str
         Parameters held at a given value.
     min_speed : float
-        The speed threshold of the rows of the fit [m/s].
+        The speed threshold of the rows of the fit [m/s] (with the Stribeck term kept: ``stribeck_min_speed``).
+    stribeck_min_speed : float
+        The min speed of the Stribeck decision's rows [m/s] (:mod:`obsdesign.data.stribeck_rows`).
     window : str
         The time window of the fit (empty: the whole record).
     units : Units
@@ -180,6 +184,7 @@ class Identification:
     at_bound: dict = field(default_factory=dict)
     fixed: tuple[str, ...] = ()
     min_speed: float = 0.0
+    stribeck_min_speed: float = 0.0
     window: str = ""
     units: Units = field(default_factory=Units)
     notices: tuple[str, ...] = ()
@@ -192,7 +197,7 @@ class Identification:
              "condition_number", "samples")
     _ASYM = ("sigma_pos", "sigma_neg", "Cf_pos", "Cf_neg")
     _EXTRA = ("s", "s_note", "model", "sample_time", "filter_hz", "filter_rule", "decimation", "stribeck", "selection",
-              "interval_method", "at_bound", "fixed", "min_speed", "window", "input_timing", "delay_samples",
+              "interval_method", "at_bound", "fixed", "min_speed", "stribeck_min_speed", "window", "input_timing", "delay_samples",
               "timing_note")
 
     def to_dict(self) -> dict:
@@ -202,7 +207,7 @@ class Identification:
         condition_number, samples``; with ``asymmetric`` also ``sigma_pos, sigma_neg, Cf_pos,
         Cf_neg``; with the Stribeck term ``Fs, vs, Fs_std, vs_std``; always ``s, s_note, model,
         sample_time, filter_hz, filter_rule, decimation, stribeck, selection, interval_method, at_bound, fixed,
-        min_speed, window, input_timing, delay_samples, timing_note``, ``timing_evidence``, ``model_shift``, ``intervals`` (name -> [low, high]), ``eiv_shift`` and ``units``
+        min_speed, stribeck_min_speed, window, input_timing, delay_samples, timing_note``, ``timing_evidence``, ``model_shift``, ``intervals`` (name -> [low, high]), ``eiv_shift`` and ``units``
         (``axis``, ``input_unit``, ``mass_unit``, ``force_unit``, ``length_unit``, the logged
         ``time``/``position`` units); ``warnings`` (a list of sentences) when the identification is
         not physical, ``notices`` when there are cautions.
@@ -279,7 +284,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
              decimation: int | None = None, presliding_window: float = PRESLIDING_WINDOW, stribeck: str = "auto",
              fix: dict | None = None, bounds: dict | None = None, min_speed: float | None = None,
              window: tuple[float, float] | None = None, n_boot: int = N_BOOT, seed: int = 0,
-             input_timing: str = "auto", delay_samples: int | None = None) -> Identification:
+             input_timing: str = "auto", delay_samples: int | None = None,
+             stribeck_min_speed: float | None = None) -> Identification:
     """Fit ``u = m a + sigma v + Cf sign(v) + offset`` (+ a Stribeck term) to a trace, within bounds.
 
     Parameters
@@ -301,15 +307,19 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
         Largest travel [m] after a reversal still taken as pre-sliding (default 1e-4 m).
     stribeck : {'auto', 'on', 'off'}
         The Stribeck term ``(Fs - Cf) sign(v) exp(-(v/vs)^2)``: kept by the model selection of
-        :mod:`obsdesign.data.estimate` (``auto``), always fitted, or never.
+        :mod:`obsdesign.data.estimate` (``auto``) on the rows of :mod:`obsdesign.data.stribeck_rows`, always
+        fitted, or never.
     fix : dict, optional
         Parameters held at a value, e.g. ``{"sigma": 12.0}`` (names of
         :data:`obsdesign.data.friction_fit.PARAMETERS` and ``ASYMMETRIC``).
     bounds : dict, optional
         ``{name: (low, high)}``; defaults: ``m, sigma, Cf, Fs >= 0`` (a fit never returns a
-        negative viscous coefficient), ``vs`` between ``min_speed`` and half the peak speed.
+        negative viscous coefficient), ``vs`` between ``stribeck_min_speed`` and half the peak speed.
     min_speed : float, optional
         Rows with ``|v|`` at or below it [m/s, rad/s] are left out; default 1 % of the peak.
+    stribeck_min_speed : float, optional
+        The min speed of the rows of the Stribeck decision and fit [m/s, rad/s], at most ``min_speed``; default
+        ``min_speed`` if given, else the slowest trusted speed (:mod:`obsdesign.data.stribeck_rows`).
     window : (float, float), optional
         Only the samples with ``t0 <= t <= t1`` [s].
     n_boot : int
@@ -366,7 +376,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
        is therefore taken from the ``coulomb-viscous`` fit of the same rows, and ``Cf_pos``,
        ``Cf_neg`` are the levels minus/plus it (standard errors propagated linearly).
     7. ``intervals``: a moving-block bootstrap widened by the errors-in-variables shift
-       (:mod:`obsdesign.data.uncertainty`); none for a fitted ``Fs`` and ``vs`` (``docs/measured-data.md``).
+       (:mod:`obsdesign.data.uncertainty`); for a fitted ``Fs`` and ``vs`` joined with the profile likelihood
+       (:func:`~obsdesign.data.friction_fit.profile_interval`; ``docs/measured-data.md``).
     8. ``s`` (eq:2:3:1-2:3:5) is fitted only if at least 5 reversals each stay within
        ``presliding_window`` of the reversal point for 5 rows of the fit grid (``5 decimation``
        samples; 50 samples, the benchmark's grid, when ``decimation`` is not given) over at least 5 distinct encoder readings; otherwise ``s = None`` and
@@ -439,43 +450,29 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
 
     pos, neg = (v > 0).astype(float), (v < 0).astype(float)
     names = ("a", "v", "sign", "one", "v_pos", "v_neg", "pos", "neg", "y")
-    stacked = dec(np.stack([a, v, np.sign(v), np.ones(n), v * pos, v * neg, pos, neg, u_f])[:, keep])
-    cols = dict(zip(names, stacked))
-    y = cols.pop("y")
-    peak = float(np.max(np.abs(cols["v"])))
+    stacked = dict(zip(names, dec(np.stack([a, v, np.sign(v), np.ones(n), v * pos, v * neg, pos, neg, u_f])[:, keep])))
+    peak = float(np.max(np.abs(stacked["v"])))
     threshold = REVERSAL_THRESHOLD * peak if min_speed is None else min_speed
-    moving = np.abs(cols["v"]) > threshold
-    if np.count_nonzero(moving) < 10:
-        raise ValueError(f"trace: expected motion in at least 10 rows of the fit, found {np.count_nonzero(moving)} "
-                         f"(|v| > {threshold:.3g} {trace.units.si('speed')}; the position barely changes, or "
-                         f"min_speed is too high)")
-    cols = {k: c[moving] for k, c in cols.items()}
-    y = y[moving]
-    v_kept = v[keep]
-
-    def shape(vs: float, parts: tuple[str, ...]) -> dict:  # Stribeck columns at the full rate, decimated
-        e = np.sign(v_kept) * np.exp(-((v_kept / vs) ** 2))
-        full = {"S": e, "S_pos": e * (v_kept > 0), "S_neg": e * (v_kept < 0), "dS": e * 2.0 * v_kept**2 / vs**3}
-        wanted = ("S",) + parts
-        return dict(zip(wanted, dec(np.stack([full[k] for k in wanted]))[:, moving]))
-
-    cols["shape"] = shape
-
-    noise_var = column_noise(float(np.mean((position - x_f)[keep] ** 2)), sos, dec_sos, q, dt)
-    vs_range = (max(threshold, 1e-12), max(0.5 * peak, 2.0 * max(threshold, 1e-12)))
-    est = estimate(cols, y, model=model, stribeck=stribeck, fix=fix, bounds=bounds, vs_range=vs_range,
-                   noise_var=noise_var, n_boot=n_boot, seed=seed)
+    speed = trace.units.si("speed")
+    moving = np.count_nonzero(np.abs(stacked["v"]) > threshold)
+    if moving < 10:
+        raise ValueError(f"trace: expected motion in at least 10 rows of the fit, found {moving} (|v| > "
+                         f"{threshold:.3g} {speed}; the position barely changes, or min_speed is too high)")
+    quantum = quantization(position)
+    white = float(np.mean((position - x_f)[keep] ** 2))
+    noise_var = column_noise(white, sos, dec_sos, q, dt)
+    floor, rule = stribeck_floor(threshold=threshold, min_speed=min_speed, stribeck_min_speed=stribeck_min_speed,
+                                 stribeck=stribeck, white=white, sos=sos, dt=dt, q=q, quantum=quantum, filter_hz=filter_hz, speed=speed)
+    fitted = fit_rows(row_maker(stacked, v[keep], dec), threshold=threshold, floor=floor, floor_rule=rule,
+                      peak=peak, speed=speed, model=model, stribeck=stribeck, fix=fix, bounds=bounds,
+                      noise_var=noise_var, n_boot=n_boot, seed=seed)
+    est, intervals, model_shift, cols, y, threshold = (fitted[k] for k in FITTED)
     values, std = est["values"], est["std"]
-    model_shift = _model_shift(est, cols, y, threshold, model=model, fix=fix, bounds=bounds, vs_range=vs_range,
-                               noise_var=noise_var)
-    intervals = widened(est["intervals"], values, model_shift)
     shown = ("m", "sigma", "Cf", "offset") + (ASYM if model == "asymmetric" else ()) + (("Fs", "vs") if est["stribeck"] else ())
     result = {k: float(values[k]) for k in shown} | {f"{k}_std": float(std.get(k, 0.0)) for k in shown}
     notes = implausible({k: (None if k in est["at_bound"] else v) for k, v in result.items()}, trace)
     for note in notes:
         warnings.warn(note, stacklevel=2)
-    quantum = quantization(position)
-    noise = math.sqrt(max(0.0, float(np.mean((position - x_f)[keep] ** 2)) - quantum**2 / 12.0))
     s, note = fit_presliding(x=position[keep], x_f=x_f[keep], v=v[keep], a=a[keep], u_f=u_f[keep], dt=dt,
                              m=result["m"], sigma=result["sigma"], Cf=result["Cf"], offset=result["offset"],
                              rows=DEFAULT_DECIMATION if decimation is None else q, window=presliding_window,
@@ -485,15 +482,18 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     return Identification(model=model, **result, nrmse_percent=est["nrmse"], condition_number=est["condition_number"],
                           samples=int(y.size), s=s, s_note=note, sample_time=dt, filter_hz=float(filter_hz),
                           filter_rule=filter_rule, decimation=q, input_gain=trace.input_gain, force_peak=float(np.max(np.abs(force))),
-                          noise_rms=noise, quantization=quantum,
+                          noise_rms=math.sqrt(max(0.0, white - quantum**2 / 12.0)), quantization=quantum,
                           reversals=int(_reversals(v, REVERSAL_THRESHOLD * float(np.max(np.abs(v)))).size),
                           source=trace.source, warnings=notes, notices=notices, stribeck=est["stribeck"], selection=est["selection"],
                           intervals=intervals, eiv_shift=est["eiv_shift"], model_shift=model_shift,
-                          at_bound=est["at_bound"], fixed=tuple(sorted(fix)), min_speed=float(threshold), window=span,
-                          interval_method=(f"moving-block bootstrap, {n_boot} replicates, blocks of {est['block_length']} "
-                                           "rows, " if n_boot else "1.96 standard errors, ") + "widened by the "
-                          "errors-in-variables shift" + (f" and by the model-error shift ({MODEL_SHIFT_FACTOR:g} x the "
-                                                         "min speed)" if model_shift else "")
-                          + (f"; {NO_INTERVAL_REASON}" if est["stribeck"] and not {"Fs", "vs"} <= set(fix) else ""),
+                          at_bound=est["at_bound"], fixed=tuple(sorted(fix)), min_speed=float(threshold),
+                          stribeck_min_speed=float(floor), window=span, interval_method=_method(est, n_boot, model_shift, fix),
                           units=trace.units, input_timing=found.timing, delay_samples=found.delay,
                           timing_note=found.note, timing_evidence=found.evidence)
+
+
+def _method(est: dict, n_boot: int, model_shift: dict, fix: dict) -> str:
+    return ((f"moving-block bootstrap, {n_boot} replicates, blocks of {est['block_length']} rows, " if n_boot
+             else "1.96 standard errors, ") + "widened by the errors-in-variables shift"
+            + (f" and by the model-error shift ({MODEL_SHIFT_FACTOR:g} x the min speed)" if model_shift else "")
+            + (f"; {STRIBECK_INTERVAL}" if est["stribeck"] and n_boot and not {"Fs", "vs"} <= set(fix) else ""))

@@ -220,8 +220,14 @@ def _build(ident, *, name, K, u_max, rho, presliding_window):
     if getattr(ident, "stribeck", False) and Fs is not None and vs is not None:
         drop = max(Fs - Cf, 0.0)
         compensation = CompensationSpec(ff_stribeck=drop, ff_stribeck_velocity=vs)
-        rules += [("compensation.ff_stribeck", drop, F, f"{src}: Fs - Cf, the Stribeck drop of the feed-forward"),
-                  ("compensation.ff_stribeck_velocity", vs, f"{L}/s", f"{src}: the Stribeck speed vs")]
+        ivals = getattr(ident, "intervals", {})
+
+        def within(key: str) -> str:
+            return f" (95 % interval of {key} {ivals[key][0]:.4g} to {ivals[key][1]:.4g})" if key in ivals else ""
+
+        rules += [("compensation.ff_stribeck", drop, F, f"{src}: Fs - Cf, the Stribeck drop of the feed-forward"
+                   + within("Fs")),
+                  ("compensation.ff_stribeck_velocity", vs, f"{L}/s", f"{src}: the Stribeck speed vs" + within("vs"))]
         # the simulated plant keeps the paper's friction (no Stribeck term): a LuGre plant from these levels with
         # default bristle constants integrated to NaN on a rotary axis of 2.5e-3 kg m^2
     cfg = Config(

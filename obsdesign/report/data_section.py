@@ -207,6 +207,8 @@ def data_section(trace, cfg=None, *, moving_speed: float | None = None, label: s
     u = units.unit  # the record's axis (linear or rotary, from its units)
     params = [("m", ident.m, ident.m_std, u("kg")), ("sigma", ident.sigma, ident.sigma_std, u("N s/m")),
               ("Cf", ident.Cf, ident.Cf_std, u("N")), ("offset", ident.offset, ident.offset_std, u("N"))]
+    if ident.stribeck:  # the Stribeck level and speed the config's feed-forward reads
+        params += [("Fs", ident.Fs, ident.Fs_std, u("N")), ("vs", ident.vs, ident.vs_std, u("m/s"))]
     shown = {k: v for k, v in trace.metadata.items() if k not in ("time base", "encoding", "delimiter", "decimal")}
     return {"source": trace.source, "names": dict(trace.names), "samples": trace.samples, "format": trace.format,
             "units_read": trace.units.describe(trace.input_gain), "time_base": trace.metadata.get("time base"),
