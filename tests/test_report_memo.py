@@ -114,6 +114,9 @@ def test_a_changed_rc_is_drawn_not_read(memo_dir):
     '<svg><![CDATA[x]]></svg>',
     '<svg><image xlink:href="data:image/svg+xml;base64,AAAA"/></svg>',
     '<svg></svg><script>x</script>',
+    '<svg><g onload=alert(1)></g></svg>',           # unquoted: an HTML parser reads a handler
+    '<svg><g/onload="alert(1)"></g></svg>',         # slash-led: likewise
+    '<svg><g>unclosed</svg>',
     "<p>not a figure</p>",
     7,
 ])

@@ -258,6 +258,28 @@ _TAG = re.compile(r"<\s*/?\s*([A-Za-z][\w:.-]*)")
 _ATTR = re.compile(r"\s([A-Za-z_:][\w:.-]*)\s*=\s*(\"[^\"]*\"|'[^']*')")
 
 
+def _well_formed_figure(text: str) -> bool:
+    """Whether ``text`` is well-formed XML whose every element is allowed and no attribute an event handler.
+
+    The regular expressions of :func:`is_figure_svg` read attributes as matplotlib quotes them; an HTML
+    parser also reads ``<g onload=x>`` and ``<g/onload="x">`` as handlers. Matplotlib writes XML, so a kept
+    figure must parse as XML (no DOCTYPE or entity reaches the parser: :func:`is_figure_svg` refuses ``<!``
+    but comments first), and the parsed tree is checked again: element names, attribute names.
+    """
+    import xml.etree.ElementTree as ET  # noqa: N817 (the standard alias)
+
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError:
+        return False
+    for el in root.iter():
+        if not isinstance(el.tag, str) or el.tag.rpartition("}")[2] not in _SVG_ELEMENTS:
+            return False
+        if any(name.rpartition("}")[2].lower().startswith("on") for name in el.attrib):
+            return False
+    return True
+
+
 def is_figure_svg(text) -> bool:
     """Whether ``text`` is an ``<svg>`` element as :func:`inline_svg` writes it: only the elements of
     matplotlib's SVG backend, no event-handler attribute, every link within the figure (``#id``) or a
@@ -272,8 +294,11 @@ def is_figure_svg(text) -> bool:
 
     Examples
     --------
-    >>> is_figure_svg('<svg><g id="a"><use xlink:href="#a"/></g></svg>')
+    >>> xlink = 'xmlns:xlink="http://www.w3.org/1999/xlink"'
+    >>> is_figure_svg(f'<svg {xlink}><g id="a"><use xlink:href="#a"/></g></svg>')
     True
+    >>> is_figure_svg('<svg><g onload=alert(1)></g></svg>')      # unquoted: not XML, an HTML handler
+    False
     >>> is_figure_svg('<svg><g onload="alert(1)"/></svg>'), is_figure_svg('<svg><script>x</script></svg>')
     (False, False)
     """
@@ -286,6 +311,8 @@ def is_figure_svg(text) -> bool:
         return False  # comments (matplotlib writes each label's TeX source in one) but no CDATA or declaration
     if re.search(r"url\(\s*['\"]?(?!#)", lowered):
         return False
+    if not _well_formed_figure(text):
+        return False  # what a browser's HTML parser reads differently (an unquoted or slash-led handler)
     for name, value in _ATTR.findall(text):
         if name.lower().startswith("on"):
             return False
