@@ -1,0 +1,575 @@
+"""Segment output error: LuGre friction and the rigid-body parameters fitted to the logged position.
+
+The record is cut into segments of ``L`` samples. Each segment is simulated under the logged force
+(held over a sample, or interpolated when logged as it acted; the position compared ``d`` samples later,
+the timing and delay :func:`~obsdesign.data.identify` found, :mod:`obsdesign.data.timing`) from its own
+initial position, velocity and bristle force, three nuisance parameters per segment estimated with the
+rest. A free inertia integrates any force error into a position error that grows without bound over a
+whole record; over a segment it cannot, and the fit of the mass, viscous, Coulomb and offset terms is not
+biased by the low-pass filter the equation-error fit (IDIM-LS) needs. The nuisances are projected out of
+the normal equations per segment (a Schur complement), so a Levenberg-Marquardt step costs the
+simulations of the global parameters plus three.
+
+The bristle parameters (``sigma0``, ``sigma1``) make the cost non-convex: each one asked for is profiled
+over its plausible range (the other parameters refitted at every point), and it is called identifiable only
+when the profile has one minimum and the profile's interval lies inside the range; otherwise the profile
+interval is reported instead.
+
+Examples
+--------
+>>> segment_bounds(1000, 400, skip=50).tolist()
+[[50, 400], [450, 400]]
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ..friction.kernels import friction_plant_step
+from ..friction.registry import FRICTION_MODELS
+
+__all__ = ["SEGMENT", "DYNAMIC", "STATIC", "SegmentFit", "SegmentRefinement", "segment_bounds", "simulate_segments",
+           "fit_segments", "refine_segments", "BudgetExceeded"]
+
+#: Default segment length [s] of the final stage (the review's 0.1 s: the bound converged there).
+SEGMENT = 0.1
+#: The stages before it, as fractions of it (short segments first: robust to a poor start).
+_STAGES = (0.1, 0.25, 1.0)
+#: The rigid-body and static friction parameters, always fitted.
+STATIC = ("m", "sigma", "Cf", "offset")
+#: The bristle parameters, profiled when asked for.
+DYNAMIC = ("sigma0", "sigma1")
+_LUGRE = FRICTION_MODELS.code("lugre")
+_LAYOUT = FRICTION_MODELS["lugre"]._layout
+#: Points of a profile over a parameter's plausible range.
+PROFILE_POINTS = 11
+#: Units of the parameters on a linear axis driven by a force (converted with :meth:`obsdesign.axis.AxisSpec.unit`).
+UNITS = {"m": "kg", "sigma": "N s/m", "Cf": "N", "offset": "N", "Fs": "N", "vs": "m/s", "sigma0": "N/m",
+         "sigma1": "N s/m"}
+_LOG = {"m", "Cf", "Fs", "vs", "sigma0"}
+
+
+class BudgetExceeded(Exception):
+    """The time budget ran out (internal: the fit returns its best so far)."""
+
+
+def segment_bounds(n: int, length: int, *, skip: int) -> np.ndarray:
+    """``[start, length]`` rows of consecutive segments of ``length`` samples in ``n``, ``skip`` left at both ends.
+
+    Parameters
+    ----------
+    n, length, skip : int
+        Samples of the record, of a segment, and left out at each end.
+    """
+    starts = np.arange(skip, n - skip - length + 1, length, dtype=np.int64)
+    return np.column_stack([starts, np.full(starts.size, length, dtype=np.int64)])
+
+
+@njit(cache=True, error_model="numpy")
+def simulate_segments(pp, force, starts, length, x0, v0, fz0, m, dt, n_sub, hold, out):
+    """Simulate each segment from ``(x0, v0, sigma0 z0 = fz0)``; write ``x`` to ``out`` (segments x length).
+
+    ``force[k]`` is held over ``[k, k+1)`` when ``hold``, else interpolated linearly to ``force[k+1]``.
+    Returns False if a simulation diverged (its samples NaN).
+    """
+    h = dt / n_sub
+    st = np.zeros(3)
+    sigma0 = pp[8]
+    ok = True
+    for i in range(starts.shape[0]):
+        x, v = x0[i], v0[i]
+        st[0] = fz0[i] / sigma0
+        st[1] = x
+        st[2] = 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
+        for k in range(length):
+            out[i, k] = x
+            if not (abs(x) < 1e6 and abs(v) < 1e9):
+                for j in range(k, length):
+                    out[i, j] = np.nan
+                ok = False
+                break
+            j = starts[i] + k
+            if hold:
+                x, v = friction_plant_step(_LUGRE, pp, st, x, v, force[j], m, h, n_sub)
+            else:
+                u1 = force[j + 1] if j + 1 < force.shape[0] else force[j]
+                for s in range(n_sub):
+                    a = (s + 0.5) / n_sub
+                    x, v = friction_plant_step(_LUGRE, pp, st, x, v, (1.0 - a) * force[j] + a * u1, m, h, 1)
+    return ok
+
+
+@dataclass(frozen=True, kw_only=True)
+class SegmentFit:
+    """Result of :func:`fit_segments` (values in SI; ``units`` gives the axis's).
+
+    Attributes
+    ----------
+    names : tuple of str
+        The fitted global parameters.
+    values, std : dict
+        Estimates and standard errors by name.
+    intervals : dict
+        95 % interval by name (the profile's where one was computed and the parameter is not identified).
+    identifiable : dict
+        By name.
+    notes : dict
+        By name: why not identifiable, or ``""``.
+    profiles : dict
+        Name -> ``(grid, cost)`` of each profiled parameter (cost: the weighted RSS).
+    segment_samples, segments : int
+        ``L`` and the number of segments of the final stage.
+    rms, noise : float
+        RMS of the position residual and the noise level it is weighted by [m or rad].
+    evaluations : int
+        Simulations of the whole record.
+    stopped : str
+        ``""``, or why the fit stopped before it finished (the time budget).
+    """
+
+    names: tuple
+    values: dict
+    std: dict
+    intervals: dict
+    identifiable: dict
+    notes: dict
+    profiles: dict
+    segment_samples: int
+    segments: int
+    rms: float
+    noise: float
+    evaluations: int
+    stopped: str
+
+
+class _Segments:
+    """The data, the parameter vector and the residual of one segment length."""
+
+    def __init__(self, x_meas, force, x_f, v_f, dt, length, skip, hold, noise, n_sub, values, budget):
+        rows = segment_bounds(x_meas.size, length, skip=skip)
+        if rows.shape[0] < 2:
+            raise ValueError(f"trace: expected at least 2 segments of {length} samples, found {rows.shape[0]} "
+                             f"(the record has {x_meas.size} samples)")
+        self.starts, self.length = rows[:, 0], int(length)
+        self.meas = x_meas[self.starts[:, None] + np.arange(length)]
+        self.force, self.dt, self.hold, self.noise, self.n_sub = force, dt, hold, noise, n_sub
+        self.x0, self.v0 = x_f[self.starts], v_f[self.starts]
+        self.values = dict(values)
+        self.out = np.empty_like(self.meas)
+        self.budget = budget
+
+    def pack(self, q):
+        """The kernel array: the registry's LuGre layout, without its ranges (written in N/m and m/s: a rotary
+        axis's N m/rad and rad/s fall outside them); a Stribeck level below Cf is taken as Cf."""
+        fs = max(q["Fs"], q["Cf"])
+        if not (q["Cf"] > 0 and q["vs"] > 0 and q["sigma0"] > 0 and q["m"] > 0):
+            raise ValueError("a positive parameter at or below 0")
+        return np.array(_LAYOUT({"Cf": q["Cf"], "Cf_neg": q["Cf"], "sigma": q["sigma"], "sigma_neg": q["sigma"],
+                                 "offset": q["offset"], "Fs": fs, "vs": q["vs"], "sigma0": q["sigma0"],
+                                 "sigma1": max(q["sigma1"], 0.0)}), dtype=np.float64)
+
+    def residual(self, q, nu):
+        """Weighted residual (segments x L) at global values ``q`` and nuisances ``nu`` (segments x 3)."""
+        self.budget.tick()
+        try:
+            pp = self.pack(q)
+        except ValueError:
+            return np.full(self.meas.shape, 1e6)
+        simulate_segments(pp, self.force, self.starts, self.length, self.x0 + nu[:, 0] * self.noise,
+                          self.v0 + nu[:, 1] * self.noise / self.dt, nu[:, 2] * q["Cf"], q["m"], self.dt,
+                          self.n_sub, self.hold, self.out)
+        r = (self.meas - self.out) / self.noise
+        return np.where(np.isfinite(r), r, 1e6)
+
+
+class _Budget:
+    """Counts simulations, drives the progress bar and stops at the time budget."""
+
+    def __init__(self, seconds, bar):
+        self.t0 = time.perf_counter()
+        self.seconds = seconds
+        self.bar = bar
+        self.count = 0
+
+    def tick(self):
+        self.count += 1
+        if self.bar is not None:
+            self.bar.update(1)
+        if self.seconds is not None and time.perf_counter() - self.t0 > self.seconds:
+            raise BudgetExceeded
+
+
+def _theta(name, value):
+    return math.log(value) if name in _LOG else value
+
+
+def _value(name, theta):
+    return math.exp(min(theta, 700.0)) if name in _LOG else theta
+
+
+def _scale(name, q):
+    """Finite-difference step of ``name`` in its fitted coordinate (relative for a log one)."""
+    if name in _LOG:
+        return 1e-4
+    size = {"sigma": max(abs(q["sigma"]), 1e-3 * q["Cf"]), "offset": max(abs(q["offset"]), q["Cf"]),
+            "sigma1": max(abs(q["sigma1"]), math.sqrt(q["sigma0"] * q["m"]))}[name]
+    return 1e-4 * size
+
+
+def _gauss_newton(seg, names, q, nu, *, iterations):
+    """Levenberg-Marquardt over ``names`` and the nuisances; returns ``(q, nu, cost, moments)``."""
+    q = dict(q)
+    nu = nu.copy()
+    lam = 1e-3
+    r = seg.residual(q, nu)
+    cost = float(np.sum(r * r))
+    mom = None
+    for _ in range(iterations):
+        Jg = np.empty(r.shape + (len(names),))
+        for j, n in enumerate(names):
+            h = _scale(n, q)
+            qq = dict(q)
+            qq[n] = _value(n, _theta(n, q[n]) + h)
+            Jg[..., j] = (seg.residual(qq, nu) - r) / h
+        Jn = np.empty(r.shape + (3,))
+        for j in range(3):
+            h = 1e-3 * max(1.0, float(np.max(np.abs(nu[:, j]))))
+            step = nu.copy()
+            step[:, j] += h
+            Jn[..., j] = (seg.residual(q, step) - r) / h
+        A = np.einsum("slg,slh->gh", Jg, Jg)
+        B = np.einsum("slg,sln->sgn", Jg, Jn)
+        C = np.einsum("slm,sln->smn", Jn, Jn)
+        bg = np.einsum("slg,sl->g", Jg, r)
+        bn = np.einsum("sln,sl->sn", Jn, r)
+        mom = (A, B, C, Jg, Jn)
+        improved = False
+        for _try in range(8):
+            Cd = C + lam * (np.einsum("snn->sn", C)[:, :, None] * np.eye(3) + 1e-12 * np.eye(3))
+            Cinv = np.linalg.inv(Cd)
+            S = A + lam * np.diag(np.diag(A)) - np.einsum("sgn,snm,shm->gh", B, Cinv, B)
+            rhs = bg - np.einsum("sgn,snm,sm->g", B, Cinv, bn)
+            try:
+                dg = -np.linalg.solve(S + 1e-12 * np.trace(S) * np.eye(len(names)) / max(len(names), 1), rhs)
+            except np.linalg.LinAlgError:
+                lam *= 10.0
+                continue
+            dn = -np.einsum("snm,sm->sn", Cinv, bn + np.einsum("sgn,g->sn", B, dg))
+            qq = {**q, **{n: _value(n, _theta(n, q[n]) + d) for n, d in zip(names, dg)}}
+            r_new = seg.residual(qq, nu + dn)
+            c_new = float(np.sum(r_new * r_new))
+            if c_new < cost:
+                q, nu, r, improved = qq, nu + dn, r_new, True
+                drop = (cost - c_new) / max(cost, 1e-300)
+                cost = c_new
+                lam = max(lam / 5.0, 1e-9)
+                break
+            lam *= 10.0
+        if not improved or drop < 1e-7:
+            break
+    return q, nu, cost, r, mom
+
+
+def _covariance(names, r, mom):
+    """Covariance of the fitted coordinates, nuisances projected out: the larger of white-noise and
+    segment-clustered (sandwich) per parameter."""
+    A, B, C, Jg, Jn = mom
+    Cinv = np.linalg.pinv(C)
+    Jp = Jg - np.einsum("sln,snm,sgm->slg", Jn, Cinv, B)
+    Ared = np.einsum("slg,slh->gh", Jp, Jp)
+    d = np.sqrt(np.maximum(np.diag(Ared), 1e-300))
+    Ainv = np.linalg.pinv(Ared / np.outer(d, d), rcond=1e-10) / np.outer(d, d)
+    n_seg = r.shape[0]
+    dof = max(r.size - len(names) - 3 * n_seg, 1)
+    white = float(np.sum(r * r)) / dof * Ainv
+    score = np.einsum("slg,sl->sg", Jp, r)
+    cluster = n_seg / max(n_seg - 1, 1) * Ainv @ (score.T @ score) @ Ainv
+    return np.maximum(np.diag(white), np.diag(cluster)), np.diag(white)
+
+
+def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), segment=SEGMENT, time_budget=None,
+                 bar=None, ranges=None):
+    """Fit LuGre and the rigid body by segment output error (see the module's notes).
+
+    Parameters
+    ----------
+    x_meas, force : ndarray
+        Position [m or rad] aligned with the force [N or N m] (the delay taken out).
+    dt : float
+        Sample time [s].
+    hold : bool
+        Whether the force is held over a sample (else interpolated).
+    noise : float
+        Position noise RMS [m or rad] the residual is weighted by.
+    start : dict
+        Starting values of ``m, sigma, Cf, offset, Fs, vs, sigma0, sigma1``.
+    free : tuple of str
+        The global parameters fitted.
+    profile : tuple of str
+        Those of ``free`` profiled over ``ranges[name]``.
+    segment : float
+        Final segment length [s].
+    time_budget : float, optional
+        Seconds; when they run out the best fit so far is returned with ``stopped`` set.
+    bar : tqdm or None
+        Progress bar updated per simulation.
+    ranges : dict
+        Name -> ``(low, high)`` of each profiled parameter.
+
+    Returns
+    -------
+    SegmentFit
+    """
+    from scipy import signal, stats
+
+    budget = _Budget(time_budget, bar)
+    fs = 1.0 / dt
+    sos = signal.butter(4, 0.1 * fs, fs=fs, output="sos")
+    x_f = signal.sosfiltfilt(sos, x_meas)
+    v_f = np.gradient(x_f, dt)
+    skip = 50
+    final = max(20, int(round(segment / dt)))
+    sigma0_top = max([start["sigma0"]] + [ranges[n][1] for n in profile if n == "sigma0"])
+    n_sub = int(min(max(math.ceil(2.0 * math.sqrt(sigma0_top / start["m"]) * dt), 4), 24))
+    q = dict(start)
+    nu = None
+    seg = None
+    stopped = ""
+    best = None
+    profiles: dict = {}
+    try:
+        for frac in _STAGES:
+            length = max(20, int(round(final * frac)))
+            seg = _Segments(x_meas, force, x_f, v_f, dt, length, skip, hold, noise, n_sub, q, budget)
+            speed = seg.v0
+            g = q["Cf"]
+            nu = np.zeros((seg.starts.size, 3))
+            nu[:, 2] = np.where(np.abs(speed) > 1e-9, np.sign(speed), 0.0) * min(g, max(q["Fs"], g)) / q["Cf"]
+            q, nu, cost, r, mom = _gauss_newton(seg, free, q, nu, iterations=30 if frac == 1.0 else 12)
+            best = (q, nu, cost, r, mom)
+        for name in profile:
+            lo, hi = ranges[name]
+            logg = lo > 0
+            grid = np.geomspace(lo, hi, PROFILE_POINTS) if logg else np.linspace(lo, hi, PROFILE_POINTS)
+            rest = tuple(n for n in free if n != name)
+            costs = np.empty(grid.size)
+            qa, nua = dict(best[0]), best[1]
+            here = max(best[0][name], 1e-300)
+            order = np.argsort(np.abs(np.log(grid / here)) if logg else np.abs(grid - here))
+            fitted = {}
+            for k in order:
+                near = min(fitted, key=lambda j: abs(j - k)) if fitted else None
+                qs, nus = (fitted[near][0], fitted[near][1]) if near is not None else (qa, nua)
+                qs = {**qs, name: float(grid[k])}
+                qk, nuk, ck, _r, _m = _gauss_newton(seg, rest, qs, nus, iterations=8)
+                fitted[k] = (qk, nuk)
+                costs[k] = ck
+            profiles[name] = (grid, costs)
+            k = int(np.argmin(costs))
+            if costs[k] < best[2] * (1 - 1e-6):  # a better basin than the start's: refit from it
+                q2, nu2, c2, r2, m2 = _gauss_newton(seg, free, fitted[k][0], fitted[k][1], iterations=30)
+                if c2 < best[2]:
+                    best = (q2, nu2, c2, r2, m2)
+    except BudgetExceeded:
+        stopped = f"stopped at the time budget of {time_budget:g} s with the best fit so far"
+        if best is None or best[4] is None:
+            raise
+    q, nu, cost, r, mom = best
+    if not np.all(np.abs(r) < 1e6):
+        raise FloatingPointError("the model could not be simulated from the start (IDIM-LS's estimate) on every "
+                                 "segment")
+    var, white = _covariance(free, r, mom)
+    tq = float(stats.t.ppf(0.975, max(r.shape[0] - 1, 1)))
+    design = {}
+    values, std, intervals, ident, notes = {}, {}, {}, {}, {}
+    for i, n in enumerate(free):
+        sd = math.sqrt(var[i]) if np.isfinite(var[i]) else math.inf
+        design[n] = var[i] / white[i] if white[i] > 0 else 1.0
+        th = _theta(n, q[n])
+        lo_v, hi_v = (_value(n, th - tq * sd), _value(n, th + tq * sd))
+        values[n] = q[n]
+        std[n] = sd * (q[n] if n in _LOG else 1.0)
+        intervals[n] = (lo_v, hi_v)
+        ident[n], notes[n] = True, ""
+        if not math.isfinite(sd) or (n in _LOG and tq * sd > 0.5):
+            ident[n], notes[n] = False, "95 % interval wider than a factor 1.65 either way"
+        elif n not in _LOG and n != "offset" and tq * sd > abs(q[n]):
+            ident[n], notes[n] = False, "95 % interval includes 0"
+    if stopped:
+        for n in free:
+            ident[n], notes[n] = False, "the fit stopped at the time budget before it converged"
+    s2 = cost / max(r.size - len(free) - 3 * r.shape[0], 1)
+    for name, (grid, costs) in profiles.items():
+        thr = float(np.min(costs)) + stats.chi2.ppf(0.95, 1) * s2 * max(design.get(name, 1.0), 1.0)
+        inside = costs <= thr
+        k = int(np.argmin(costs))
+        minima = [j for j in range(grid.size) if (j == 0 or costs[j] <= costs[j - 1]) and
+                  (j == grid.size - 1 or costs[j] <= costs[j + 1])]
+        runs = np.flatnonzero(np.diff(np.r_[0, inside.astype(int), 0]) == 1).size
+        low = grid[max(int(np.flatnonzero(inside)[0]) - 1, 0)]
+        high = grid[min(int(np.flatnonzero(inside)[-1]) + 1, grid.size - 1)]
+        edge = inside[0] or inside[-1]
+        if stopped:
+            continue
+        if len(minima) > 1 or runs > 1 or edge:
+            why = ("the profile has several minima" if len(minima) > 1 or runs > 1
+                   else "the profile stays within the threshold at the edge of the range")
+            ident[name] = False
+            notes[name] = f"{why}: the data do not pin it; the profile interval is the honest one"
+            intervals[name] = (float(low) if not inside[0] else float(grid[0]),
+                               float(high) if not inside[-1] else float(grid[-1]))
+        else:
+            lo_i, hi_i = intervals[name]
+            intervals[name] = (max(lo_i, float(low)), min(hi_i, float(high))) if ident[name] else (float(low),
+                                                                                                    float(high))
+            if not grid[k - 1] <= q[name] <= grid[k + 1]:
+                ident[name] = False
+                notes[name] = "the fit did not end in the profile's minimum"
+    return SegmentFit(names=tuple(free), values=values, std=std, intervals=intervals, identifiable=ident,
+                      notes=notes, profiles=profiles, segment_samples=seg.length, segments=int(seg.starts.size),
+                      rms=float(np.sqrt(np.mean(r * r))) * noise, noise=noise, evaluations=budget.count,
+                      stopped=stopped)
+
+
+@dataclass(frozen=True, kw_only=True)
+class SegmentRefinement:
+    """Result of :func:`refine_segments`: the :class:`SegmentFit` in the axis's units, and its start.
+
+    Attributes
+    ----------
+    fit : SegmentFit
+    initial : dict
+        The starting values by name (IDIM-LS's estimate; the bristle parameters from the noise level).
+    units : dict
+        Unit of each parameter on this axis (``kg m^2``, ``N m``, ``N m/rad`` on a rotary one).
+    length_unit : str
+        ``'m'`` or ``'rad'``.
+    timing : str
+        How the input timing and the delay were modelled.
+    segment_time : float
+        ``L`` in seconds.
+    wall_time : float
+        Seconds.
+    """
+
+    fit: SegmentFit
+    initial: dict
+    units: dict
+    length_unit: str
+    timing: str
+    segment_time: float
+    wall_time: float
+    model: str = "lugre"
+
+    def __getitem__(self, name: str) -> dict:
+        f = self.fit
+        if name not in f.values:
+            raise KeyError(f"{name!r} was not refined; refined: {', '.join(f.names)}")
+        lo, hi = f.intervals[name]
+        return {"value": f.values[name], "initial": self.initial[name], "std": f.std[name], "low": lo, "high": hi,
+                "unit": self.units[name], "identifiable": f.identifiable[name], "note": f.notes[name]}
+
+    def to_dict(self) -> dict:
+        """JSON-ready: ``model, method, segment_samples, segment_time, segments, timing, rms, noise, evaluations,
+        wall_time, stopped`` and ``parameters`` (name -> ``value, initial, std, low, high, unit, identifiable,
+        note``), ``profiles`` (name -> ``{grid, cost}``)."""
+        f = self.fit
+        return {"model": self.model, "method": "segment output error", "segment_samples": f.segment_samples,
+                "segment_time": self.segment_time, "segments": f.segments, "timing": self.timing, "rms": f.rms,
+                "noise": f.noise, "length_unit": self.length_unit, "evaluations": f.evaluations,
+                "wall_time": self.wall_time, "stopped": f.stopped,
+                "parameters": {n: self[n] for n in f.names},
+                "profiles": {n: {"grid": g.tolist(), "cost": c.tolist()} for n, (g, c) in f.profiles.items()}}
+
+    def apply(self, ident):
+        """``ident`` unchanged (the segment fit is reported beside the static one, not written into it)."""
+        return ident
+
+    def __str__(self) -> str:
+        f = self.fit
+        lines = [f"Output-error refinement ({self.model}, segments): {f.segments} segments of L = {f.segment_samples} "
+                 f"samples ({self.segment_time:.4g} s), each with its own initial position, velocity and bristle "
+                 f"force; {self.timing}; RMS position residual {f.rms:.3g} {self.length_unit} "
+                 f"({f.rms / f.noise:.3g} x the noise level); {f.evaluations} simulations"]
+        if f.stopped:
+            lines.append(f"  {f.stopped}")
+        for n in f.names:
+            p = self[n]
+            verdict = "identifiable" if p["identifiable"] else f"NOT identifiable: {p['note']}"
+            lines.append(f"  {n:<7} {p['value']:.6g} {p['unit']}  95 % [{p['low']:.5g}, {p['high']:.5g}]  "
+                         f"(start {p['initial']:.4g})  {verdict}")
+        return "\n".join(lines)
+
+
+def refine_segments(trace, ident, *, parameters: tuple, segment: float = SEGMENT, time_budget: float | None = None,
+                    progress: bool = False) -> SegmentRefinement:
+    """LuGre and the rigid body refined by segment output error (:func:`fit_segments`) from ``ident``.
+
+    Parameters
+    ----------
+    trace : Trace
+        The record.
+    ident : Identification
+        Its static fit: the start, the input timing and the delay, the noise level.
+    parameters : tuple of str
+        The parameters asked for; the bristle ones among them are profiled. ``m, sigma, Cf, offset``,
+        ``sigma0, sigma1`` (and ``Fs, vs`` when the static fit kept a Stribeck term, or asked) are always
+        fitted: holding any of them at a biased value biases the rest.
+    segment : float
+        Segment length [s] of the final stage.
+    time_budget : float, optional
+        Seconds.
+    progress : bool
+        Show a progress bar with an ETA on stderr.
+    """
+    import sys
+
+    from ..axis import AxisSpec
+
+    t0 = time.perf_counter()
+    if ident.model != "coulomb-viscous":
+        raise ValueError(f"ident: expected a coulomb-viscous identification for the segment fit, found {ident.model!r}")
+    d = int(ident.delay_samples)
+    x = np.asarray(trace.position, dtype=np.float64)[d:]
+    u = np.asarray(trace.force, dtype=np.float64)[:trace.force.size - d]
+    dt = trace.sample_time
+    noise = max(ident.noise_rms, ident.quantization / math.sqrt(12.0), 1e-15)
+    stribeck = ident.Fs is not None or "Fs" in parameters or "vs" in parameters
+    sigma0 = ident.Cf / (10.0 * noise)
+    sigma0_max = 100.0 * ident.m / dt**2  # a bristle resonance 10 / dt: beyond it the samples see a rigid stick
+    start = {"m": ident.m, "sigma": ident.sigma, "Cf": ident.Cf, "offset": ident.offset,
+             "Fs": ident.Fs if ident.Fs is not None else ident.Cf,
+             "vs": ident.vs if ident.vs is not None else 1.0, "sigma0": min(sigma0, sigma0_max / 10.0)}
+    start["sigma1"] = math.sqrt(start["sigma0"] * ident.m)
+    free = STATIC + (("Fs", "vs") if stribeck else ()) + DYNAMIC
+    profile = tuple(n for n in DYNAMIC if n in parameters)
+    ranges = {"sigma0": (min(ident.Cf / (1e3 * noise), sigma0_max / 1e4), min(ident.Cf / (1e-3 * noise), sigma0_max)),
+              "sigma1": None}
+    crit = 2.0 * math.sqrt(start["sigma0"] * ident.m)
+    ranges["sigma1"] = (1e-3 * crit, 30.0 * crit)
+    per_fit = len(free) + 5
+    total = int((12 + 12 + 30) * per_fit + len(profile) * (PROFILE_POINTS * 8 * (per_fit - 1) + 30 * per_fit))
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=total, unit="sim", desc="refine (segment output error)", file=sys.stderr, leave=False,
+                   mininterval=0.5, dynamic_ncols=True)
+    try:
+        fit = fit_segments(x, u, dt=dt, hold=ident.input_timing == "hold", noise=noise, start=start, free=free,
+                           profile=profile, segment=segment, time_budget=time_budget, bar=bar, ranges=ranges)
+    finally:
+        if bar is not None:
+            bar.close()
+    axis = AxisSpec(kind="rotary" if trace.units.rotary else "linear", input="A")
+    timing = (f"input {'held over a sample' if ident.input_timing == 'hold' else 'as logged (interpolated)'}, "
+              f"position {d} sample{'s' if d != 1 else ''} late (as identify found)")
+    return SegmentRefinement(fit=fit, initial={n: start[n] for n in free},
+                             units={n: axis.unit(UNITS[n]) for n in free}, length_unit=axis.unit("m"),
+                             timing=timing, segment_time=fit.segment_samples * dt,
+                             wall_time=time.perf_counter() - t0)
