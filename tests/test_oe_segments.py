@@ -90,6 +90,7 @@ def test_segment_fit_recovers_the_linear_axis_and_profiles_sigma0():
     assert ref.fit.segment_samples == 100 and "L = 100 samples" in str(ref)
 
 
+@pytest.mark.slow
 def test_a_tiny_time_budget_is_one_line_and_exit_1(tmp_path):
     """Stopped before a first fit: one line 'could not be identified', exit 1, no traceback."""
     from obsdesign.cli import main
@@ -115,7 +116,7 @@ def _help_examples() -> list[tuple[str, str]]:
     from obsdesign.cli import build_parser
 
     text = " ".join(build_parser("identify")._subparsers._group_actions[0].choices["identify"].format_help().split())
-    part = text[text.index("--refine NAMES"):text.index("--refine-model MODEL plant")]
+    part = text[text.index("--refine NAMES refine"):text.index("--refine-model MODEL plant")]
     paper, _, lugre = part.partition("(paper)")
     return [(name, "paper") for name in re.findall(r"'([^']+)'", paper)] + \
         [(name, "lugre") for name in re.findall(r"'([^']+)'", lugre.split("(a segment fit")[0])]
