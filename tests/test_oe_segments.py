@@ -9,8 +9,8 @@ import sys
 
 import numpy as np
 import pytest
-
 from _axis_logs import AXES, axis_trace, noisy_log, simulate_axis
+
 from obsdesign.data import identify
 from obsdesign.data.oe_segments import segment_bounds, simulate_segments
 from obsdesign.data.output_error import RefineFailed, refine
