@@ -33,7 +33,7 @@ from numba import njit
 from ..friction.kernels import friction_plant_step
 from ..friction.registry import FRICTION_MODELS
 
-__all__ = ["SEGMENT", "DYNAMIC", "STATIC", "UNITS", "PROFILE_POINTS", "SegmentFit", "segment_bounds",
+__all__ = ["SEGMENT", "DYNAMIC", "STATIC", "UNITS", "PROFILE_POINTS", "SegmentFit", "segment_bounds", "substeps",
            "simulate_segments", "fit_segments", "BudgetExceeded"]
 
 #: Default segment length [s] of the final stage (the review's 0.1 s: the bound converged there).
@@ -204,6 +204,22 @@ class _Budget:
             raise BudgetExceeded
 
 
+def substeps(sigma0: float, m: float, dt: float) -> int:
+    """Heun substeps a sample for a bristle resonance ``sqrt(sigma0/m)`` [rad/s]: ``omega h <= 1/4``, 4 to 64.
+
+    Parameters
+    ----------
+    sigma0, m, dt : float
+        Bristle stiffness, mass (inertia), sample time.
+
+    Examples
+    --------
+    >>> substeps(2e5, 2.5e-3, 2.5e-4)        # omega dt = 2.24
+    9
+    """
+    return int(min(max(math.ceil(4.0 * math.sqrt(sigma0 / m) * dt), 4), 64))
+
+
 def _theta(name, value):
     return math.log(value) if name in _LOG else value
 
@@ -225,6 +241,7 @@ def _gauss_newton(seg, names, q, nu, *, iterations):
     """Levenberg-Marquardt over ``names`` and the nuisances; returns ``(q, nu, cost, moments)``."""
     q = dict(q)
     nu = nu.copy()
+    seg.n_sub = substeps(q["sigma0"], q["m"], seg.dt)
     lam = 1e-3
     r = seg.residual(q, nu)
     cost = float(np.sum(r * r))
@@ -334,8 +351,7 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
     v_f = np.gradient(x_f, dt)
     skip = 50
     final = max(20, int(round(segment / dt)))
-    sigma0_top = max([start["sigma0"]] + [ranges[n][1] for n in profile if n == "sigma0"])
-    n_sub = int(min(max(math.ceil(2.0 * math.sqrt(sigma0_top / start["m"]) * dt), 4), 24))
+    n_sub = substeps(start["sigma0"], start["m"], dt)
     q = dict(start)
     nu = None
     seg = None
@@ -351,6 +367,11 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
             nu = np.zeros((seg.starts.size, 3))
             nu[:, 2] = np.where(np.abs(speed) > 1e-9, np.sign(speed), 0.0) * min(g, max(q["Fs"], g)) / q["Cf"]
             q, nu, cost, r, mom = _gauss_newton(seg, free, q, nu, iterations=30 if frac == 1.0 else 12)
+            best = (q, nu, cost, r, mom)
+        for _ in range(2):  # the substeps follow the bristle stiffness found: refit where they changed
+            if substeps(q["sigma0"], q["m"], dt) == seg.n_sub:
+                break
+            q, nu, cost, r, mom = _gauss_newton(seg, free, q, nu, iterations=30)
             best = (q, nu, cost, r, mom)
         for name in profile:
             lo, hi = ranges[name]
