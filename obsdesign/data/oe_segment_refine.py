@@ -16,7 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .oe_segments import DYNAMIC, PROFILE_POINTS, SEGMENT, STATIC, UNITS, SegmentFit, fit_segments
+from .oe_segments import (DYNAMIC, PROFILE_ITERATIONS, PROFILE_POINTS, SEGMENT, STATIC, UNITS, SegmentFit,
+                          fit_segments)
 
 __all__ = ["SegmentRefinement", "refine_segments"]
 
@@ -128,7 +129,7 @@ def refine_segments(trace, ident, *, parameters: tuple, segment: float = SEGMENT
     noise = max(ident.noise_rms, ident.quantization / math.sqrt(12.0), 1e-15)
     stribeck = ident.Fs is not None or "Fs" in parameters or "vs" in parameters
     sigma0 = ident.Cf / (10.0 * noise)
-    sigma0_max = 100.0 * ident.m / dt**2  # a bristle resonance 10 / dt: beyond it the samples see a rigid stick
+    sigma0_max = 16.0 * ident.m / dt**2  # a bristle resonance 4 / dt (0.64 x the rate): beyond, a rigid stick
     start = {"m": ident.m, "sigma": ident.sigma, "Cf": ident.Cf, "offset": ident.offset,
              "Fs": ident.Fs if ident.Fs is not None else ident.Cf,
              "vs": ident.vs if ident.vs is not None else 1.0, "sigma0": min(sigma0, sigma0_max / 10.0)}
@@ -140,7 +141,8 @@ def refine_segments(trace, ident, *, parameters: tuple, segment: float = SEGMENT
     crit = 2.0 * math.sqrt(start["sigma0"] * ident.m)
     ranges["sigma1"] = (1e-3 * crit, 30.0 * crit)
     per_fit = len(free) + 5
-    total = int((12 + 12 + 30) * per_fit + len(profile) * (PROFILE_POINTS * 8 * (per_fit - 1) + 30 * per_fit))
+    total = int((12 + 12 + 30) * per_fit + len(profile) * (PROFILE_POINTS * PROFILE_ITERATIONS * (per_fit - 1)
+                                                           + 30 * per_fit))
     bar = None
     if progress:
         from tqdm import tqdm

@@ -33,7 +33,7 @@ from numba import njit
 from ..friction.kernels import friction_plant_step
 from ..friction.registry import FRICTION_MODELS
 
-__all__ = ["SEGMENT", "DYNAMIC", "STATIC", "UNITS", "PROFILE_POINTS", "SegmentFit", "segment_bounds", "substeps",
+__all__ = ["SEGMENT", "DYNAMIC", "STATIC", "UNITS", "PROFILE_POINTS", "PROFILE_ITERATIONS", "SegmentFit", "segment_bounds", "substeps",
            "simulate_segments", "fit_segments", "BudgetExceeded"]
 
 #: Default segment length [s] of the final stage (the review's 0.1 s: the bound converged there).
@@ -48,6 +48,8 @@ _LUGRE = FRICTION_MODELS.code("lugre")
 _LAYOUT = FRICTION_MODELS["lugre"]._layout
 #: Points of a profile over a parameter's plausible range.
 PROFILE_POINTS = 11
+#: Levenberg-Marquardt iterations at each point of a profile (each starts from its neighbour's optimum).
+PROFILE_ITERATIONS = 6
 #: Units of the parameters on a linear axis driven by a force (converted with :meth:`obsdesign.axis.AxisSpec.unit`).
 UNITS = {"m": "kg", "sigma": "N s/m", "Cf": "N", "offset": "N", "Fs": "N", "vs": "m/s", "sigma0": "N/m",
          "sigma1": "N s/m"}
@@ -387,7 +389,7 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
                 near = min(fitted, key=lambda j: abs(j - k)) if fitted else None
                 qs, nus = (fitted[near][0], fitted[near][1]) if near is not None else (qa, nua)
                 qs = {**qs, name: float(grid[k])}
-                qk, nuk, ck, _r, _m = _gauss_newton(seg, rest, qs, nus, iterations=8)
+                qk, nuk, ck, _r, _m = _gauss_newton(seg, rest, qs, nus, iterations=PROFILE_ITERATIONS)
                 fitted[k] = (qk, nuk)
                 costs[k] = ck
             profiles[name] = (grid, costs)
