@@ -64,6 +64,9 @@ def refine_from_args(args: argparse.Namespace, trace, ident):
 
     from ..data.output_error import SEGMENT, RefineFailed
 
+    if args.refine_model == "lugre" and ident.model != "coulomb-viscous":
+        raise UsageError(f"obsdesign {args.command}: argument --refine-model: lugre's segment fit is symmetric; "
+                         f"expected the symmetric identification, found --asymmetric")
     segment = SEGMENT if args.segment is None else args.segment
     if args.refine_model == "lugre" and segment / trace.sample_time < 20:
         raise UsageError(f"obsdesign {args.command}: argument --segment: expected at least 20 samples "
