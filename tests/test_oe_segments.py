@@ -160,5 +160,9 @@ def test_rotary_refine_speaks_rotary_units(tmp_path, capsys):
     text = capsys.readouterr().out
     head = text[text.index("Output-error refinement"):text.index("Identification")]
     assert "kg m^2" in head and "N m/rad" in head and "rad (" in head
-    assert not re.search(r"\b(kg|N|N/m|m)\b(?! m)", head.replace("kg m^2", "").replace("N m", "").replace(
-        "rad", "")), head
+    units = dict(re.findall(r"^  (\w+)\s+\S+ (.+?)  95 %", head, flags=re.M))
+    assert units == {"m": "kg m^2", "sigma": "N m s/rad", "Cf": "N m", "offset": "N m", "sigma0": "N m/rad",
+                     "sigma1": "N m s/rad"}, units
+    for line in head.splitlines()[1:]:   # every interval holds its point estimate
+        value, low, high = map(float, re.search(r"\s(\S+) .*95 % \[(\S+), (\S+)\]", line).groups())
+        assert low <= value <= high, line

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .oe_segments import (DYNAMIC, PROFILE_ITERATIONS, PROFILE_POINTS, SEGMENT, STATIC, UNITS, SegmentFit,
+from .oe_segments import (DAMPING_STARTS, DYNAMIC, PROFILE_ITERATIONS, PROFILE_POINTS, SEGMENT, STATIC, UNITS, SegmentFit,
                           fit_segments)
 
 __all__ = ["SegmentRefinement", "refine_segments"]
@@ -133,7 +133,7 @@ def refine_segments(trace, ident, *, parameters: tuple, segment: float = SEGMENT
     start = {"m": ident.m, "sigma": ident.sigma, "Cf": ident.Cf, "offset": ident.offset,
              "Fs": ident.Fs if ident.Fs is not None else ident.Cf,
              "vs": ident.vs if ident.vs is not None else 1.0, "sigma0": min(sigma0, sigma0_max / 10.0)}
-    start["sigma1"] = math.sqrt(start["sigma0"] * ident.m)
+    start["sigma1"] = 0.6 * math.sqrt(start["sigma0"] * ident.m)  # damping ratio 0.3 (the stage-1 starts vary it)
     free = STATIC + (("Fs", "vs") if stribeck else ()) + DYNAMIC
     profile = tuple(n for n in DYNAMIC if n in parameters)
     ranges = {"sigma0": (min(ident.Cf / (1e3 * noise), sigma0_max / 1e4), min(ident.Cf / (1e-3 * noise), sigma0_max)),
@@ -141,7 +141,7 @@ def refine_segments(trace, ident, *, parameters: tuple, segment: float = SEGMENT
     crit = 2.0 * math.sqrt(start["sigma0"] * ident.m)
     ranges["sigma1"] = (1e-3 * crit, 30.0 * crit)
     per_fit = len(free) + 5
-    total = int((12 + 12 + 30) * per_fit + len(profile) * (PROFILE_POINTS * PROFILE_ITERATIONS * (per_fit - 1)
+    total = int((12 * (len(DAMPING_STARTS) + 1) + 30) * per_fit + len(profile) * (PROFILE_POINTS * PROFILE_ITERATIONS * (per_fit - 1)
                                                            + 30 * per_fit))
     bar = None
     if progress:
