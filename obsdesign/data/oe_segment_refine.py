@@ -141,7 +141,7 @@ def refine_segments(trace, ident, *, parameters: tuple, segment: float = SEGMENT
     crit = 2.0 * math.sqrt(start["sigma0"] * ident.m)
     ranges["sigma1"] = (1e-3 * crit, 30.0 * crit)
     per_fit = len(free) + 5
-    total = int((12 * (len(DAMPING_STARTS) + 1) + 30) * per_fit + len(profile) * (PROFILE_POINTS * PROFILE_ITERATIONS * (per_fit - 1)
+    total = int(len(DAMPING_STARTS) * (12 + 12 + 30) * per_fit + len(profile) * (PROFILE_POINTS * PROFILE_ITERATIONS * (per_fit - 1)
                                                            + 30 * per_fit))
     bar = None
     if progress:
