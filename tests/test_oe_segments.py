@@ -164,5 +164,5 @@ def test_rotary_refine_speaks_rotary_units(tmp_path, capsys):
     assert units == {"m": "kg m^2", "sigma": "N m s/rad", "Cf": "N m", "offset": "N m", "sigma0": "N m/rad",
                      "sigma1": "N m s/rad"}, units
     for line in head.splitlines()[1:]:   # every interval holds its point estimate
-        value, low, high = map(float, re.search(r"\s(\S+) .*95 % \[(\S+), (\S+)\]", line).groups())
+        value, low, high = map(float, re.search(r"^\s+\w+\s+(\S+) .*95 % \[(\S+), (\S+)\]", line).groups())
         assert low <= value <= high, line

@@ -12,14 +12,28 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .choices import MAX_DELAY
+from .timing import TIMING_MARGIN
 from .oe_segments import (DAMPING_STARTS, DYNAMIC, PROFILE_ITERATIONS, PROFILE_POINTS, SEGMENT, STATIC, UNITS, SegmentFit,
                           fit_segments)
 
 __all__ = ["SegmentRefinement", "refine_segments"]
+
+
+def _neighbours(timing: str, delay: int) -> list[tuple[str, int]]:
+    """The other readings of a log's timing the segment fit tries: the other input timing, a delay one off.
+
+    Examples
+    --------
+    >>> _neighbours("sample", 1)
+    [('hold', 1), ('sample', 0), ('sample', 2)]
+    """
+    out = [("hold" if timing == "sample" else "sample", delay)]
+    return out + [(timing, k) for k in (delay - 1, delay + 1) if 0 <= k <= MAX_DELAY]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -70,7 +84,7 @@ class SegmentRefinement:
         return {"model": self.model, "method": "segment output error", "segment_samples": f.segment_samples,
                 "segment_time": self.segment_time, "segments": f.segments, "timing": self.timing, "rms": f.rms,
                 "noise": f.noise, "length_unit": self.length_unit, "evaluations": f.evaluations,
-                "wall_time": self.wall_time, "stopped": f.stopped,
+                "wall_time": self.wall_time, "stopped": f.stopped, "timing_alternatives": dict(f.alternatives),
                 "parameters": {n: self[n] for n in f.names},
                 "profiles": {n: {"grid": g.tolist(), "cost": c.tolist()} for n, (g, c) in f.profiles.items()}}
 
@@ -86,6 +100,9 @@ class SegmentRefinement:
                  f"({f.rms / f.noise:.3g} x the noise level); {f.evaluations} simulations"]
         if f.stopped:
             lines.append(f"  {f.stopped}")
+        if f.alternatives:
+            lines.append("  the log's timing, other readings refitted (BIC against this one; negative fits better): "
+                         + "; ".join(f"{k} {v:+.1f}" for k, v in f.alternatives.items()))
         for n in f.names:
             p = self[n]
             verdict = "identifiable" if p["identifiable"] else f"NOT identifiable: {p['note']}"
@@ -149,12 +166,24 @@ def refine_segments(trace, ident, *, parameters: tuple, segment: float = SEGMENT
 
         bar = tqdm(total=total, unit="sim", desc="refine (segment output error)", file=sys.stderr, leave=False,
                    mininterval=0.5, dynamic_ncols=True)
+    alternatives = {}
+    for timing, delay in _neighbours(ident.input_timing, d):
+        label = f"--input-timing {timing} --delay-samples {delay}"
+        alternatives[label] = (np.asarray(trace.position, dtype=np.float64)[delay:],
+                               np.asarray(trace.force, dtype=np.float64)[:trace.force.size - delay], timing == "hold")
     try:
         fit = fit_segments(x, u, dt=dt, hold=ident.input_timing == "hold", noise=noise, start=start, free=free,
-                           profile=profile, segment=segment, time_budget=time_budget, bar=bar, ranges=ranges)
+                           profile=profile, segment=segment, time_budget=time_budget, bar=bar, ranges=ranges,
+                           alternatives=alternatives)
     finally:
         if bar is not None:
             bar.close()
+    better = {k: v for k, v in fit.alternatives.items() if v < -TIMING_MARGIN}
+    if better:
+        label = min(better, key=better.get)
+        why = (f"the segments fit better with another reading of the log's timing ({label}: BIC "
+               f"{better[label]:+.1f}): rerun with {label}")
+        fit = replace(fit, identifiable={n: False for n in fit.names}, notes={n: why for n in fit.names})
     axis = AxisSpec(kind="rotary" if trace.units.rotary else "linear", input="A")
     timing = (f"input {'held over a sample' if ident.input_timing == 'hold' else 'as logged (interpolated)'}, "
               f"position {d} sample{'s' if d != 1 else ''} late (as identify found)")

@@ -45,6 +45,9 @@ _STAGES = (0.1, 0.25, 1.0)
 #: stages run from each start and the lowest final cost wins (chosen after the first stage, the short segments
 #: picked a worse basin).
 DAMPING_STARTS = (0.03, 0.3, 3.0)
+#: Iterations of the refit of each alternative reading of the log's timing (fewer than the fit's own: an
+#: alternative that fits better all the same is clearly better).
+ALTERNATIVE_ITERATIONS = 6
 #: The rigid-body and static friction parameters, always fitted.
 STATIC = ("m", "sigma", "Cf", "offset")
 #: The bristle parameters, profiled when asked for.
@@ -119,14 +122,9 @@ class SegmentFit:
     ----------
     names : tuple of str
         The fitted global parameters.
-    values, std : dict
-        Estimates and standard errors by name.
-    intervals : dict
-        95 % interval by name (the profile's where one was computed and the parameter is not identified).
-    identifiable : dict
-        By name.
-    notes : dict
-        By name: why not identifiable, or ``""``.
+    values, std, intervals, identifiable, notes : dict
+        By name: estimates, standard errors, 95 % intervals (the profile's where one was computed and the
+        parameter is not identified), whether identifiable, and why not (or ``""``).
     profiles : dict
         Name -> ``(grid, cost)`` of each profiled parameter (cost: the weighted RSS).
     segment_samples, segments : int
@@ -137,6 +135,9 @@ class SegmentFit:
         Simulations of the whole record.
     stopped : str
         ``""``, or why the fit stopped before it finished (the time budget).
+    alternatives : dict
+        Label -> ``segments x ln(MS_alternative / MS_fit)`` of each other reading of the log's timing tried
+        (negative: the alternative fits better, though refitted with fewer iterations).
     """
 
     names: tuple
@@ -152,6 +153,7 @@ class SegmentFit:
     noise: float
     evaluations: int
     stopped: str
+    alternatives: dict
 
 
 class _Segments:
@@ -227,11 +229,11 @@ def substeps(sigma0: float, m: float, dt: float) -> int:
     return int(min(max(math.ceil(4.0 * math.sqrt(sigma0 / m) * dt), 4), 64))
 
 
-def _theta(name, value):
+def _theta(name, value):  # the fitted coordinate: ln p for a positive parameter
     return math.log(value) if name in _LOG else value
 
 
-def _value(name, theta):
+def _value(name, theta):  # its inverse
     return math.exp(min(theta, 700.0)) if name in _LOG else theta
 
 
@@ -316,8 +318,24 @@ def _covariance(names, r, mom):
     return np.maximum(np.diag(white), np.diag(cluster)), np.diag(white)
 
 
+def _smooth(x, dt):
+    """Zero-phase low-passed position (a tenth of the rate) and its derivative: the segments' first states."""
+    from scipy import signal
+
+    sos = signal.butter(4, 0.1 / dt, fs=1.0 / dt, output="sos")
+    x_f = signal.sosfiltfilt(sos, x)
+    return x_f, np.gradient(x_f, dt)
+
+
+def _bristle_start(seg, q):
+    """Nuisances at the segments' smoothed states, the bristle force at the sliding level in the direction of motion."""
+    nu = np.zeros((seg.starts.size, 3))
+    nu[:, 2] = np.where(np.abs(seg.v0) > 1e-9, np.sign(seg.v0), 0.0)
+    return nu
+
+
 def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), segment=SEGMENT, time_budget=None,
-                 bar=None, ranges=None):
+                 bar=None, ranges=None, alternatives=None):
     """Fit LuGre and the rigid body by segment output error (see the module's notes).
 
     Parameters
@@ -344,36 +362,30 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
         Progress bar updated per simulation.
     ranges : dict
         Name -> ``(low, high)`` of each profiled parameter.
+    alternatives : dict, optional
+        Label -> ``(x_meas, force, hold)``: other readings of the log's timing, each refitted from the optimum
+        with :data:`ALTERNATIVE_ITERATIONS` iterations and compared by mean square residual.
 
     Returns
     -------
     SegmentFit
     """
-    from scipy import signal, stats
+    from scipy import stats
 
     budget = _Budget(time_budget, bar)
-    fs = 1.0 / dt
-    sos = signal.butter(4, 0.1 * fs, fs=fs, output="sos")
-    x_f = signal.sosfiltfilt(sos, x_meas)
-    v_f = np.gradient(x_f, dt)
     skip = 50
+    x_f, v_f = _smooth(x_meas, dt)
+    checked: dict = {}
     final = max(20, int(round(segment / dt)))
     n_sub = substeps(start["sigma0"], start["m"], dt)
-    stopped = ""
-    best = None
-    seg = None
-    partial: list = []
-    profiles: dict = {}
+    stopped, best, seg, partial, profiles = "", None, None, [], {}
 
     def chain(q):
         """The stages from ``q``: segments of L/10, L/4, then L, each from the last optimum."""
         for frac in _STAGES:
             length = max(20, int(round(final * frac)))
             sg = _Segments(x_meas, force, x_f, v_f, dt, length, skip, hold, noise, n_sub, q, budget)
-            g = q["Cf"]
-            nu = np.zeros((sg.starts.size, 3))
-            nu[:, 2] = np.where(np.abs(sg.v0) > 1e-9, np.sign(sg.v0), 0.0) * min(g, max(q["Fs"], g)) / q["Cf"]
-            fit = _gauss_newton(sg, free, q, nu, iterations=30 if frac == 1.0 else 12)
+            fit = _gauss_newton(sg, free, q, _bristle_start(sg, q), iterations=30 if frac == 1.0 else 12)
             q = fit[0]
             partial[:] = [fit, sg]
         for _ in range(2):  # the substeps follow the bristle stiffness found: refit where they changed
@@ -414,6 +426,11 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
                 q2, nu2, c2, r2, m2 = _gauss_newton(seg, free, fitted[k][0], fitted[k][1], iterations=30)
                 if c2 < best[2]:
                     best = (q2, nu2, c2, r2, m2)
+        ms = best[2] / best[3].size
+        for label, (xa, ua, ha) in (alternatives or {}).items():
+            sa = _Segments(xa, ua, *_smooth(xa, dt), dt, seg.length, skip, ha, noise, seg.n_sub, best[0], budget)
+            fa = _gauss_newton(sa, free, best[0], _bristle_start(sa, best[0]), iterations=ALTERNATIVE_ITERATIONS)
+            checked[label] = float(seg.starts.size * math.log(max(fa[2] / fa[3].size, 1e-300) / max(ms, 1e-300)))
     except BudgetExceeded:
         stopped = f"stopped at the time budget of {time_budget:g} s with the best fit so far"
         if best is None and partial and partial[0][4] is not None:
@@ -478,4 +495,4 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
     return SegmentFit(names=tuple(free), values=values, std=std, intervals=intervals, identifiable=ident,
                       notes=notes, profiles=profiles, segment_samples=seg.length, segments=int(seg.starts.size),
                       rms=float(np.sqrt(np.mean(r * r))) * noise, noise=noise, evaluations=budget.count,
-                      stopped=stopped)
+                      stopped=stopped, alternatives=checked)
