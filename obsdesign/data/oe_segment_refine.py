@@ -25,15 +25,15 @@ __all__ = ["SegmentRefinement", "refine_segments"]
 
 
 def _neighbours(timing: str, delay: int) -> list[tuple[str, int]]:
-    """The other readings of a log's timing the segment fit tries: the other input timing, a delay one off.
+    """The other readings of a log's timing the segment fit tries: either input timing, a delay at most one off.
 
     Examples
     --------
-    >>> _neighbours("sample", 1)
-    [('hold', 1), ('sample', 0), ('sample', 2)]
+    >>> _neighbours("sample", 0)
+    [('sample', 1), ('hold', 0), ('hold', 1)]
     """
-    out = [("hold" if timing == "sample" else "sample", delay)]
-    return out + [(timing, k) for k in (delay - 1, delay + 1) if 0 <= k <= MAX_DELAY]
+    return [(t, k) for t in ("sample", "hold") for k in (delay - 1, delay, delay + 1)
+            if 0 <= k <= MAX_DELAY and (t, k) != (timing, delay)]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -57,6 +57,8 @@ class SegmentRefinement:
         Seconds.
     model : str
         ``'lugre'``.
+    warning : str
+        One line when the fit as a whole is not to be trusted (another reading of the log's timing fits better).
     """
 
     fit: SegmentFit
@@ -67,6 +69,7 @@ class SegmentRefinement:
     segment_time: float
     wall_time: float
     model: str = "lugre"
+    warning: str = ""
 
     def __getitem__(self, name: str) -> dict:
         f = self.fit
@@ -85,6 +88,7 @@ class SegmentRefinement:
                 "segment_time": self.segment_time, "segments": f.segments, "timing": self.timing, "rms": f.rms,
                 "noise": f.noise, "length_unit": self.length_unit, "evaluations": f.evaluations,
                 "wall_time": self.wall_time, "stopped": f.stopped, "timing_alternatives": dict(f.alternatives),
+                "warning": self.warning,
                 "parameters": {n: self[n] for n in f.names},
                 "profiles": {n: {"grid": g.tolist(), "cost": c.tolist()} for n, (g, c) in f.profiles.items()}}
 
@@ -100,6 +104,8 @@ class SegmentRefinement:
                  f"({f.rms / f.noise:.3g} x the noise level); {f.evaluations} simulations"]
         if f.stopped:
             lines.append(f"  {f.stopped}")
+        if self.warning:
+            lines.append(f"  {self.warning}")
         if f.alternatives:
             lines.append("  the log's timing, other readings refitted (BIC against this one; negative fits better): "
                          + "; ".join(f"{k} {v:+.1f}" for k, v in f.alternatives.items()))
@@ -166,7 +172,7 @@ def refine_segments(trace, ident, *, parameters: tuple, segment: float = SEGMENT
 
         bar = tqdm(total=total, unit="sim", desc="refine (segment output error)", file=sys.stderr, leave=False,
                    mininterval=0.5, dynamic_ncols=True)
-    alternatives = {}
+    alternatives, warning = {}, ""
     for timing, delay in _neighbours(ident.input_timing, d):
         label = f"--input-timing {timing} --delay-samples {delay}"
         alternatives[label] = (np.asarray(trace.position, dtype=np.float64)[delay:],
@@ -181,13 +187,14 @@ def refine_segments(trace, ident, *, parameters: tuple, segment: float = SEGMENT
     better = {k: v for k, v in fit.alternatives.items() if v < -TIMING_MARGIN}
     if better:
         label = min(better, key=better.get)
-        why = (f"the segments fit better with another reading of the log's timing ({label}: BIC "
-               f"{better[label]:+.1f}): rerun with {label}")
-        fit = replace(fit, identifiable={n: False for n in fit.names}, notes={n: why for n in fit.names})
+        warning = (f"NOT identified: the segments fit better with another reading of the log's timing "
+                   f"({label}: BIC {better[label]:+.1f}); rerun with {label}")
+        fit = replace(fit, identifiable={n: False for n in fit.names},
+                      notes={n: "another reading of the log's timing fits better (above)" for n in fit.names})
     axis = AxisSpec(kind="rotary" if trace.units.rotary else "linear", input="A")
     timing = (f"input {'held over a sample' if ident.input_timing == 'hold' else 'as logged (interpolated)'}, "
               f"position {d} sample{'s' if d != 1 else ''} late (as identify found)")
     return SegmentRefinement(fit=fit, initial={n: start[n] for n in free},
                              units={n: axis.unit(UNITS[n]) for n in free}, length_unit=axis.unit("m"),
-                             timing=timing, segment_time=fit.segment_samples * dt,
+                             timing=timing, segment_time=fit.segment_samples * dt, warning=warning,
                              wall_time=time.perf_counter() - t0)
