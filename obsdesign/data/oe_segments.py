@@ -468,8 +468,8 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
         thr = float(np.min(costs)) + stats.chi2.ppf(0.95, 1) * s2 * max(design.get(name, 1.0), 1.0)
         inside = costs <= thr
         k = int(np.argmin(costs))
-        minima = [j for j in range(grid.size) if (j == 0 or costs[j] <= costs[j - 1]) and
-                  (j == grid.size - 1 or costs[j] <= costs[j + 1])]
+        minima = [j for j in range(grid.size) if inside[j] and (j == 0 or costs[j] <= costs[j - 1]) and
+                  (j == grid.size - 1 or costs[j] <= costs[j + 1])]  # those within the interval it reports
         runs = np.flatnonzero(np.diff(np.r_[0, inside.astype(int), 0]) == 1).size
         low = grid[max(int(np.flatnonzero(inside)[0]) - 1, 0)]
         high = grid[min(int(np.flatnonzero(inside)[-1]) + 1, grid.size - 1)]
