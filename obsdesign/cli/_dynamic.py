@@ -18,9 +18,16 @@ def add_refine_flags(p: argparse.ArgumentParser) -> None:
         The ``identify`` parser.
     """
     p.add_argument("--refine", metavar="NAMES",
-                   help="refine these parameters by output error, comma-separated (e.g. s or s,m,Cf,delay)")
+                   help="refine these parameters by output error, comma-separated; e.g. 's' or 's,delay' (paper), "
+                        "'sigma0' or 'sigma0,sigma1' with --refine-model lugre (a segment fit that also refits m, "
+                        "sigma, Cf, offset and profiles each bristle parameter asked for)")
     p.add_argument("--refine-model", default="paper", metavar="MODEL",  # checked when used: no NumPy in the parser
                    help="plant friction model of the refinement: paper, lugre or gms (default: paper)")
+    p.add_argument("--segment", type=POSITIVE_ARG, metavar="SECONDS",
+                   help="segment length of the lugre refinement [s], at least 20 samples (default 0.1)")
+    p.add_argument("--time-budget", type=POSITIVE_ARG, metavar="SECONDS",
+                   help="stop the refinement after this long: lugre with the best fit so far (and says so), "
+                        "paper/gms with a one-line reason")
 
 
 def refine_from_args(args: argparse.Namespace, trace, ident):
@@ -36,6 +43,9 @@ def refine_from_args(args: argparse.Namespace, trace, ident):
         Its static fit.
     """
     if args.refine is None:
+        for flag, value in (("--segment", args.segment), ("--time-budget", args.time_budget)):
+            if value is not None:
+                raise UsageError(f"obsdesign {args.command}: argument {flag}: only with --refine")
         return ident, None
     from ..data.output_error import MODELS, refinable, refine
 
@@ -47,7 +57,26 @@ def refine_from_args(args: argparse.Namespace, trace, ident):
     if not all(names) or len(set(names)) != len(names) or any(n not in allowed for n in names):
         raise UsageError(f"obsdesign {args.command}: argument --refine: expected distinct names of "
                          f"{','.join(allowed)} separated by commas, found {args.refine!r}")
-    result = refine(trace, ident, parameters=names, model=args.refine_model)
+    if args.refine_model != "lugre" and args.segment is not None:
+        raise UsageError(f"obsdesign {args.command}: argument --segment: only with --refine-model lugre, found "
+                         f"--refine-model {args.refine_model}")
+    import sys
+
+    from ..data.output_error import SEGMENT, RefineFailed
+
+    if args.refine_model == "lugre" and ident.model != "coulomb-viscous":
+        raise UsageError(f"obsdesign {args.command}: argument --refine-model: lugre's segment fit is symmetric; "
+                         f"expected the symmetric identification, found --asymmetric")
+    segment = SEGMENT if args.segment is None else args.segment
+    if args.refine_model == "lugre" and segment / trace.sample_time < 20:
+        raise UsageError(f"obsdesign {args.command}: argument --segment: expected at least 20 samples "
+                         f"({20 * trace.sample_time:g} s), found {args.segment:g}")
+    try:
+        result = refine(trace, ident, parameters=names, model=args.refine_model, segment=segment,
+                        time_budget=args.time_budget, progress=True)
+    except RefineFailed as e:
+        print(f"obsdesign {args.command}: --refine {args.refine}: could not be identified: {e}", file=sys.stderr)
+        raise SystemExit(1) from None
     if not args.json:
         print(result)
     return result.apply(ident), result.to_dict()

@@ -11,7 +11,9 @@ Examples
 --------
 >>> sorted(refinable("paper"))
 ['Cf', 'delay', 'm', 'offset', 's', 'sigma']
->>> refinable("lugre")[-4:]
+>>> refinable("lugre")
+('m', 'sigma', 'Cf', 'offset', 'Fs', 'vs', 'sigma0', 'sigma1')
+>>> refinable("lugre", "windows")[-4:]
 ('sigma0', 'sigma1', 'm', 'delay')
 """
 
@@ -28,36 +30,22 @@ from .._validate import check_choice
 from ..friction.registry import FRICTION_MODELS
 from .identify import Identification
 from .oe_plant import PAPER_LAYOUT, select_windows, simulate_windows
+from .oe_names import METHODS, MODELS, RefineFailed, default_method, refinable
+from .oe_segment_refine import SegmentRefinement, refine_segments
+from .oe_segments import SEGMENT, BudgetExceeded
 from .oe_stats import NEAR_NULL, _grouped_jacobian, _held_sensitivity, _moments, _null_loadings, _pinv, _scan_s
 from .trace import Trace
 
-__all__ = ["RefinedParameter", "Refinement", "refine", "refinable", "MODELS", "NEAR_NULL", "TRAVEL", "WINDOW"]
+__all__ = ["RefinedParameter", "Refinement", "RefineFailed", "refine", "refinable", "default_method", "METHODS", "MODELS", "NEAR_NULL", "TRAVEL",
+           "WINDOW"]
 
-#: Plant friction models the refinement simulates: the registry's, less Dahl (the paper's pre-sliding shape
-#: without its Stribeck or memory parameters: nothing the paper model does not already fit).
-MODELS = tuple(name for name in FRICTION_MODELS.names() if name != "dahl")
+
 #: Default travel [m] after which the friction is taken as saturated (the windows start beyond it).
 TRAVEL = 1e-3
 #: Default time [s] a window starts before its first reversal and runs on after the sliding resumes.
 WINDOW = 0.05
 #: Largest half-width of the 95 % interval of ln(p) for a positive parameter to count as identified.
 MAX_LOG_HALF_WIDTH = 0.5
-_SKIP = ("Cf_neg", "sigma_neg", "N", "beta")
-
-
-def refinable(model: str) -> tuple[str, ...]:
-    """Names :func:`refine` can fit for a plant friction ``model``.
-
-    Parameters
-    ----------
-    model : str
-        A name of :data:`MODELS`.
-    """
-    info = FRICTION_MODELS[check_choice("model", model, MODELS)]
-    names = tuple(n for n in info.scalar_parameters() if n not in _SKIP)
-    if "offset" not in names:
-        names += ("offset",)
-    return names + ("m", "delay")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -158,8 +146,7 @@ class Refinement:
             return ident
         p = self["s"]
         return replace(ident, s=p.value, s_note=f"output error over {self.windows} windows ({self.reversals} "
-                                                f"reversals): 95 % interval {p.low:.4g} to {p.high:.4g} "
-                                                f"1/{self.length_unit}")
+                                                f"reversals): 95 % interval {p.low:.4g} to {p.high:.4g} {p.unit}")
 
     def __str__(self) -> str:
         lines = [f"Output-error refinement ({self.model}): {self.windows} windows, {self.reversals} reversals, "
@@ -170,6 +157,11 @@ class Refinement:
             lines.append(f"  {p.name:<8} {p.value:.5g} {p.unit}  95 % [{p.low:.4g}, {p.high:.4g}]  "
                          f"(start {p.initial:.4g})  {verdict}")
         return "\n".join(lines)
+
+
+def _exp(x: float) -> float:
+    """``exp(x)``, ``inf`` beyond the float range (an interval of ``ln p`` too wide to print as numbers)."""
+    return math.exp(x) if x < 709.0 else math.inf
 
 
 class _Problem:
@@ -199,6 +191,7 @@ class _Problem:
         self.meas = trace.position[self.rows]
         self.out = np.empty(self.rows.size)
         self.evaluations = 0
+        self.deadline: float | None = None
 
     def _base(self, ident, initial):
         asym = ident.model == "asymmetric"
@@ -274,6 +267,8 @@ class _Problem:
         return x, ok
 
     def residual(self, p):
+        if self.deadline is not None and time.perf_counter() > self.deadline:
+            raise BudgetExceeded
         g = len(self.names)
         q = self.assign(dict(self.values), {n: self.from_theta(n, t) for n, t in zip(self.names, p[:g])})
         w = self.starts.size
@@ -289,7 +284,8 @@ class _Problem:
 
 def refine(trace: Trace, ident: Identification, *, parameters: tuple[str, ...] = ("s",), model: str = "paper",
            initial: dict | None = None, travel: float = TRAVEL, window: float = WINDOW,
-           substeps: int = 10) -> Refinement:
+           substeps: int = 10, segment: float = SEGMENT, time_budget: float | None = None,
+           progress: bool = False, method: str | None = None) -> Refinement | SegmentRefinement:
     """Refine dynamic friction parameters (and a sensor delay) by output error against the logged position.
 
     Parameters
@@ -313,16 +309,28 @@ def refine(trace: Trace, ident: Identification, *, parameters: tuple[str, ...] =
     window : float
         Time [s] a window starts before its reversal and runs on after the friction saturated.
     substeps : int
-        Heun substeps of the plant per sample.
+        Heun substeps of the plant per sample (``paper``, ``gms``).
+    segment : float
+        Segment length [s] of the segment fit (``lugre``: :mod:`obsdesign.data.oe_segments`).
+    time_budget : float, optional
+        Seconds: ``lugre`` stops with the best fit so far (and says so); ``paper``/``gms`` raise
+        :class:`RefineFailed`.
+    progress : bool
+        A progress bar with an ETA on stderr.
+    method : str, optional
+        A name of :data:`METHODS` (default: :func:`default_method`).
 
     Returns
     -------
-    Refinement
+    Refinement or SegmentRefinement
+        ``lugre``: the segment fit (:func:`obsdesign.data.oe_segments.refine_segments`), the others the windows'.
 
     Raises
     ------
     ValueError
         An unknown model or parameter, a bad travel/window/substeps, a record with no window.
+    RefineFailed
+        A numerical failure of the fit, or the time budget ran out before a first fit.
 
     Notes
     -----
@@ -341,7 +349,6 @@ def refine(trace: Trace, ident: Identification, *, parameters: tuple[str, ...] =
     The held ``m, sigma, Cf, offset`` are uncertain too: their standard errors from ``ident`` are carried
     into each refined parameter's variance through its sensitivity to them at the optimum.
     """
-    from scipy import optimize, stats
 
     t_start = time.perf_counter()
     if not isinstance(trace, Trace):
@@ -350,16 +357,44 @@ def refine(trace: Trace, ident: Identification, *, parameters: tuple[str, ...] =
         raise TypeError(f"ident: expected an Identification (obsdesign.data.identify), found {type(ident).__name__}")
     model = check_choice("model", model, MODELS)
     names = tuple(parameters) if not isinstance(parameters, str) else (parameters,)
-    allowed = refinable(model)
+    method = default_method(model) if method is None else check_choice("method", method, METHODS)
+    allowed = refinable(model, method)
     if not names or len(set(names)) != len(names) or any(n not in allowed for n in names):
         raise ValueError(f"parameters: expected distinct names of {', '.join(allowed)} (model {model!r}), "
                          f"found {', '.join(map(str, names)) or 'none'}")
-    for label, value, high in (("travel", travel, 1.0), ("window", window, 100.0)):
+    for label, value, high in (("travel", travel, 1.0), ("window", window, 100.0), ("segment", segment, 100.0)):
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value <= high:
             raise ValueError(f"{label}: expected a number in (0, {high:g}], found {value!r}")
     if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or not 1 <= substeps <= 1000:
         raise ValueError(f"substeps: expected an integer in [1, 1000], found {substeps!r}")
+    if time_budget is not None and (isinstance(time_budget, bool) or not isinstance(time_budget, (int, float))
+                                    or not 0 < time_budget < math.inf):
+        raise ValueError(f"time_budget: expected a positive number of seconds, found {time_budget!r}")
+    if method == "segments":
+        if segment / trace.sample_time < 20:
+            raise ValueError(f"segment: expected at least 20 samples ({20 * trace.sample_time:g} s), found {segment:g} s")
+        try:
+            return refine_segments(trace, ident, parameters=names, segment=float(segment), time_budget=time_budget,
+                                   progress=progress)
+        except BudgetExceeded:
+            raise RefineFailed(f"the time budget of {time_budget:g} s ran out before a first fit: give more "
+                               f"(--time-budget) or a shorter record (--window)") from None
+        except (ArithmeticError, np.linalg.LinAlgError) as e:
+            raise RefineFailed(f"the segment fit failed numerically ({type(e).__name__}: {e})") from None
+    try:
+        return _refine_windows(trace, ident, names, model, initial, travel, window, substeps, time_budget, t_start)
+    except BudgetExceeded:
+        raise RefineFailed(f"the time budget of {time_budget:g} s ran out (the {model} windows' fit has no partial "
+                           f"result: give more time or a shorter record with --window)") from None
+    except (ArithmeticError, np.linalg.LinAlgError) as e:
+        raise RefineFailed(f"the {model} windows' fit failed numerically ({type(e).__name__}: {e})") from None
+
+
+def _refine_windows(trace, ident, names, model, initial, travel, window, substeps, time_budget, t_start):
+    from scipy import optimize, stats
+
     prob = _Problem(trace, ident, model, names, initial, float(travel), float(window), int(substeps))
+    prob.deadline = None if time_budget is None else t_start + time_budget
     if prob.starts.size == 0:
         raise ValueError(f"trace: no window to simulate: expected a reversal between strokes of gross sliding "
                          f"longer than travel = {travel:g} {prob.axis.length_unit}, found none in {trace.source!r}")
@@ -425,7 +460,7 @@ def refine(trace: Trace, ident: Identification, *, parameters: tuple[str, ...] =
             note = "95 % interval wider than one sample"
         elif not log and name != "delay" and half > abs(value):
             note = "95 % interval includes 0"
-        lo_v, hi_v = ((math.exp(theta - half), math.exp(theta + half)) if log else (theta - half, theta + half)) \
+        lo_v, hi_v = ((_exp(theta - half), _exp(theta + half)) if log else (theta - half, theta + half)) \
             if math.isfinite(half) else (-math.inf, math.inf)
         out.append(RefinedParameter(name=name, unit=unit, value=value, initial=float(prob.values[name]),
                                     std=sd * (value if log else 1.0), low=lo_v, high=hi_v,
