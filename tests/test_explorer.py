@@ -218,7 +218,9 @@ def test_the_step_follows_the_loop_fields(page, dt, delay, kp_scale):
     cfg = od.load_preset("vcm")
     driver = page(cfg)
     fields = {"delay": str(delay)}
-    ref = cfg.override(delay_samples=delay, **({} if dt is None else {"dt": dt}))
+    # the page keeps the config's PID gains when its fields change (vcm carries the paper's design), where
+    # [pid] design = "auto" would redesign for dt = 1 ms and a delay of 3 (the sampled design)
+    ref = cfg.override(delay_samples=delay, design="paper", **({} if dt is None else {"dt": dt}))
     loop = preview_inputs(ref)
     s = loop.sampled
     if kp_scale != 1.0:

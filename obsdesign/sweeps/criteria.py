@@ -70,7 +70,7 @@ def parse_criterion(text: str, scenario: str) -> Criterion:
     >>> parse_criterion("speed<=1", "positioning")
     Traceback (most recent call last):
     ...
-    ValueError: criteria: unknown metric 'speed' in 'speed<=1'; expected one of rms_error, max_error, observer_rms_error_v, observer_rms_error_f, settling_time_1, settling_time_2, steady_state_error_1, steady_state_error_2, overshoot_1, overshoot_2, rise_time_1, rise_time_2
+    ValueError: criteria: unknown metric 'speed' in 'speed<=1'; expected one of rms_error, max_error, observer_rms_error_v, observer_rms_error_f, settle_band, settling_time_1, settling_time_2, steady_state_error_1, steady_state_error_2, overshoot_1, overshoot_2, rise_time_1, rise_time_2
     """
     if isinstance(text, Criterion):
         return text
