@@ -302,7 +302,7 @@ BAD = [
     (["--fix", "sigma=abc"], "--fix: expected NAME=VALUE"), (["--fix", "sigma=-1"], "fix sigma: expected a value >= 0"),
     (["--bounds", "sigma=1"], "--bounds: expected NAME=LO:HI"), (["--bounds", "sigma=5:1"], "--bounds"),
     (["--bounds", "sigma=-1:5"], "bounds sigma: expected bounds within the physical range"),
-    (["--min-speed", "-1"], "--min-speed"), (["--window", "5:1"], "--window"), (["--window", "abc"], "--window"),
+    (["--min-speed", "-1"], "--min-speed"), (["--stribeck-min-speed", "0"], "--stribeck-min-speed"), (["--window", "5:1"], "--window"), (["--window", "abc"], "--window"),
     (["--u-max", "0"], "--u-max"), (["--bootstrap", "-1"], "--bootstrap"), (["--input-timing", "late"], "--input-timing"),
     (["--delimiter", ","], "split by the delimiter ','"),
     (["--filter-hz", "0"], "--filter-hz"), (["--filter-hz", "nan"], "--filter-hz"),

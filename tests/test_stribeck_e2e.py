@@ -55,6 +55,26 @@ def test_auto_drops_the_term_on_an_axis_without_a_drop():
 
 
 @pytest.mark.slow
+def test_cli_stribeck_min_speed_is_the_api_keyword(low_vs_log, tmp_path):
+    """``--stribeck-min-speed 0.2`` (above the drop's vs = 0.1) gives the API's ``stribeck_min_speed=0.2``: the rows
+    of the min speed only, where the drop is not seen (the same decision and its reason)."""
+    path = tmp_path / "rotary.csv"
+    np.savetxt(path, np.column_stack([low_vs_log["t"], low_vs_log["x"], low_vs_log["i"]]), delimiter=",",
+               header="t,x,i", comments="", fmt="%.17g")
+    base = [sys.executable, "-m", "obsdesign", "identify", str(path), "--time", "t", "--position", "x", "--input", "i",
+            "--position-unit", "rad", "--input-unit", "A", "--input-gain", str(LOW_VS["gain"]), "--bootstrap", "0"]
+    out = subprocess.run(base + ["--stribeck-min-speed", "0.2", "--json"], capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    api = identify(axis_trace(LOW_VS, low_vs_log), n_boot=0, stribeck_min_speed=0.2)
+    assert data["stribeck"] is api.stribeck is False
+    assert math.isclose(data["stribeck_min_speed"], min(0.2, data["min_speed"]), rel_tol=1e-12)
+    assert math.isclose(data["stribeck_min_speed"], api.stribeck_min_speed, rel_tol=1e-9)
+    bad = subprocess.run(base + ["--stribeck-min-speed", "-1"], capture_output=True, text=True, timeout=600)
+    assert bad.returncode == 2 and "--stribeck-min-speed" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.slow
 def test_cli_config_carries_fs_vs_to_the_feedforward(low_vs_log, tmp_path):
     path = tmp_path / "rotary.csv"
     np.savetxt(path, np.column_stack([low_vs_log["t"], low_vs_log["x"], low_vs_log["i"]]), delimiter=",",

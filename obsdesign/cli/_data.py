@@ -211,7 +211,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     ident = identify(trace, model="asymmetric" if args.asymmetric else "coulomb-viscous", stribeck=args.stribeck,
                      fix=fix, bounds=bounds, min_speed=args.min_speed, window=args.window, n_boot=args.bootstrap,
                      seed=args.seed, input_timing=args.input_timing, delay_samples=args.delay_samples,
-                     filter_hz=args.filter_hz, decimation=args.decimation)
+                     filter_hz=args.filter_hz, decimation=args.decimation,
+                     stribeck_min_speed=args.stribeck_min_speed)
     ident, refined = refine_from_args(args, trace, ident)
     peak = ident.force_peak / abs(ident.input_gain) if ident.input_gain else 0.0
     if args.u_max is not None and peak > args.u_max * (1 + 1e-9):
@@ -298,6 +299,10 @@ def add_commands(sub) -> None:
                    help="bounds of a parameter (SI units; LO or HI may be empty), repeatable")
     p.add_argument("--min-speed", type=POSITIVE_ARG, metavar="V",
                    help="rows with |v| at or below V [m/s, rad/s] are left out (default 1 %% of the peak)")
+    p.add_argument("--stribeck-min-speed", type=POSITIVE_ARG, metavar="V",
+                   help="rows the Stribeck decision and a kept Stribeck fit use: |v| above V [m/s, rad/s], at most "
+                        "--min-speed (default: the slowest speed the encoder and noise make trustworthy, "
+                        "max(3 sigma_v, 2 counts per cut-off period); JSON stribeck_min_speed)")
     p.add_argument("--window", type=_window_arg, metavar="T0:T1", help="fit only the samples in [T0, T1] s")
     p.add_argument("--filter-hz", type=POSITIVE_ARG, metavar="HZ",
                    help="cut-off of the zero-phase low-pass [Hz], below Nyquist (default: from the record, one "
