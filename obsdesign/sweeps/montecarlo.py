@@ -54,13 +54,12 @@ import numpy as np
 from .._io import atomic_path, atomic_write
 from .._validate import check_integer
 from ..params import Config
-from ..sampled.choices import CONTROLLERS
 from ..sim.scenarios import build_scenario, scenario_spec
 from .criteria import Criterion, numeric_metrics, parse_criterion
 from .folder import SweepLock, check_start, read_manifest
 from .plan import check_axes, plan_runs
 from .pool import Executor
-from .run import metric_columns, run_one
+from .run import check_controller, metric_columns, run_one
 from .sketch import Moments, QuantileSketch
 from .summary import STATUS_VALUES
 
@@ -272,11 +271,7 @@ def monte_carlo(cfg: Config, scenario: str, *, uncertain: dict, samples: int, ou
     if metric not in numeric_metrics(scenario):
         raise ValueError(f"metric: expected one of {', '.join(numeric_metrics(scenario))}, found {metric!r}")
     crit = tuple(parse_criterion(c, scenario) for c in criteria)
-    if controller is not None:
-        CONTROLLERS.check(controller)
-        if spec.open_loop != (controller == "open-loop"):
-            expected = "'open-loop'" if spec.open_loop else "'pid' or 'pid+observer'"
-            raise ValueError(f"controller: scenario {spec.name!r} needs {expected}, found {controller!r}")
+    check_controller(spec, controller)
     options = {k: v for k, v in (("duration", duration), ("controller", controller)) if v is not None}
     build_scenario(scenario, dt=cfg.observer.dt, duration=duration)  # bad scenario or duration: fail now
     out = Path(out_dir)

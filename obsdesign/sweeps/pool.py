@@ -16,6 +16,7 @@ pending batches and terminates the workers instead of waiting for them.
 from __future__ import annotations
 
 import concurrent.futures
+import math
 import os
 import signal
 import sys
@@ -175,18 +176,16 @@ class Executor:
             for batch in batches:
                 yield fn(batch)
             return
-        if window is not None:
-            yield from self._windowed(fn, iter(batches), window)
+        if window is not None or self.dask:  # Dask: always watched for a cluster left without workers
+            yield from self._windowed(fn, iter(batches), window if window is not None else math.inf)
             return
         self.futures = [self.pool.submit(fn, batch) for batch in batches]
-        if self.dask:
-            yield from self._dask_results()
-            return
         for fut in concurrent.futures.as_completed(self.futures):
             yield fut.result()
 
-    def _windowed(self, fn, batches, window: int):
-        """Results as they complete, with at most ``window`` batches in flight."""
+    def _windowed(self, fn, batches, window: float):
+        """Results as they complete, with at most ``window`` batches in flight (``inf``: all of them), and
+        ``NoWorkersError`` when a Dask cluster stays without workers."""
         if self.dask:
             from distributed import wait
         else:
@@ -210,27 +209,6 @@ class Executor:
             for fut in done:
                 yield fut.result()
             if not self.dask or done or self.pool.nthreads():
-                idle_since = None
-            elif idle_since is None:
-                idle_since = time.monotonic()
-            elif time.monotonic() - idle_since > STALL_S:
-                raise NoWorkersError(f"the Dask cluster has had no worker for {STALL_S:g} s with "
-                                     f"{len(pending)} batches pending")
-
-    def _dask_results(self):
-        """Results as they complete; ``NoWorkersError`` when the cluster stays without workers."""
-        from distributed import wait
-
-        pending = set(self.futures)
-        idle_since = None
-        while pending:
-            try:
-                done, pending = wait(pending, timeout=2.0, return_when="FIRST_COMPLETED")
-            except TimeoutError:  # distributed's TimeoutError is the builtin one
-                done = set()
-            for fut in done:
-                yield fut.result()
-            if done or self.pool.nthreads():
                 idle_since = None
             elif idle_since is None:
                 idle_since = time.monotonic()

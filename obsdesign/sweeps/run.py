@@ -149,6 +149,29 @@ class SweepResult:
         return best_value(self.rows, parameter, metric)
 
 
+def check_controller(spec, controller: str | None) -> None:
+    """Refuse a ``controller`` (None: the scenario's own) that is not one or does not fit the scenario ``spec``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``controller``, what the scenario needs and the value found.
+
+    Examples
+    --------
+    >>> from obsdesign.sim.scenarios import scenario_spec
+    >>> check_controller(scenario_spec("positioning"), "open-loop")
+    Traceback (most recent call last):
+    ...
+    ValueError: controller: scenario 'positioning' needs 'pid' or 'pid+observer', found 'open-loop'
+    """
+    if controller is not None:
+        CONTROLLERS.check(controller)
+        if spec.open_loop != (controller == "open-loop"):
+            expected = "'open-loop'" if spec.open_loop else "'pid' or 'pid+observer'"
+            raise ValueError(f"controller: scenario {spec.name!r} needs {expected}, found {controller!r}")
+
+
 def sweep(cfg: Config, scenario: str, *, vary: dict | None = None, uncertain: dict | None = None,
           samples: int = 1, seed: int = 0, executor=None, workers: int | None = None,
           out_dir: str | os.PathLike | None = None, resume: bool = False, force: bool = False,
@@ -213,11 +236,7 @@ def sweep(cfg: Config, scenario: str, *, vary: dict | None = None, uncertain: di
     if (resume or force) and out_dir is None:
         raise ValueError(f"{'resume' if resume else 'force'}: needs out_dir, the folder of the sweep")
     spec = scenario_spec(scenario)
-    if controller is not None:
-        CONTROLLERS.check(controller)
-        if spec.open_loop != (controller == "open-loop"):
-            expected = "'open-loop'" if spec.open_loop else "'pid' or 'pid+observer'"
-            raise ValueError(f"controller: scenario {spec.name!r} needs {expected}, found {controller!r}")
+    check_controller(spec, controller)
     options = {k: v for k, v in (("duration", duration), ("controller", controller)) if v is not None}
     run_cfg = cfg
     run_options = options
