@@ -300,6 +300,11 @@ def test_progress_lines_carry_the_eta_and_force_replaces_a_study(tmp_path, capsy
 
 
 @pytest.mark.slow
+# The scheduler's HTTP server tries port 8787 even without a dashboard; where a parallel pytest worker's scheduler
+# (tests/test_sweep.py) holds it, distributed warns, moves to another port and leaves its probe socket to the
+# garbage collector: noise of the test's neighbours, not of the study.
+@pytest.mark.filterwarnings("ignore:Port 8787 is already in use:UserWarning", "ignore::ResourceWarning",
+                            "ignore::pytest.PytestUnraisableExceptionWarning")
 def test_dask_cluster_gives_the_same_study(study, tmp_path):
     """The batches on a local Dask cluster of two workers (the windowed submission through distributed.wait)."""
     distributed = pytest.importorskip("distributed", reason="dask[distributed] not installed")
