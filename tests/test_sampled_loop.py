@@ -49,6 +49,7 @@ import json  # noqa: E402
 import math  # noqa: E402
 import warnings  # noqa: E402
 
+import _loop_axes as loop_axes  # noqa: E402
 import numpy as np  # noqa: E402
 
 from obsdesign.cli import main  # noqa: E402
@@ -68,10 +69,7 @@ def config_2khz():
     """The new-user trial's identified axis (4i/4k): 2 kHz, tau = m/sigma, crossover at a tenth of Nyquist, with
     the paper's PID (the loop the reviewers analysed; ``auto`` would carry the sampled design here, whose tests
     are in tests/test_pid_design.py)."""
-    m, sigma, K, dt = 1.8042, 11.922, 6.5, 5e-4
-    wc = 0.1 * math.pi / dt
-    return od.load_preset("vcm").override(m=m, sigma=sigma, K=K, dt=dt, tau=m / sigma, design="paper",
-                                          max_S=K / sigma / (wc * math.sin(math.radians(60.0))))
+    return loop_axes.config_2khz(design="paper")
 
 
 @pytest.mark.parametrize("make", [lambda: od.load_preset("vcm"), config_2khz], ids=["vcm", "2kHz"])
