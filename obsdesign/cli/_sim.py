@@ -169,24 +169,12 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         raise UsageError(f"obsdesign sweep: argument --resume: no results.csv in {args.out!r} to resume")
     cfg = load(args)
     _warn_lag_on_physical("sweep", cfg, "--variant static")  # a sweep simulates the physical plant
-    client = _connect(args.scheduler) if args.scheduler else None
-    try:
-        res = sweep(cfg, args.scenario, vary=vary, uncertain=uncertain, samples=args.samples, seed=args.seed,
-                    executor=client, workers=args.workers, out_dir=out, resume=args.resume, force=args.force,
-                    progress=_progress(runs), duration=args.duration)
-    except KeyboardInterrupt:
-        print(f"obsdesign sweep: interrupted; finished runs are in {str(out / 'results.csv')!r}, "
-              "continue with --resume", file=sys.stderr)
-        return 130
-    except Exception as e:  # a worker process died (BrokenProcessPool, dask KilledWorker, lost connection)
-        if not _is_worker_failure(e):
-            raise
-        print(f"obsdesign sweep: a worker failed ({type(e).__name__}); finished runs are in "
-              f"{str(out / 'results.csv')!r}, continue with --resume", file=sys.stderr)
-        return 1
-    finally:
-        if client is not None:
-            client.close()
+    res, status = _on_workers(args, f"runs are in {str(out / 'results.csv')!r}", lambda client: sweep(
+        cfg, args.scenario, vary=vary, uncertain=uncertain, samples=args.samples, seed=args.seed, executor=client,
+        workers=args.workers, out_dir=out, resume=args.resume, force=args.force, progress=_progress(runs),
+        duration=args.duration))
+    if status is not None:
+        return status
     failed = [row for row in res.rows if row.get("status") == "failed"]
     if res.rows and len(failed) == len(res.rows):  # nothing to summarise: say why, exit 2 (bad input)
         raise UsageError(f"obsdesign sweep: all {len(failed)} runs failed; the first (run {failed[0]['run']}): "
@@ -204,6 +192,27 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
 #: A sweep without --vary of more samples than this is streamed (obsdesign.sweeps.montecarlo).
 STREAM_ABOVE = 20_000
+
+
+def _on_workers(args, kept: str, run):
+    """``(run(client), None)``, the client that of ``--scheduler`` (or None); on Ctrl-C ``(None, 130)`` and on a
+    worker that died (BrokenProcessPool, dask KilledWorker, lost connection) ``(None, 1)``, each after one line
+    saying where the finished work is (``kept``: "runs are in ...")."""
+    client = _connect(args.scheduler) if args.scheduler else None
+    try:
+        return run(client), None
+    except KeyboardInterrupt:
+        print(f"obsdesign sweep: interrupted; finished {kept}, continue with --resume", file=sys.stderr)
+        return None, 130
+    except Exception as e:
+        if not _is_worker_failure(e):
+            raise
+        print(f"obsdesign sweep: a worker failed ({type(e).__name__}); finished {kept}, continue with --resume",
+              file=sys.stderr)
+        return None, 1
+    finally:
+        if client is not None:
+            client.close()
 
 
 def _monte_carlo(args: argparse.Namespace, vary: dict, uncertain: dict, runs: int, out: Path) -> int:
@@ -226,25 +235,12 @@ def _monte_carlo(args: argparse.Namespace, vary: dict, uncertain: dict, runs: in
         raise UsageError(f"obsdesign sweep: argument --resume: no sweep.json in {str(out)!r} to resume")
     cfg = load(args)
     _warn_lag_on_physical("sweep", cfg, "--variant static")
-    client = _connect(args.scheduler) if args.scheduler else None
-    try:
-        res = monte_carlo(cfg, args.scenario, uncertain=uncertain, samples=args.samples, seed=args.seed,
-                          criteria=criteria, metric=args.metric, worst=args.worst or 10, batch=args.batch or 200,
-                          executor=client, workers=args.workers, out_dir=out, resume=args.resume, force=args.force,
-                          progress=_progress(runs), duration=args.duration)
-    except KeyboardInterrupt:
-        print(f"obsdesign sweep: interrupted; finished batches are in {str(out / 'batches')!r}, "
-              "continue with --resume", file=sys.stderr)
-        return 130
-    except Exception as e:
-        if not _is_worker_failure(e):
-            raise
-        print(f"obsdesign sweep: a worker failed ({type(e).__name__}); finished batches are in "
-              f"{str(out / 'batches')!r}, continue with --resume", file=sys.stderr)
-        return 1
-    finally:
-        if client is not None:
-            client.close()
+    res, status = _on_workers(args, f"batches are in {str(out / 'batches')!r}", lambda client: monte_carlo(
+        cfg, args.scenario, uncertain=uncertain, samples=args.samples, seed=args.seed, criteria=criteria,
+        metric=args.metric, worst=args.worst or 10, batch=args.batch or 200, executor=client, workers=args.workers,
+        out_dir=out, resume=args.resume, force=args.force, progress=_progress(runs), duration=args.duration))
+    if status is not None:
+        return status
     if res.counts["failed"] == res.runs:
         first = res.worst[0]
         raise UsageError(f"obsdesign sweep: all {res.runs} runs failed; the first (run {first['run']}): "
