@@ -1,14 +1,17 @@
-"""The controller as an FMI 2.0 co-simulation FMU: FMPy validates it and runs it on the simulator's record.
+"""The controller as an FMI 2.0 and 3.0 co-simulation FMU: FMPy validates it and runs it on the simulator's record.
 
 The FMU's output after the step from t_n is the command of sample n; ``K * command - G`` must equal
-the simulator's ``u`` column bit for bit (the FMU is the generated C, compiled on this host).
+the simulator's ``u`` column bit for bit (the FMU is the generated C, compiled on this host). Every test that
+builds or runs an FMU runs for both FMI versions (``fmi``): only the FMI wrapper and modelDescription differ.
 """
 
 from __future__ import annotations
 
+import contextlib
 import io
 import re
 import shutil
+import sys
 import xml.etree.ElementTree as ET
 import zipfile
 
@@ -16,15 +19,18 @@ import numpy as np
 import pytest
 
 import obsdesign as od
-from obsdesign.export import export
+from obsdesign.export import FMI_VERSIONS, export
 from obsdesign.export.fmu import FMU_NAME, MODEL_IDENTIFIER, OBSERVER_FMU_NAME, fmu_archive, fmu_platform
 
 fmpy = pytest.importorskip("fmpy", reason="fmpy (the test extra) is not installed")
 from fmpy.fmi2 import FMU2Slave  # noqa: E402
+from fmpy.fmi3 import FMU3Slave  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
 
-HAS_CC = shutil.which("cc") is not None and fmu_platform() is not None
+HAS_CC = shutil.which("cc") is not None and all(fmu_platform(v) is not None for v in FMI_VERSIONS)
 needs_cc = pytest.mark.skipif(not HAS_CC, reason="no C compiler or no FMI platform folder: source FMU only")
+#: Every FMI version the export writes: the tests below run for each.
+each_fmi = pytest.mark.parametrize("fmi", FMI_VERSIONS, ids=[f"fmi{v}" for v in FMI_VERSIONS])
 VCM = od.load_preset("vcm")
 TABLE1 = od.load_preset("table1")
 
@@ -61,39 +67,58 @@ def _write(tmp_path, data, name=FMU_NAME):
     return path
 
 
-def _drive(path, inputs):
-    """The FMU stepped over ``inputs`` (rows of x_ref, x_meas[, v_ref, w_ff]) by FMPy's FMI 2.0 API; the commands."""
+@contextlib.contextmanager
+def _running(path, identifier=MODEL_IDENTIFIER):
+    """The FMU at ``path`` instantiated and initialised by FMPy's FMI 2.0 or 3.0 API (its ``fmiVersion``):
+    ``(set(names, values), step(t, dt), get(names), dt)``."""
     md = fmpy.read_model_description(str(path))
     unzipped = fmpy.extract(str(path))
     vrs = {v.name: v.valueReference for v in md.modelVariables}
-    dt = float(md.defaultExperiment.stepSize)
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=MODEL_IDENTIFIER, instanceName="c")
+    fmi3 = md.fmiVersion.startswith("3")
+    fmu = (FMU3Slave if fmi3 else FMU2Slave)(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=identifier,
+                                             instanceName="c")
     fmu.instantiate()
     try:
-        fmu.setupExperiment(startTime=0.0)
-        fmu.enterInitializationMode()
+        if fmi3:
+            fmu.enterInitializationMode(startTime=0.0)
+        else:
+            fmu.setupExperiment(startTime=0.0)
+            fmu.enterInitializationMode()
         fmu.exitInitializationMode()
-        names = ["x_ref", "x_meas", "v_ref", "w_ff"][:inputs.shape[1]]
-        refs = [vrs[n] for n in names]
-        out = np.empty(len(inputs))
-        for n, row in enumerate(inputs):
-            fmu.setReal(refs, [float(x) for x in row])
-            fmu.doStep(currentCommunicationPoint=n * dt, communicationStepSize=dt)
-            out[n] = fmu.getReal([vrs["command"]])[0]
+        setter, getter = (fmu.setFloat64, fmu.getFloat64) if fmi3 else (fmu.setReal, fmu.getReal)
+
+        def step(t, dt):
+            fmu.doStep(currentCommunicationPoint=t, communicationStepSize=dt)
+
+        yield (lambda names, values: setter([vrs[n] for n in names], [float(x) for x in values]), step,
+               lambda names: getter([vrs[n] for n in names]), float(md.defaultExperiment.stepSize))
         fmu.terminate()
     finally:
         fmu.freeInstance()
         shutil.rmtree(unzipped, ignore_errors=True)
+
+
+def _drive(path, inputs):
+    """The FMU stepped over ``inputs`` (rows of x_ref, x_meas[, v_ref, w_ff]) by FMPy's FMI API; the commands."""
+    names = ["x_ref", "x_meas", "v_ref", "w_ff"][:inputs.shape[1]]
+    out = np.empty(len(inputs))
+    with _running(path) as (set_inputs, step, get, dt):
+        for n, row in enumerate(inputs):
+            set_inputs(names, row)
+            step(n * dt, dt)
+            out[n] = get(["command"])[0]
     return out
 
 
 @needs_cc
+@each_fmi
 @pytest.mark.parametrize("case", CASES.values(), ids=list(CASES))
-def test_fmu_reproduces_the_simulator_bit_for_bit(case, tmp_path):
+def test_fmu_reproduces_the_simulator_bit_for_bit(case, fmi, tmp_path):
     cfg, kw = case
     res, extra = _simulate(cfg, kw)
     path = _write(tmp_path, fmu_archive(cfg, binary=True, controller=kw.get("controller"),
-                                        schedule=res.stiffness_schedule, estimator=res.estimator))
+                                        schedule=res.stiffness_schedule, estimator=res.estimator, fmi_version=fmi))
+    assert validate_fmu(str(path)) == []
     command = _drive(path, np.column_stack([res.x_ref, res.x_meas, *extra]))
     d = cfg.hardware.delay_samples  # the simulated drive applies the command of sample n from n + d
     u = cfg.plant.K * command[:len(command) - d] - cfg.plant.G
@@ -101,9 +126,10 @@ def test_fmu_reproduces_the_simulator_bit_for_bit(case, tmp_path):
 
 
 @needs_cc
-def test_simulate_fmu_with_the_recorded_inputs_gives_the_simulated_command(tmp_path):
+@each_fmi
+def test_simulate_fmu_with_the_recorded_inputs_gives_the_simulated_command(fmi, tmp_path):
     res, _ = _simulate(VCM, dict(scenario="tracking"), duration=0.15)
-    path = _write(tmp_path, fmu_archive(VCM, schedule=res.stiffness_schedule))
+    path = _write(tmp_path, fmu_archive(VCM, schedule=res.stiffness_schedule, fmi_version=fmi))
     assert validate_fmu(str(path)) == []
     n, dt = len(res.t), VCM.observer.dt
     signals = np.zeros(n, dtype=[("time", float), ("x_ref", float), ("x_meas", float)])
@@ -114,9 +140,18 @@ def test_simulate_fmu_with_the_recorded_inputs_gives_the_simulated_command(tmp_p
     assert np.array_equal(VCM.plant.K * command - VCM.plant.G, res.u)
 
 
-def test_source_fmu_validates_and_describes_the_controller(tmp_path):
+def _variables(root):
+    """name -> (element with causality and variability, unit, start) of a modelDescription, FMI 2.0 or 3.0."""
+    if root.get("fmiVersion") == "2.0":
+        return {v.get("name"): (v, v.find("Real").get("unit"), v.find("Real").get("start"))
+                for v in root.iter("ScalarVariable")}
+    return {v.get("name"): (v, v.get("unit"), v.get("start")) for v in root.find("ModelVariables")}
+
+
+@each_fmi
+def test_source_fmu_validates_and_describes_the_controller(fmi, tmp_path):
     cfg = dataclasses_replace_axis(VCM)
-    path = _write(tmp_path, fmu_archive(cfg, binary=False))
+    path = _write(tmp_path, fmu_archive(cfg, binary=False, fmi_version=fmi))
     assert validate_fmu(str(path)) == []
     with zipfile.ZipFile(path) as archive:
         names = set(archive.namelist())
@@ -129,18 +164,39 @@ def test_source_fmu_validates_and_describes_the_controller(tmp_path):
     for fname, text in controller_files(cfg, "c").items():
         assert sources[f"sources/{fname}"] == text
     root = ET.fromstring(xml)
-    assert root.get("fmiVersion") == "2.0" and root.get("generationTool") == f"obsdesign {od.__version__}"
+    assert root.get("fmiVersion") == f"{fmi}.0" and root.get("generationTool") == f"obsdesign {od.__version__}"
     assert float(root.find("DefaultExperiment").get("stepSize")) == cfg.observer.dt
-    variables = {v.get("name"): v for v in root.iter("ScalarVariable")}
-    units = {name: v.find("Real").get("unit") for name, v in variables.items()}
+    found = _variables(root)
+    variables = {name: v for name, (v, _, _) in found.items()}
+    units = {name: unit for name, (_, unit, _) in found.items()}
     assert units["x_ref"] == units["x_meas"] == "rad" and units["command"] == "A"  # a rotary axis driven in A
     assert units["KAPPA"] == "N m/rad" and units["DT"] == "s"
     assert {variables[n].get("causality") for n in ("x_ref", "x_meas")} == {"input"}
     assert variables["command"].get("causality") == "output"
-    assert float(variables["KP"].find("Real").get("start")) == od.export.controller.controller_constants(cfg)["KP"]
+    assert float(found["KP"][2]) == od.export.controller.controller_constants(cfg)["KP"]
     assert {v.get("variability") for n, v in variables.items() if v.get("causality") == "local"} == {"constant"}
     defined = {u.get("name") for u in root.iter("Unit")}
     assert set(units.values()) <= defined
+    if fmi == "3":  # the FMI 3.0 specifics: Float64, instantiationToken, the independent time, buildDescription
+        assert root.get("instantiationToken") and root.get("guid") is None
+        assert {v.tag for v in variables.values()} == {"Float64"}
+        assert variables["time"].get("causality") == "independent" and variables["time"].get("valueReference") == "0"
+        assert root.find("CoSimulation").get("hasEventMode") == "false"
+        assert "sources/buildDescription.xml" in names
+
+
+@needs_cc
+def test_fmi2_and_fmi3_wrap_the_same_c_and_differ_in_the_wrapper_only():
+    zips = {v: zipfile.ZipFile(io.BytesIO(fmu_archive(TABLE1.override(mode="blend"), fmi_version=v)))
+            for v in FMI_VERSIONS}
+    two, three = zips["2"], zips["3"]
+    for name in ("sources/obsdesign_controller.c", "sources/obsdesign_controller.h"):
+        assert two.read(name) == three.read(name)
+    assert set(three.namelist()) - set(two.namelist()) == {
+        "sources/buildDescription.xml",
+        f"binaries/{fmu_platform('3')}/{MODEL_IDENTIFIER}{'.dylib' if sys.platform == 'darwin' else '.so'}"}
+    assert b"fmi3DoStep" in three.read("sources/obsdesign_fmu.c") and b"fmi2" not in three.read("sources/obsdesign_fmu.c")
+    assert fmu_archive(VCM, binary=False, fmi_version=3) == fmu_archive(VCM, binary=False, fmi_version="3")
 
 
 def dataclasses_replace_axis(cfg):
@@ -149,11 +205,12 @@ def dataclasses_replace_axis(cfg):
     return dataclasses.replace(cfg, axis=od.AxisSpec(kind="rotary", input="A"))
 
 
+@each_fmi
 @pytest.mark.parametrize("binary", [pytest.param(True, marks=needs_cc), False])
-def test_same_inputs_give_the_same_bytes_and_no_path(binary, tmp_path, monkeypatch):
-    a = fmu_archive(VCM, binary=binary)
+def test_same_inputs_give_the_same_bytes_and_no_path(binary, fmi, tmp_path, monkeypatch):
+    a = fmu_archive(VCM, binary=binary, fmi_version=fmi)
     monkeypatch.chdir(tmp_path)
-    b = fmu_archive(VCM, binary=binary)
+    b = fmu_archive(VCM, binary=binary, fmi_version=fmi)
     assert a == b
     with zipfile.ZipFile(io.BytesIO(a)) as archive:
         assert {i.date_time for i in archive.infolist()} == {(1980, 1, 1, 0, 0, 0)}
@@ -166,28 +223,30 @@ def test_same_inputs_give_the_same_bytes_and_no_path(binary, tmp_path, monkeypat
 HOSTILE = ['"><x a="&amp;', "]]> */ (* *) \\", "name\u2028with\nlines", "é" * 200]
 
 
+@each_fmi
 @pytest.mark.parametrize("name", HOSTILE)
-def test_hostile_names_stay_in_comments_and_attributes(name, tmp_path):
+def test_hostile_names_stay_in_comments_and_attributes(name, fmi, tmp_path):
     import dataclasses
 
     cfg = dataclasses.replace(VCM, name=name)
-    data = fmu_archive(cfg, binary=HAS_CC)
+    data = fmu_archive(cfg, binary=HAS_CC, fmi_version=fmi)
     path = _write(tmp_path, data)
     assert validate_fmu(str(path)) == []
     with zipfile.ZipFile(path) as archive:
         root = ET.fromstring(archive.read("modelDescription.xml"))
     assert od.export.controller.sanitize_comment(name) in root.get("description")
     # the controller is the same whatever its name
-    clean = zipfile.ZipFile(io.BytesIO(fmu_archive(VCM, binary=False)))
+    clean = zipfile.ZipFile(io.BytesIO(fmu_archive(VCM, binary=False, fmi_version=fmi)))
     assert clean.read("sources/obsdesign_controller.c").split(b"\n", 1)[1] == \
-        zipfile.ZipFile(io.BytesIO(fmu_archive(cfg, binary=False))).read("sources/obsdesign_controller.c").split(
-            b"\n", 1)[1]
+        zipfile.ZipFile(io.BytesIO(fmu_archive(cfg, binary=False, fmi_version=fmi))).read(
+            "sources/obsdesign_controller.c").split(b"\n", 1)[1]
 
 
 @needs_cc
-def test_a_step_other_than_dt_is_refused(tmp_path, capfd):
-    path = _write(tmp_path, fmu_archive(VCM))
-    with pytest.raises(Exception, match="fmi2DoStep failed"):
+@each_fmi
+def test_a_step_other_than_dt_is_refused(fmi, tmp_path, capfd):
+    path = _write(tmp_path, fmu_archive(VCM, fmi_version=fmi))
+    with pytest.raises(Exception, match=f"fmi{fmi}DoStep failed"):
         fmpy.simulate_fmu(str(path), stop_time=10 * VCM.observer.dt, step_size=2 * VCM.observer.dt,
                           output_interval=2 * VCM.observer.dt)
     assert "the communication step must be dt" in capfd.readouterr().out
@@ -196,6 +255,9 @@ def test_a_step_other_than_dt_is_refused(tmp_path, capfd):
 @pytest.mark.parametrize("args, kwargs, exc, match", [
     ((VCM,), {"binary": "yes"}, TypeError, "binary: expected True, False or None"),
     ((VCM,), {"schedule": "true"}, ValueError, "schedule: 'true'"),
+    ((VCM,), {"fmi_version": "3.0"}, ValueError, "fmi_version: expected one of 2, 3, found '3.0'"),
+    ((VCM,), {"fmi_version": 1}, ValueError, "fmi_version: expected one of 2, 3, found 1"),
+    ((VCM,), {"fmi_version": True}, ValueError, "fmi_version: expected one of 2, 3, found True"),
 ])
 def test_fmu_errors(args, kwargs, exc, match):
     with pytest.raises(exc, match=match):
@@ -214,6 +276,12 @@ def test_export_writes_the_controller_and_the_observer_fmu(tmp_path):
     assert path.name == FMU_NAME and zipfile.is_zipfile(path)
     (path,) = export(VCM, "fmu", tmp_path)
     assert path.name == OBSERVER_FMU_NAME and validate_fmu(str(path)) == []
+    for what in ("controller", "observer"):
+        (path,) = export(VCM, "fmu", tmp_path / "3", what=what, fmi_version="3")
+        assert fmpy.read_model_description(str(path)).fmiVersion == "3.0" and validate_fmu(str(path)) == []
+    with pytest.raises(ValueError, match="fmi_version: applies to format 'fmu' only, found '3' with format 'c'"):
+        export(VCM, "c", tmp_path / "no", fmi_version="3")
+    assert not (tmp_path / "no").exists()
     with pytest.raises(ValueError, match="estimator: applies to what='controller' only"):
         fmu_archive(VCM, what="observer", estimator="eso")
     with pytest.raises(ValueError, match="what: expected one of observer, controller, found 'table'"):
@@ -240,28 +308,20 @@ def _observer_reference(cfg, u_prev, x_meas, tmp_path):
 
 
 @needs_cc
+@each_fmi
 @pytest.mark.parametrize("cfg", [VCM, TABLE1.override(rho=3.0)], ids=["vcm", "table1-rho3"])
-def test_the_observer_fmu_reproduces_the_simulated_estimates_bit_for_bit(cfg, tmp_path):
+def test_the_observer_fmu_reproduces_the_simulated_estimates_bit_for_bit(cfg, fmi, tmp_path):
     res = od.simulate(cfg, "tracking", duration=0.5)  # the default schedule, as the observer export
-    path = _write(tmp_path, fmu_archive(cfg, what="observer", binary=True), OBSERVER_FMU_NAME)
+    path = _write(tmp_path, fmu_archive(cfg, what="observer", binary=True, fmi_version=fmi), OBSERVER_FMU_NAME)
     assert validate_fmu(str(path)) == []
-    md = fmpy.read_model_description(str(path))
-    vrs = {v.name: v.valueReference for v in md.modelVariables}
-    unzipped = fmpy.extract(str(path))
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier="obsdesign_observer", instanceName="o")
-    fmu.instantiate()
-    fmu.setupExperiment(startTime=0.0)
-    fmu.enterInitializationMode()
-    fmu.exitInitializationMode()
     u_prev = np.concatenate([[0.0], res.u[:-1]])  # the net force held over the interval that ends at sample n
     out = []
-    for n, (u, x) in enumerate(zip(u_prev, res.x_meas)):
-        fmu.setReal([vrs["u_prev"], vrs["x_meas"]], [float(u), float(x)])
-        fmu.doStep(currentCommunicationPoint=n * cfg.observer.dt, communicationStepSize=cfg.observer.dt)
-        out.append(fmu.getReal([vrs["v_hat"], vrs["f_hat"]]))
-    fmu.terminate()
-    fmu.freeInstance()
-    shutil.rmtree(unzipped, ignore_errors=True)
+    with _running(path, "obsdesign_observer") as (set_inputs, step, get, dt):
+        assert dt == cfg.observer.dt
+        for n, (u, x) in enumerate(zip(u_prev, res.x_meas)):
+            set_inputs(["u_prev", "x_meas"], [u, x])
+            step(n * dt, dt)
+            out.append(get(["v_hat", "f_hat"]))
     out = np.array(out)
     assert np.array_equal(out[:, 0], res.v_hat) and np.array_equal(out[:, 1], res.f_hat)
     assert np.array_equal(out, _observer_reference(cfg, u_prev, res.x_meas, tmp_path))
@@ -292,20 +352,30 @@ def test_cli_writes_the_fmu_and_the_st_and_refuses_in_one_line(tmp_path, capsys,
                         "-o", str(tmp_path / "d"))  # the drive's delay is not the block's (issue 33): exported as is
     assert code == 0 and err == []
     assert (tmp_path / "d" / "obsdesign_controller.st").is_file()
+    status, stdout, err = _cli(capsys, "export", "--format", "fmu", "--fmi-version", "3", "-o", str(tmp_path / "f3"))
+    assert status == 0 and stdout.split() == [str(tmp_path / "f3" / OBSERVER_FMU_NAME)]
+    assert fmpy.read_model_description(stdout.split()[0]).fmiVersion == "3.0"
+    code, _, err = _cli(capsys, "export", "--format", "c", "--fmi-version", "3", "-o", str(tmp_path / "no"))
+    assert code == 2 and err == ["obsdesign export: argument --fmi-version: applies to --format fmu only, found "
+                                 "--fmi-version 3 with --format c"]
+    code, _, err = _cli(capsys, "export", "--format", "fmu", "--fmi-version", "4", "-o", str(tmp_path / "no"))
+    assert code == 2 and len(err) == 1 and "--fmi-version: invalid choice: '4'" in err[0]
+    assert not (tmp_path / "no").exists()
     monkeypatch.setenv("CC", "no-such-compiler-obsdesign")
     code, _, err = _cli(capsys, "export", "--format", "fmu", "--what", "controller", "-o", str(tmp_path / "s"))
     assert code == 0 and len(err) == 1 and "a source FMU" in err[0]
 
 
 @needs_cc
+@each_fmi
 @pytest.mark.slow  # CMake configures a project: about 9 s
-def test_the_source_fmu_builds_in_an_importer_and_runs_the_same(tmp_path, capfd):
+def test_the_source_fmu_builds_in_an_importer_and_runs_the_same(fmi, tmp_path, capfd):
     """FMPy's own build of a source FMU (CMake, its flags): what an importer without our compiler does."""
     build = pytest.importorskip("fmpy.build", reason="fmpy without its build module")
     if shutil.which("cmake") is None:
         pytest.skip("cmake (a dependency of fmpy) is not on PATH")
     res, _ = _simulate(VCM, dict(scenario="tracking"), duration=0.3)
-    path = _write(tmp_path, fmu_archive(VCM, binary=False, schedule=res.stiffness_schedule))
+    path = _write(tmp_path, fmu_archive(VCM, binary=False, schedule=res.stiffness_schedule, fmi_version=fmi))
     unzipped = fmpy.extract(str(path), unzipdir=str(tmp_path / "unzipped"))
     (tmp_path / "build").mkdir()
     build.build_platform_binary(unzipped, build_dir=str(tmp_path / "build"))

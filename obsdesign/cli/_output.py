@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..export import CONTROLLER_FORMATS
+from ..export import CONTROLLER_FORMATS, FMI_VERSIONS
 from ..export import FORMATS as EXPORT_FORMATS
 from ..export import TARGET_FORMATS
 from ..export import TARGETS as EXPORT_TARGETS
@@ -31,6 +31,9 @@ def _cmd_export(args: argparse.Namespace) -> int:
                         ("--estimator", args.estimator), ("--controller-waits", args.controller_waits or None)):
         if value is not None and args.what != "controller":
             raise UsageError(f"obsdesign export: argument {flag}: applies to --what controller only, found {value!r}")
+    if args.fmi_version is not None and args.format != "fmu":
+        raise UsageError(f"obsdesign export: argument --fmi-version: applies to --format fmu only, found "
+                         f"--fmi-version {args.fmi_version} with --format {args.format}")
     if args.target != "host" and (args.what != "controller" or args.format != TARGET_FORMATS[args.target]):
         raise UsageError(f"obsdesign export: argument --target: {args.target} applies to --what controller "
                          f"--format {TARGET_FORMATS[args.target]} only, found --what {args.what} --format {args.format}")
@@ -42,7 +45,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
     paths = export(cfg, args.format, args.output, what=args.what, controller=args.controller,
                    schedule=args.stiffness, estimator=args.estimator, table=table_options(args),
-                   target=args.target, waits=args.controller_waits)
+                   target=args.target, waits=args.controller_waits, fmi_version=args.fmi_version)
     if args.controller_waits:
         d = cfg.hardware.delay_samples
         print_warnings([f"--controller-waits: the exported controller delays its command by {d} sample"
@@ -111,6 +114,9 @@ def add_commands(sub) -> None:
                    help="with --what controller: the controller that waits, for a bench WITHOUT the drive's delay: "
                         "it returns its command of [hardware] delay_samples samples earlier, so the bench runs the "
                         "loop simulate runs with the delay (hardware with the delay must not use it; docs/delay.md)")
+    p.add_argument("--fmi-version", choices=FMI_VERSIONS,
+                   help="with --format fmu: the FMI version of the co-simulation FMU, 2 (FMI 2.0, default) or 3 "
+                        "(FMI 3.0); the same controller C (docs/fmu-export.md)")
     add_config_flags(p, default_preset="vcm")
     p.add_argument("--variant", choices=VARIANTS, help="override the config's model variant")
     p.add_argument("--rho", type=POSITIVE_ARG, help="gain parameter rho (> 0)")

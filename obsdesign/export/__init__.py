@@ -32,12 +32,17 @@ TARGETS = ("host", "cortex-m4f", "real")
 #: The one format of each target but ``host``.
 TARGET_FORMATS = {"cortex-m4f": "c", "real": "st"}
 
-#: The formats packaged for a tool, of the controller or the observer: an FMI 2.0 co-simulation FMU
+#: The FMI versions of the ``fmu`` format (:func:`obsdesign.export.fmu.fmu_archive`): 2.0 (the default) and 3.0,
+#: co-simulation, around the same generated C.
+FMI_VERSIONS = ("2", "3")
+
+#: The formats packaged for a tool, of the controller or the observer: an FMI 2.0/3.0 co-simulation FMU
 #: and an IEC 61131-3 function block (not source languages of :func:`~obsdesign.export.controller.controller_files`).
 # choice subset: the exports packaged for an importer or a PLC
 TOOL_FORMATS = ("fmu", "st")
 
-__all__ = ["export", "FORMATS", "WHAT", "CONTROLLER_FORMATS", "TOOL_FORMATS", "TARGETS", "TARGET_FORMATS"]
+__all__ = ["export", "FORMATS", "WHAT", "CONTROLLER_FORMATS", "TOOL_FORMATS", "TARGETS", "TARGET_FORMATS",
+           "FMI_VERSIONS"]
 
 
 def __getattr__(name: str):

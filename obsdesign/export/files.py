@@ -39,7 +39,7 @@ __all__ = ["export"]
 def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "observer",
            controller: str | None = None, schedule: str | None = None,
            estimator: str | None = None, table: dict | None = None, target: str = "host",
-           waits: bool = False) -> list[Path]:
+           waits: bool = False, fmi_version: str | None = None) -> list[Path]:
     """Write the export files of one format into ``out_dir`` (created if missing).
 
     Parameters
@@ -83,6 +83,9 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
     waits : bool
         With ``what='controller'``: the controller that waits (returns its command of d samples earlier),
         for a bench WITHOUT the drive's delay (:func:`obsdesign.export.controller.controller_files`).
+    fmi_version : {'2', '3'}, optional
+        With format ``fmu``: the FMI version (:data:`obsdesign.export.FMI_VERSIONS`; default ``'2'``),
+        :func:`obsdesign.export.fmu.fmu_archive`.
 
     Returns
     -------
@@ -106,6 +109,9 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
         return _write(table_files(friction_table(cfg, **(table or {}))), out_dir)
     if table is not None:
         raise ValueError(f"table: applies to what='friction-table' only, found {table!r} with what={what!r}")
+    if fmi_version is not None and fmt != "fmu":
+        raise ValueError(f"fmi_version: applies to format 'fmu' only, found {fmi_version!r} with format {fmt!r}")
+    fmi = {} if fmi_version is None else {"fmi_version": fmi_version}
     if waits is not False and what != "controller":
         raise ValueError(f"waits: applies to what='controller' only, found {waits!r} with what={what!r}")
     if what == "controller":
@@ -125,7 +131,7 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
             from .fmu import FMU_NAME, fmu_archive
 
             out = {FMU_NAME: fmu_archive(cfg, controller=controller, schedule=schedule, estimator=estimator,
-                                         waits=waits)}
+                                         waits=waits, **fmi)}
         elif target == "real":
             from .st_real import real_block_files
 
@@ -145,7 +151,7 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
     if fmt == "fmu":
         from .fmu import OBSERVER_FMU_NAME, fmu_archive
 
-        return _write({OBSERVER_FMU_NAME: fmu_archive(cfg, what="observer")}, out_dir)
+        return _write({OBSERVER_FMU_NAME: fmu_archive(cfg, what="observer", **fmi)}, out_dir)
     if fmt == "st":
         from .st import st_files
 

@@ -1,22 +1,25 @@
-"""The sampled controller (or the observer alone) as an FMI 2.0 co-simulation FMU, built from the generated C.
+"""The sampled controller (or the observer alone) as an FMI 2.0 or 3.0 co-simulation FMU, built from the generated C.
 
 The archive ``obsdesign_controller.fmu`` holds ``modelDescription.xml``, the sources
 ``obsdesign_controller.h/.c`` (the files of ``export --format c``, unchanged: one code path) and
-``obsdesign_fmu.c`` (the FMI 2.0 interface around them), and, when a C compiler is found at export
+``obsdesign_fmu.c`` (the FMI interface around them), and, when a C compiler is found at export
 time (``$CC``, else ``cc``), the shared library for this platform under ``binaries/``; without
-one it is a source FMU that the importer compiles.
+one it is a source FMU that the importer compiles. ``fmi_version="3"`` (:data:`obsdesign.export.FMI_VERSIONS`)
+writes the FMI 3.0 FMU of the same C files: only ``obsdesign_fmu.c`` and ``modelDescription.xml`` differ (and
+FMI 3.0's ``sources/buildDescription.xml`` and platform folder, ``binaries/x86_64-linux``).
 
 The FMU's step runs the controller once per communication step, which must be ``dt``
 (``DefaultExperiment stepSize``; ``canHandleVariableCommunicationStepSize = false``). Inputs
 ``x_ref``, ``x_meas`` (and ``v_ref``, ``w_ff`` for the compensation modes ``feedforward``/``blend``),
 outputs ``command``, ``v_hat``, ``f_hat``, ``f_hat_filtered``; the export's numbers are read-only
-constants with their units (they are compiled into the C: a new value is a new export).
+constants with their units (causality ``local``, variability ``constant``: they are compiled into the C, and the
+controller's coefficients are derived from them at export time, so a new value is a new export).
 
 ``fmu_archive(cfg, what="observer")`` wraps the observer's C export the same way
 (``obsdesign_observer.fmu``: inputs ``u_prev``, ``x_meas``; outputs ``v_hat``, ``f_hat``).
 
 The bytes depend on the inputs only: no path, no timestamp (the zip entries carry 1980-01-01),
-and the ``guid`` is a hash of the archive's text.
+and the ``guid`` (FMI 3.0: ``instantiationToken``) is a hash of the archive's text.
 
 Examples
 --------
@@ -26,6 +29,12 @@ Examples
 ['modelDescription.xml', 'sources/obsdesign_controller.c', 'sources/obsdesign_controller.h', 'sources/obsdesign_fmu.c']
 >>> data == fmu_archive(od.load_preset("vcm"), binary=False)
 True
+>>> fmi3 = zipfile.ZipFile(io.BytesIO(fmu_archive(od.load_preset("vcm"), binary=False, fmi_version="3")))
+>>> fmi3.read("sources/obsdesign_controller.c") == zipfile.ZipFile(io.BytesIO(data)).read(
+...     "sources/obsdesign_controller.c")
+True
+>>> sorted(fmi3.namelist())[-1]
+'sources/obsdesign_fmu.c'
 """
 
 from __future__ import annotations
@@ -33,6 +42,7 @@ from __future__ import annotations
 import hashlib
 import io
 import os
+import platform
 import shlex
 import shutil
 import subprocess
@@ -47,7 +57,7 @@ from xml.sax.saxutils import quoteattr
 from .._validate import check_choice
 from .._version import __version__
 from ..params import Config
-from . import WHAT
+from . import FMI_VERSIONS, WHAT
 from .codegen import c_files, export_spec
 from .controller import _environment, _literal, controller_constants, controller_files, exported_controller
 from .literals import comment_text
@@ -56,7 +66,7 @@ __all__ = ["FMU_NAME", "OBSERVER_FMU_NAME", "MODEL_IDENTIFIER", "fmu_archive", "
 
 #: The archive's file name.
 FMU_NAME = "obsdesign_controller.fmu"
-#: The FMI model identifier: the shared library's base name and the prefix-free FMI 2.0 functions.
+#: The FMI model identifier: the shared library's base name (the FMI functions are not prefixed).
 MODEL_IDENTIFIER = "obsdesign_controller"
 
 #: The observer FMU's archive name.
@@ -94,20 +104,38 @@ _OBSERVER_OUTPUTS = (("v_hat", "m/s", "velocity estimate", "obsdesign_observer_v
                      ("f_hat", "N", "friction estimate", "obsdesign_observer_friction(&m->c)"))
 
 
-def fmu_platform() -> str | None:
-    """The FMI 2.0 platform folder of this machine (``linux64``, ``darwin64``), None where not built.
+def fmu_platform(fmi_version: str = "2") -> str | None:
+    """The platform folder of this machine under ``binaries/``, None where the export builds no binary.
+
+    FMI 2.0: ``linux64``, ``darwin64`` (32-bit: ``linux32``, ``darwin32``); FMI 3.0: the platform tuple
+    ``x86_64-linux``, ``aarch64-linux``, ``x86_64-darwin``, ``aarch64-darwin`` (``x86-linux`` on 32 bits).
 
     Examples
     --------
     >>> fmu_platform() in ("linux64", "linux32", "darwin64", "darwin32", None)
     True
+    >>> fmu_platform("3") in ("x86_64-linux", "aarch64-linux", "x86-linux", "x86_64-darwin", "aarch64-darwin", None)
+    True
     """
+    system = "linux" if sys.platform.startswith("linux") else "darwin" if sys.platform == "darwin" else None
+    if system is None:
+        return None
     bits = "64" if sys.maxsize > 2**32 else "32"
-    if sys.platform.startswith("linux"):
-        return "linux" + bits
-    if sys.platform == "darwin":
-        return "darwin" + bits
+    if _fmi_version(fmi_version) == "2":
+        return system + bits
+    machine = platform.machine().lower()
+    if machine in ("x86_64", "amd64", "i386", "i686", "x86"):
+        return ("x86_64" if bits == "64" else "x86") + "-" + system
+    if machine in ("aarch64", "arm64") and bits == "64":
+        return "aarch64-" + system
     return None
+
+
+def _fmi_version(value) -> str:
+    """``value`` as a name of :data:`~obsdesign.export.FMI_VERSIONS` (the integers 2 and 3 read as "2", "3")."""
+    if isinstance(value, int) and not isinstance(value, bool) and str(value) in FMI_VERSIONS:
+        return str(value)
+    return check_choice("fmi_version", value, FMI_VERSIONS)
 
 
 def _compiler() -> list[str] | None:
@@ -165,49 +193,89 @@ def _observer_model(cfg, choices) -> _Model:
                   {"schedule": "estimated"})
 
 
-def _model_description(model: _Model, guid: str) -> str:
+def _model_description(model: _Model, guid: str, fmi_version: str) -> str:
+    """The ``modelDescription.xml`` of ``model``: FMI 2.0 ``ScalarVariable``/``Real`` or FMI 3.0 ``Float64``."""
     cfg, inputs, outputs, constants = model.cfg, model.inputs, model.outputs, model.constants
     identifier = model.identifier
+    fmi3 = fmi_version == "3"
     dt = _literal(cfg.observer.dt)
     words = ", ".join(f"{k} {v}" for k, v in model.choices.items())
     desc = f"obsdesign {'sampled controller' if model.module == 'controller' else 'observer'}, {words}, " \
            f"config {comment_text(cfg.name)}"
-    units = sorted({v["unit"] for v in inputs + outputs + constants})
-    lines = ['<?xml version="1.0" encoding="UTF-8"?>',
-             f'<fmiModelDescription fmiVersion="2.0" modelName="{identifier}" guid="{guid}"',
-             f'  description={quoteattr(desc)}',
-             f'  generationTool={quoteattr("obsdesign " + __version__)}',
-             '  variableNamingConvention="flat" numberOfEventIndicators="0">',
-             f'  <CoSimulation modelIdentifier="{identifier}" canHandleVariableCommunicationStepSize="false"',
-             '    canGetAndSetFMUstate="false" canSerializeFMUstate="false" providesDirectionalDerivative="false">',
-             '    <SourceFiles>', '      <File name="obsdesign_fmu.c"/>', f'      <File name="obsdesign_{model.module}.c"/>',
-             '    </SourceFiles>', '  </CoSimulation>', '  <UnitDefinitions>']
+    time_unit = cfg.units.unit("s")
+    units = sorted({v["unit"] for v in inputs + outputs + constants} | ({time_unit} if fmi3 else set()))
+    provenance = [f'      <Provenance version={quoteattr(__version__)} config={quoteattr(comment_text(cfg.name))}'
+                  f' variant={quoteattr(cfg.observer.variant)} what="{model.module}"',
+                  '        ' + " ".join(f"{k}={quoteattr(v)}" for k, v in model.choices.items()) + "/>"]
+    if fmi3:
+        lines = ['<?xml version="1.0" encoding="UTF-8"?>',
+                 f'<fmiModelDescription fmiVersion="3.0" modelName="{identifier}" instantiationToken="{guid}"',
+                 f'  description={quoteattr(desc)}',
+                 f'  generationTool={quoteattr("obsdesign " + __version__)}', '  variableNamingConvention="flat">',
+                 f'  <CoSimulation modelIdentifier="{identifier}" canHandleVariableCommunicationStepSize="false"',
+                 f'    fixedInternalStepSize="{dt}" hasEventMode="false" canGetAndSetFMUState="false"',
+                 '    canSerializeFMUState="false" providesDirectionalDerivatives="false"/>']
+    else:
+        lines = ['<?xml version="1.0" encoding="UTF-8"?>',
+                 f'<fmiModelDescription fmiVersion="2.0" modelName="{identifier}" guid="{guid}"',
+                 f'  description={quoteattr(desc)}',
+                 f'  generationTool={quoteattr("obsdesign " + __version__)}',
+                 '  variableNamingConvention="flat" numberOfEventIndicators="0">',
+                 f'  <CoSimulation modelIdentifier="{identifier}" canHandleVariableCommunicationStepSize="false"',
+                 '    canGetAndSetFMUstate="false" canSerializeFMUstate="false" providesDirectionalDerivative="false">',
+                 '    <SourceFiles>', '      <File name="obsdesign_fmu.c"/>',
+                 f'      <File name="obsdesign_{model.module}.c"/>', '    </SourceFiles>', '  </CoSimulation>']
+    lines += ['  <UnitDefinitions>']
     lines += [f'    <Unit name={quoteattr(u)}/>' for u in units]
-    lines += ['  </UnitDefinitions>', f'  <DefaultExperiment startTime="0.0" stepSize="{dt}"/>', '  <VendorAnnotations>', '    <Tool name="obsdesign">',
-              f'      <Provenance version={quoteattr(__version__)} config={quoteattr(comment_text(cfg.name))}'
-              f' variant={quoteattr(cfg.observer.variant)} what="{model.module}"',
-              '        ' + " ".join(f"{k}={quoteattr(v)}" for k, v in model.choices.items()) + "/>",
-              '    </Tool>', '  </VendorAnnotations>', '  <ModelVariables>']
+    lines += ['  </UnitDefinitions>', f'  <DefaultExperiment startTime="0.0" stepSize="{dt}"/>']
+    if not fmi3:
+        lines += ['  <VendorAnnotations>', '    <Tool name="obsdesign">', *provenance, '    </Tool>',
+                  '  </VendorAnnotations>']
+    lines += ['  <ModelVariables>']
 
-    def var(v, causality, variability, real):
+    def var(v, causality, variability, start):
+        if fmi3:
+            return [f'    <Float64 name={quoteattr(v["name"])} valueReference="{v["vr"]}" '
+                    f'causality="{causality}" variability="{variability}"',
+                    f'      description={quoteattr(v["description"])} unit={quoteattr(v["unit"])}{start}/>']
         return [f'    <ScalarVariable name={quoteattr(v["name"])} valueReference="{v["vr"]}" '
                 f'causality="{causality}" variability="{variability}"',
                 f'      description={quoteattr(v["description"])}>',
-                f'      <Real unit={quoteattr(v["unit"])}{real}/>', '    </ScalarVariable>']
+                f'      <Real unit={quoteattr(v["unit"])}{start}/>', '    </ScalarVariable>']
 
+    if fmi3:  # the independent variable (value reference 0)
+        lines += var({"name": "time", "vr": 0, "description": "simulation time", "unit": time_unit},
+                     "independent", "continuous", "")
     for v in inputs:
         lines += var(v, "input", "discrete", ' start="0.0"')
     for v in outputs:
         lines += var(v, "output", "discrete", "")
-    for v in constants:
+    for v in constants:  # compiled into the C: FMI's "parameter" would promise a value the importer can set
         lines += var(v, "local", "constant", f' start="{v["value"]}"')
-    first_output = len(inputs) + 1
-    lines += ['  </ModelVariables>', '  <ModelStructure>', '    <Outputs>']
-    lines += [f'      <Unknown index="{first_output + i}" dependencies=""/>' for i in range(len(outputs))]
-    lines += ['    </Outputs>', '    <InitialUnknowns>']
-    lines += [f'      <Unknown index="{first_output + i}" dependencies=""/>' for i in range(len(outputs))]
-    lines += ['    </InitialUnknowns>', '  </ModelStructure>', '</fmiModelDescription>', '']
+    lines += ['  </ModelVariables>', '  <ModelStructure>']
+    if fmi3:
+        lines += [f'    <Output valueReference="{v["vr"]}" dependencies=""/>' for v in outputs]
+        lines += [f'    <InitialUnknown valueReference="{v["vr"]}" dependencies=""/>' for v in outputs]
+        lines += ['  </ModelStructure>', '  <Annotations>', '    <Annotation type="obsdesign">', *provenance,
+                  '    </Annotation>', '  </Annotations>']
+    else:
+        first_output = len(inputs) + 1
+        lines += ['    <Outputs>']
+        lines += [f'      <Unknown index="{first_output + i}" dependencies=""/>' for i in range(len(outputs))]
+        lines += ['    </Outputs>', '    <InitialUnknowns>']
+        lines += [f'      <Unknown index="{first_output + i}" dependencies=""/>' for i in range(len(outputs))]
+        lines += ['    </InitialUnknowns>', '  </ModelStructure>']
+    lines += ['</fmiModelDescription>', '']
     return "\n".join(lines)
+
+
+def _build_description(model: _Model) -> str:
+    """FMI 3.0's ``sources/buildDescription.xml``: the two C files of the FMU (FMI 2.0 lists them in ``SourceFiles``)."""
+    return "\n".join(['<?xml version="1.0" encoding="UTF-8"?>', '<fmiBuildDescription fmiVersion="3.0">',
+                      f'  <BuildConfiguration modelIdentifier="{model.identifier}">',
+                      '    <SourceFileSet language="C99">', '      <SourceFile name="obsdesign_fmu.c"/>',
+                      f'      <SourceFile name="obsdesign_{model.module}.c"/>', '    </SourceFileSet>',
+                      '  </BuildConfiguration>', '</fmiBuildDescription>', ''])
 
 
 def _zip(entries: dict[str, bytes]) -> bytes:
@@ -241,8 +309,9 @@ def _build(sources: dict[str, str], cc: list[str], identifier: str, module: str)
 
 
 def fmu_archive(cfg, *, what: str = "controller", binary: bool | None = None, controller: str | None = None,
-                schedule: str | None = None, estimator: str | None = None, waits: bool = False) -> bytes:
-    """The FMU (FMI 2.0 co-simulation) of the exported controller or observer, as the bytes of its zip archive.
+                schedule: str | None = None, estimator: str | None = None, waits: bool = False,
+                fmi_version: str = "2") -> bytes:
+    """The FMU (FMI 2.0 or 3.0 co-simulation) of the exported controller or observer, as the bytes of its zip archive.
 
     Parameters
     ----------
@@ -260,6 +329,10 @@ def fmu_archive(cfg, *, what: str = "controller", binary: bool | None = None, co
     controller, schedule, estimator, waits : optional
         As in :func:`obsdesign.export.controller.controller_files` (``waits``: the controller that waits, for
         a bench without the drive's delay; controller only).
+    fmi_version : {'2', '3'}
+        The FMI version (:data:`obsdesign.export.FMI_VERSIONS`; the integers 2 and 3 are read as these):
+        ``'2'`` (default) FMI 2.0, ``'3'`` FMI 3.0 (``Float64`` variables, ``instantiationToken``,
+        ``fmi3InstantiateCoSimulation``, no event mode). The controller's C files are the same for both.
 
     Returns
     -------
@@ -275,6 +348,7 @@ def fmu_archive(cfg, *, what: str = "controller", binary: bool | None = None, co
         The compiler failed.
     """
     choices = {"controller": controller, "schedule": schedule, "estimator": estimator}
+    version = _fmi_version(fmi_version)
     if check_choice("what", what, _WHAT) == "observer":
         if waits:
             raise ValueError("waits: applies to what='controller' only, found True with what='observer'")
@@ -283,19 +357,19 @@ def fmu_archive(cfg, *, what: str = "controller", binary: bool | None = None, co
         model = _controller_model(cfg, choices, waits)
     if binary not in (None, True, False):
         raise TypeError(f"binary: expected True, False or None, found {binary!r}")
-    cc, platform = _compiler(), fmu_platform()
-    if binary and (cc is None or platform is None):
-        raise ValueError(f"binary: no C compiler ($CC or cc) or no FMI platform folder for {sys.platform!r}; "
-                         "expected binary=False (a source FMU) or None")
-    build = binary if binary is not None else (cc is not None and platform is not None)
+    cc, folder = _compiler(), fmu_platform(version)
+    if binary and (cc is None or folder is None):
+        raise ValueError(f"binary: no C compiler ($CC or cc) or no FMI {version}.0 platform folder for "
+                         f"{sys.platform!r}; expected binary=False (a source FMU) or None")
+    build = binary if binary is not None else (cc is not None and folder is not None)
     sources = dict(model.sources)
 
     def render(guid):
         wrapper = _environment(model.cfg.units).get_template("obsdesign_fmu.c.j2").render(
             name=comment_text(model.cfg.name), module=model.module,
             choices=", ".join(f"{k} {v}" for k, v in model.choices.items()), dt=_literal(model.cfg.observer.dt),
-            guid=guid, inputs=model.inputs, outputs=model.outputs, constants=model.constants)
-        return wrapper, _model_description(model, guid)
+            guid=guid, inputs=model.inputs, outputs=model.outputs, constants=model.constants, fmi=int(version))
+        return wrapper, _model_description(model, guid, version)
 
     digest = hashlib.sha256("\0".join((*render("{}"), *sources.values())).encode()).hexdigest()
     guid = "{" + str(uuid.UUID(digest[:32])) + "}"
@@ -303,7 +377,9 @@ def fmu_archive(cfg, *, what: str = "controller", binary: bool | None = None, co
     sources["obsdesign_fmu.c"] = wrapper
     entries = {"modelDescription.xml": xml.encode()}
     entries.update({f"sources/{name}": text.encode() for name, text in sources.items()})
-    if build and cc is not None and platform is not None:
+    if version == "3":
+        entries["sources/buildDescription.xml"] = _build_description(model).encode()
+    if build and cc is not None and folder is not None:
         lib = _build(sources, cc, model.identifier, model.module)
-        entries[f"binaries/{platform}/{model.identifier}{'.dylib' if sys.platform == 'darwin' else '.so'}"] = lib
+        entries[f"binaries/{folder}/{model.identifier}{'.dylib' if sys.platform == 'darwin' else '.so'}"] = lib
     return _zip(entries)
