@@ -252,6 +252,23 @@ def test_a_step_other_than_dt_is_refused(fmi, tmp_path, capfd):
     assert "the communication step must be dt" in capfd.readouterr().out
 
 
+@needs_cc
+@each_fmi
+def test_the_constants_are_read_only_and_no_parameter_is_declared(fmi, tmp_path, capfd):
+    """The export's numbers are compiled into the C (the coefficients are derived from them at export time): the
+    FMU declares them local constants, not parameters an importer could set, and refuses a value for one."""
+    path = _write(tmp_path, fmu_archive(VCM, fmi_version=fmi))
+    md = fmpy.read_model_description(str(path))
+    assert not {v.causality for v in md.modelVariables} & {"parameter", "calculatedParameter", "structuralParameter"}
+    consts = od.export.controller.controller_constants(VCM)
+    with _running(path) as (set_inputs, step, get, dt):
+        assert get(["KP", "DT"]) == [consts["KP"], VCM.observer.dt]
+        with pytest.raises(Exception, match=f"fmi{fmi}Set{'Real' if fmi == '2' else 'Float64'} failed"):
+            set_inputs(["KP"], [1.0])
+        assert get(["KP"]) == [consts["KP"]]
+    assert "only the inputs can be set (the constants are compiled in)" in capfd.readouterr().out
+
+
 @pytest.mark.parametrize("args, kwargs, exc, match", [
     ((VCM,), {"binary": "yes"}, TypeError, "binary: expected True, False or None"),
     ((VCM,), {"schedule": "true"}, ValueError, "schedule: 'true'"),
