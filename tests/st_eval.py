@@ -12,12 +12,17 @@ construct past the test. Each node is compiled once into a Python closure; LREAL
 result is a ``numpy.float32``, a literal combines with it as float32 (NumPy's scalar promotion: a Python
 float is weak), so each operation rounds to float32 as a single-precision FPU does. It adds ``TRUNC``
 (toward zero, to DINT), ``DINT_TO_REAL`` and array initializers ``[a, b, ...]`` (the REAL block's table).
+
+``plcopen_source(xml)`` rebuilds the ST text of a PLCopen XML (TC6 2.01) project from its XML alone (the
+interface's variables, types and initial values; the ST bodies), so that ``Program(plcopen_source(xml))``
+runs what a CODESYS-type runtime imports through the same evaluator as the ``.st`` file.
 """
 
 from __future__ import annotations
 
 import math
 import operator
+import xml.etree.ElementTree as ET
 
 import numpy as np
 
@@ -69,6 +74,53 @@ def _float32(thunk):
     def rounded(env):
         return np.float32(thunk(env))
     return rounded
+
+
+_TC6 = "{http://www.plcopen.org/xml/tc6_0201}"
+_XHTML_P = "{http://www.w3.org/1999/xhtml}p"
+_TC6_SECTIONS = {"inputVars": "VAR_INPUT", "outputVars": "VAR_OUTPUT", "localVars": "VAR", "tempVars": "VAR_TEMP"}
+
+
+def _tc6_type(node) -> str:
+    (t,) = list(node)
+    name = t.tag.removeprefix(_TC6)
+    if name != "array":
+        return name
+    (dim,) = t.findall(f"{_TC6}dimension")
+    (base,) = list(t.find(f"{_TC6}baseType"))
+    return f"ARRAY[{dim.get('lower')}..{dim.get('upper')}] OF {base.tag.removeprefix(_TC6)}"
+
+
+def _tc6_value(node) -> str:
+    simple = node.find(f"{_TC6}simpleValue")
+    if simple is not None:
+        return simple.get("value")
+    values = node.findall(f"{_TC6}arrayValue/{_TC6}value/{_TC6}simpleValue")
+    return "[" + ", ".join(v.get("value") for v in values) + "]"
+
+
+def plcopen_source(xml: str) -> str:
+    """The ST text of the POUs of a PLCopen XML project, read from the XML only (not the package's generator)."""
+    root = ET.fromstring(xml.encode())
+    parts = []
+    for pou in root.iter(f"{_TC6}pou"):
+        kind = {"function": "FUNCTION", "functionBlock": "FUNCTION_BLOCK"}[pou.get("pouType")]
+        interface = pou.find(f"{_TC6}interface")
+        returns = interface.find(f"{_TC6}returnType")
+        lines = [f"{kind} {pou.get('name')}" + (f" : {_tc6_type(returns)}" if returns is not None else "")]
+        for section in interface:
+            tag = section.tag.removeprefix(_TC6)
+            if tag == "returnType":
+                continue
+            lines.append("VAR CONSTANT" if section.get("constant") == "true" else _TC6_SECTIONS[tag])
+            for v in section.findall(f"{_TC6}variable"):
+                init = v.find(f"{_TC6}initialValue")
+                value = f" := {_tc6_value(init)}" if init is not None else ""
+                lines.append(f"    {v.get('name')} : {_tc6_type(v.find(f'{_TC6}type'))}{value};")
+            lines.append("END_VAR")
+        body = pou.find(f"{_TC6}body/{_TC6}ST/{_XHTML_P}").text
+        parts.append("\n".join(lines) + "\n" + body + f"END_{kind}\n")
+    return "\n".join(parts)
 
 
 class _Return(Exception):

@@ -18,9 +18,9 @@ from obsdesign.export.st import FB_NAME
 from obsdesign.export.st_real import REAL_BOUND_COMMAND, REAL_BOUND_F_CF, real_block_files
 
 blark = pytest.importorskip("blark", reason="blark (the test extra) is not installed")
-from st_eval import Program  # noqa: E402
+from st_eval import Program, plcopen_source  # noqa: E402
 
-ST = "obsdesign_controller.st"
+ST, XML = "obsdesign_controller.st", "obsdesign_controller.xml"
 VCM = od.load_preset("vcm")  # encoder 1 um, no noise: the estimated-raw schedule
 HAS_GCC = shutil.which("gcc") is not None
 
@@ -58,7 +58,7 @@ def _m4f_on_host(cfg, tmp_path):
 def test_the_real_block_has_no_lreal_and_states_its_bound():
     files = real_block_files(VCM)
     text = files[ST]
-    assert "LREAL" not in text and "LREAL" not in files["obsdesign_controller.xml"]
+    assert "LREAL" not in text and "LREAL" not in files[XML]
     assert f"friction estimate within {REAL_BOUND_F_CF:g} x Cf, command within {REAL_BOUND_COMMAND:g} x u_max" in text
     assert "x_meas : DINT;" in text and "ring" not in text.replace("squaring", "")
     delayed = real_block_files(VCM.override(delay_samples=2))[ST]
@@ -86,18 +86,26 @@ def test_export_writes_the_real_block_for_the_controller_only(tmp_path):
         export(VCM, "st", tmp_path, target="real")
 
 
-@pytest.mark.slow  # blark parses the block with its 512-entry table in about a minute
-@pytest.mark.parametrize("cfg", [VCM, VCM.override(delay_samples=1), VCM.override(noise_rms=1.1e-6)],
-                         ids=["vcm", "vcm-delay-1", "vcm-noisy-hysteresis"])
-def test_the_real_block_in_float32_matches_the_double_controller_and_the_m4f_c(cfg, tmp_path):
+@pytest.mark.slow  # blark parses the block with its 512-entry table in about 40 s (the XML case: twice)
+@pytest.mark.parametrize("cfg, xml", [(VCM, True), (VCM.override(delay_samples=1), False),
+                                      (VCM.override(noise_rms=1.1e-6), False)],
+                         ids=["vcm+xml", "vcm-delay-1", "vcm-noisy-hysteresis"])
+def test_the_real_block_in_float32_matches_the_double_controller_and_the_m4f_c(cfg, xml, tmp_path):
     q = cfg.sensor.quantization
     res = od.simulate(cfg, od.sim.Positioning(step_up=0.1, step_down=0.4), duration=0.6, controller="pid+observer")
     x_ref, x_meas = _counts(res, q)
-    block = Program(real_block_files(cfg)[ST], real32=True).block(FB_NAME)
+    files = real_block_files(cfg)
+    block = Program(files[ST], real32=True).block(FB_NAME)
     out = [block(int(r), int(m)) for r, m in zip(x_ref, x_meas)]
     command = np.array([o["COMMAND"] for o in out])
     f_hat = np.array([o["F_HAT"] for o in out])
     assert command.dtype == np.float32 and f_hat.dtype == np.float32  # the evaluator ran in float32
+    if xml:  # the PLCopen XML a runtime imports, rebuilt from the XML alone: the same float32 numbers
+        imported = Program(plcopen_source(files[XML]), real32=True).block(FB_NAME)
+        again = [imported(int(r), int(m)) for r, m in zip(x_ref, x_meas)]
+        assert np.array_equal([o["COMMAND"] for o in again], command)
+        assert np.array_equal([o["F_HAT"] for o in again], f_hat)
+        assert {type(o["F_HAT"]) for o in again} == {np.float32}
     # the double controller (the Python export, = simulate on these whole-count inputs)
     ns: dict = {}
     exec(controller_files(cfg, "python")["obsdesign_controller.py"], ns)
