@@ -32,8 +32,8 @@ TARGETS = ("host", "cortex-m4f", "real")
 #: The one format of each target but ``host``.
 TARGET_FORMATS = {"cortex-m4f": "c", "real": "st"}
 
-#: The FMI versions of the ``fmu`` format (:func:`obsdesign.export.fmu.fmu_archive`): 2.0 (the default) and 3.0,
-#: co-simulation, around the same generated C.
+#: The FMI versions of the ``fmu`` format (:func:`obsdesign.export.fmu.fmu_archive`): 2.0 (the first: the default)
+#: and 3.0, co-simulation, around the same generated C.
 FMI_VERSIONS = ("2", "3")
 
 #: The formats packaged for a tool, of the controller or the observer: an FMI 2.0/3.0 co-simulation FMU

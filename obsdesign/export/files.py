@@ -29,7 +29,7 @@ from pathlib import Path
 
 from .._io import atomic_write
 from ..params import Config
-from . import CONTROLLER_FORMATS, FORMATS, TARGET_FORMATS, TARGETS, WHAT
+from . import CONTROLLER_FORMATS, FMI_VERSIONS, FORMATS, TARGET_FORMATS, TARGETS, WHAT
 from .codegen import c_files, export_spec, js_module, latex_document, octave_files, python_module
 
 __all__ = ["export"]
@@ -101,6 +101,9 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
     if target != "host" and (what != "controller" or fmt != TARGET_FORMATS[target]):
         raise ValueError(f"target: {target!r} applies to what='controller' in format {TARGET_FORMATS[target]!r} "
                          f"only, found what={what!r}, format={fmt!r}")
+    if fmi_version is not None and fmt != "fmu":
+        raise ValueError(f"fmi_version: applies to format 'fmu' only, found {fmi_version!r} with format {fmt!r}")
+    fmi = FMI_VERSIONS[0] if fmi_version is None else fmi_version  # checked by fmu_archive
     if what == "friction-table":
         if fmt != "c":
             raise ValueError(f"format: the friction table is written as CSV and a C array; expected c, found {fmt!r}")
@@ -109,9 +112,6 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
         return _write(table_files(friction_table(cfg, **(table or {}))), out_dir)
     if table is not None:
         raise ValueError(f"table: applies to what='friction-table' only, found {table!r} with what={what!r}")
-    if fmi_version is not None and fmt != "fmu":
-        raise ValueError(f"fmi_version: applies to format 'fmu' only, found {fmi_version!r} with format {fmt!r}")
-    fmi = {} if fmi_version is None else {"fmi_version": fmi_version}
     if waits is not False and what != "controller":
         raise ValueError(f"waits: applies to what='controller' only, found {waits!r} with what={what!r}")
     if what == "controller":
@@ -131,7 +131,7 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
             from .fmu import FMU_NAME, fmu_archive
 
             out = {FMU_NAME: fmu_archive(cfg, controller=controller, schedule=schedule, estimator=estimator,
-                                         waits=waits, **fmi)}
+                                         waits=waits, fmi_version=fmi)}
         elif target == "real":
             from .st_real import real_block_files
 
@@ -151,7 +151,7 @@ def export(cfg: Config, fmt: str, out_dir: str | os.PathLike, *, what: str = "ob
     if fmt == "fmu":
         from .fmu import OBSERVER_FMU_NAME, fmu_archive
 
-        return _write({OBSERVER_FMU_NAME: fmu_archive(cfg, what="observer", **fmi)}, out_dir)
+        return _write({OBSERVER_FMU_NAME: fmu_archive(cfg, what="observer", fmi_version=fmi)}, out_dir)
     if fmt == "st":
         from .st import st_files
 

@@ -104,7 +104,7 @@ _OBSERVER_OUTPUTS = (("v_hat", "m/s", "velocity estimate", "obsdesign_observer_v
                      ("f_hat", "N", "friction estimate", "obsdesign_observer_friction(&m->c)"))
 
 
-def fmu_platform(fmi_version: str = "2") -> str | None:
+def fmu_platform(fmi_version: str = FMI_VERSIONS[0]) -> str | None:
     """The platform folder of this machine under ``binaries/``, None where the export builds no binary.
 
     FMI 2.0: ``linux64``, ``darwin64`` (32-bit: ``linux32``, ``darwin32``); FMI 3.0: the platform tuple
@@ -310,7 +310,7 @@ def _build(sources: dict[str, str], cc: list[str], identifier: str, module: str)
 
 def fmu_archive(cfg, *, what: str = "controller", binary: bool | None = None, controller: str | None = None,
                 schedule: str | None = None, estimator: str | None = None, waits: bool = False,
-                fmi_version: str = "2") -> bytes:
+                fmi_version: str = FMI_VERSIONS[0]) -> bytes:
     """The FMU (FMI 2.0 or 3.0 co-simulation) of the exported controller or observer, as the bytes of its zip archive.
 
     Parameters
