@@ -315,7 +315,8 @@ def _rotary_axis():
     J, sigma, K, dt, wc = 2.0e-4, 2.0e-3, 0.1, 2.5e-4, 2 * math.pi * 200
     axis = od.load_preset("vcm").override(
         m=J, sigma=sigma, K=K, G=0.0, u_max=8.0, Cf=0.02, s=2000.0, kappa=100.0, dt=dt, tau=J / sigma,
-        max_S=K / sigma / (wc * math.sin(math.radians(60.0))), quantization=2 * math.pi / 2**20)
+        max_S=K / sigma / (wc * math.sin(math.radians(60.0))), quantization=2 * math.pi / 2**20,
+        design="paper")  # the page keeps the config's gains when the delay is typed in; auto would redesign
     return dataclasses.replace(axis, name="rotary-4k", axis=AxisSpec(kind="rotary", input="A"), sources={})
 
 

@@ -145,6 +145,9 @@ class PIDDesign(ResultDisplay):
         :func:`resolve_pid`).
     reason : str
         Why the config carries this design, in one line ("" for a design built from numbers alone).
+    T_z : float or None
+        The controller's derivative time [s] where it is not ``tau`` (the sampled design frees ``kd`` from the
+        pole cancellation: ``C = k (T_z s + 1)(T_I s + 1) / (T_I s)``); ``None``: ``tau``.
     H, C, S : control.TransferFunction
         Plant, controller and input disturbance sensitivity ``H / (1 + H C)`` (eq:Syd).
     """
@@ -167,12 +170,13 @@ class PIDDesign(ResultDisplay):
     closed_loop_stable: bool
     design: str = "paper"
     reason: str = ""
+    T_z: float | None = None
     H = lazy_system()
     C = lazy_system()
     S = lazy_system()
 
     def _system_args(self) -> tuple:
-        return (self.k, self.T_I, self.tau, self.phi)
+        return (self.k, self.T_I, self.tau, self.phi) + (() if self.T_z is None else (self.T_z,))
 
     def _build_systems(self) -> dict:
         return _systems(*self._system_args())
@@ -181,7 +185,7 @@ class PIDDesign(ResultDisplay):
         """JSON-ready values (the keys of ``obsdesign pid --json`` and more)."""
         keys = ("k", "T_I", "kp", "ki", "kd", "omega_s", "max_S_achieved", "phase_margin_deg", "tau", "phi",
                 "omega_peak", "phase_margin_achieved_deg", "gain_margin", "omega_crossover", "closed_loop_stable",
-                "design", "reason")
+                "design", "reason", "T_z")
         return {key: getattr(self, key) for key in keys}
 
     def _rows(self):
@@ -224,31 +228,36 @@ def peak_magnitude(sys: ct.TransferFunction) -> tuple[float, float]:
     return (best, float(10.0**res.x)) if best >= mag[i] else (float(mag[i]), float(w[i]))
 
 
-def _systems(k: float, T_I: float, tau: float, phi: float) -> dict:
+def _systems(k: float, T_I: float, tau: float, phi: float, T_z: float | None = None) -> dict:
     import control as ct
 
+    z = tau if T_z is None else T_z  # the controller's derivative time: tau cancels the plant pole (eq:Cpid)
     H = ct.tf([phi], [tau, 1.0, 0.0])
-    C = ct.tf([k * tau * T_I, k * (tau + T_I), k], [T_I, 0.0])
+    C = ct.tf([k * z * T_I, k * (z + T_I), k], [T_I, 0.0])
     return {"H": H, "C": C, "S": ct.feedback(H, C)}  # S = H / (1 + H C), eq:Syd
 
 
-def _verification(k: float, T_I: float, tau: float, phi: float) -> list:
+def _verification(k: float, T_I: float, tau: float, phi: float, T_z: float | None = None) -> list:
     """python-control's numbers of the loop: peak of |S| and where, margins, stability."""
     import control as ct
 
-    sys = _systems(k, T_I, tau, phi)
+    sys = _systems(k, T_I, tau, phi, T_z)
     peak, w_peak = peak_magnitude(sys["S"])
     gm, pm, _, _, wgc, _ = ct.stability_margins(sys["C"] * sys["H"])
     return [peak, w_peak, float(pm), float(gm), float(wgc), bool(np.all(np.real(ct.poles(sys["S"])) < 0))]
 
 
-def loop_polynomials(k: float, T_I: float, tau: float, phi: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def loop_polynomials(k: float, T_I: float, tau: float, phi: float,
+                     T_z: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``L = C H`` of eq:Cpid and eq:linplant as polynomials in ``s`` (highest power first), NumPy only.
 
     Parameters
     ----------
     k, T_I, tau, phi : float
         Total gain [V/m], integrator time [s], plant time constant [s], plant gain [m/(V s)].
+    T_z : float, optional
+        The controller's derivative time [s] where it is not ``tau`` (the sampled design's free ``kd``,
+        :func:`~obsdesign.design.pid_sampled.resolve_pid`): ``C = k (T_z s + 1)(T_I s + 1) / (T_I s)``.
 
     Returns
     -------
@@ -261,7 +270,8 @@ def loop_polynomials(k: float, T_I: float, tau: float, phi: float) -> tuple[np.n
     >>> [float(c) for c in den]
     [0.001, 0.1, 0.0, 0.0]
     """
-    num_C, den_C = np.array([k * tau * T_I, k * (tau + T_I), k]), np.array([T_I, 0.0])
+    z = tau if T_z is None else T_z
+    num_C, den_C = np.array([k * z * T_I, k * (z + T_I), k]), np.array([T_I, 0.0])
     num_H, den_H = np.array([phi]), np.array([tau, 1.0, 0.0])
     return np.polymul(num_C, num_H), np.polymul(den_C, den_H), np.polymul(num_H, den_C)
 
@@ -377,12 +387,14 @@ def _is_pid_numbers(value) -> bool:
             and isinstance(value[5], bool))
 
 
-def _build(k: float, T_I: float, tau: float, phi: float, phase_margin_deg: float) -> PIDDesign:
-    args = (k, T_I, tau, phi)
+def _build(k: float, T_I: float, tau: float, phi: float, phase_margin_deg: float,
+           T_z: float | None = None) -> PIDDesign:
+    args = (k, T_I, tau, phi) + (() if T_z is None else (T_z,))
+    z = tau if T_z is None else T_z
     peak, w_peak, pm, gm, wgc, stable = memo("pid", args, lambda: _verification(*args), valid=_is_pid_numbers,
                                              verify=_verify(args))
     return PIDDesign(
-        k=k, T_I=T_I, tau=tau, phi=phi, kp=k * (T_I + tau) / T_I, ki=k / T_I, kd=k * tau,  # eq:PIDparams
+        k=k, T_I=T_I, tau=tau, phi=phi, kp=k * (T_I + z) / T_I, ki=k / T_I, kd=k * z, T_z=T_z,  # eq:PIDparams
         phase_margin_deg=phase_margin_deg, omega_s=math.tan(math.radians(phase_margin_deg)) / T_I,
         max_S_achieved=peak, omega_peak=w_peak, phase_margin_achieved_deg=pm,
         gain_margin=gm, omega_crossover=wgc, closed_loop_stable=stable,
@@ -433,7 +445,8 @@ def pid_from_config(cfg: Config, *, design: str | None = None) -> PIDDesign:
     if c.design == "paper":
         pid = design_pid(phi=cfg.phi, tau=cfg.pid.tau, max_S=cfg.pid.max_S, phase_margin_deg=cfg.pid.phase_margin_deg)
     else:
-        pid = _build(c.k, c.T_I, float(cfg.pid.tau), float(cfg.phi), c.design_phase_margin_deg)
+        tau = float(cfg.pid.tau)
+        pid = _build(c.k, c.T_I, tau, float(cfg.phi), c.design_phase_margin_deg, None if c.T_z == tau else c.T_z)
     return dataclasses.replace(pid, design=c.design, reason=c.reason)
 
 

@@ -59,7 +59,7 @@ class PIDDesigns(ResultDisplay):
             if c is None:
                 return None
             pm = c.sampled_pm_deg
-            return {"k": c.k, "T_I": c.T_I, "kp": c.kp, "ki": c.ki, "kd": c.kd, "tau_d": c.tau_d,
+            return {"k": c.k, "T_I": c.T_I, "T_z": c.T_z, "kp": c.kp, "ki": c.ki, "kd": c.kd, "tau_d": c.tau_d,
                     "design_phase_margin_deg": c.design_phase_margin_deg,
                     "sampled_phase_margin_deg": pm if math.isfinite(pm) else None}
 
@@ -75,7 +75,7 @@ class PIDDesigns(ResultDisplay):
                 rows.append((f"{name}: no design", self.note))
                 continue
             rows += [(f"{name}: kp [V/m] / ki [V/(m s)] / kd [V s/m]", f"{c.kp:.6g} / {c.ki:.6g} / {c.kd:.6g}"),
-                     (f"{name}: k [V/m] / T_I [s]", f"{c.k:.6g} / {c.T_I:.6g}"),
+                     (f"{name}: k [V/m] / T_I [s] / T_z [s]", f"{c.k:.6g} / {c.T_I:.6g} / {c.T_z:.6g}"),
                      (f"{name}: phase margin on the sampled loop ({where}) [deg]",
                       f"{c.sampled_pm_deg:.4g} (target {self.target_deg:g})")]
         rows.append(("carried by the config", f"{self.carried.design} ([pid] design = {self.paper.setting!r})"))
