@@ -24,6 +24,7 @@ import pytest
 
 import obsdesign as od
 from obsdesign.cli import main
+from obsdesign.export.controller import controller_files
 from obsdesign.params import CompensationSpec, Config
 
 HAS_GCC = shutil.which("gcc") is not None
@@ -138,7 +139,7 @@ def test_knobs_change_the_compensation_by_the_law(knobs):
     assert np.max(np.abs(res.u - base.u)) > 1e-3  # the knob changes the loop
     # The PID part (kp e + ki int e + kd deriv + G/K) depends only on the measured error: take it from
     # the exported 'pid' controller driven by the same trace (no saturation in this run).
-    files = od.export.controller.controller_files(cfg, "python", controller="pid")
+    files = controller_files(cfg, "python", controller="pid")
     pid_only = _run_python(files, res.x_ref, res.x_meas)
     comp = cfg.compensation
     fade = np.minimum(1.0, np.abs(res.v_hat) / comp.deadzone) if comp.deadzone > 0 else 1.0
@@ -151,7 +152,7 @@ def test_default_knobs_are_bit_for_bit_the_papers_law():
     """Defaults: the kernel's force equals the exported Python controller's exactly (no rounding)."""
     cfg = od.load_preset("vcm")
     res = od.simulate(cfg, "tracking", duration=1.0)
-    cmd = _run_python(od.export.controller.controller_files(cfg, "python"), res.x_ref, res.x_meas)
+    cmd = _run_python(controller_files(cfg, "python"), res.x_ref, res.x_meas)
     assert np.array_equal(cfg.plant.K * cmd - cfg.plant.G, res.u)
     # and an explicit default section changes nothing
     again = od.simulate(cfg.override(gain=1.0, viscous=False, deadzone=0.0), "tracking", duration=1.0)
