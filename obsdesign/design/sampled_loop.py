@@ -46,9 +46,9 @@ import numpy as np
 
 from .._display import ResultDisplay
 from .._memo import list_of, memo
-from .._validate import MAX_DELAY_SAMPLES, POSITIVE, check_integer
+from .._validate import POSITIVE
 from ..params import Config
-from .margins import closed_loop, loop_margins as _margins
+from .margins import closed_loop, drive_delay, loop_margins as _margins
 from .pid import lazy_system
 from .pid_sampled import sampled_pid_gains
 
@@ -342,8 +342,7 @@ def sampled_loop(cfg: Config, *, delay_samples: int | None = None) -> SampledLoo
     """
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
-    d = cfg.hardware.delay_samples if delay_samples is None else check_integer("delay_samples", delay_samples, minimum=0,
-                                                                                      maximum=MAX_DELAY_SAMPLES)
+    d = drive_delay(cfg, delay_samples)
     dt, N = cfg.observer.dt, cfg.pid.derivative_N
     kp, ki, kd, tau_d = sampled_pid_gains(cfg)
     args = (kp, ki, kd, tau_d, dt, cfg.phi, cfg.pid.tau, d)
