@@ -28,7 +28,7 @@ import obsdesign as od
 from obsdesign.export import armcheck
 from obsdesign.export.controller import controller_files
 from obsdesign.export.mcu import mcu_controller_files
-from obsdesign.sim.scenarios import Chirp
+from obsdesign.loop.scenarios import Chirp
 
 STEPS = 1_000_000
 STROKE = Chirp(f0=0.01, f1=0.1, peak_velocity=2 * np.pi * 0.1 * 0.5)  # amplitude 0.5 m: a 1 m stroke

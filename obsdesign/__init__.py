@@ -67,7 +67,7 @@ def __getattr__(name: str):
         value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
         globals()[name] = value
         return value
-    if name in ("design", "sim", "report", "symbolic", "params", "cli", "export", "friction", "studies", "sweeps",
+    if name in ("design", "loop", "sim", "report", "symbolic", "params", "cli", "export", "friction", "studies", "sweeps",
                 "data", "estimators", "datasets"):
         return importlib.import_module(f".{name}", __name__)
     raise AttributeError(f"module 'obsdesign' has no attribute {name!r}")

@@ -44,13 +44,14 @@ from ._validate import check_choice, check_integer
 from .estimators import DiscreteEstimator, friction_noise_rms, noise_level, reference_noise_rms, tune
 from .estimators.registry import ESTIMATORS, RULES
 from .friction.registry import FRICTION_MODELS
+from .loop.bands import SETTLE_DWELL
+from .loop.inputs import prepare
 from .params import Config
 from .plant_spec import PlantFrictionSpec
-from .sim.bands import SETTLE_DWELL
 from .sim.cases import CASES, TRANSIENT
 from .sim.metrics import rms
 from .sim.shared import run_shared
-from .sim.simulate import prepare, run
+from .sim.simulate import run
 from .sim.step_metrics import step_metrics
 from .sweeps.pool import Executor
 
@@ -219,7 +220,7 @@ def _row_metrics(row: dict[str, Any], res) -> None:
         for t_step, y0, y1 in ((spec.step_up, 0.0, spec.step_size), (spec.step_down, spec.step_size, 0.0)):
             end = spec.step_down if t_step == spec.step_up else duration
             window = (res.t >= t_step) & (res.t < end)
-            # the run's own band (obsdesign.sim.bands: 2 counts or 3 x the noise RMS) and the simulator's dwell
+            # the run's own band (obsdesign.loop.bands: 2 counts or 3 x the noise RMS) and the simulator's dwell
             m = step_metrics(res.t[window], res.x[window], t_step=t_step, y0=y0, y1=y1,
                              settle_band=res.metrics["settle_band"], dwell=SETTLE_DWELL)
             times.append(m["settling_time"])

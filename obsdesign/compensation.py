@@ -10,7 +10,7 @@ the simulator and the exported controller then do exactly the floating-point ope
 that law. The section is optional in TOML. :meth:`obsdesign.Config.override` addresses its
 fields by their names (``gain``, ``viscous``, ``deadzone``, ``mode``, ``lookahead``, ...).
 
-``mode`` (:data:`obsdesign.sampled.choices.COMPENSATION_MODES`) chooses what compensates:
+``mode`` (:data:`COMPENSATION_MODES`, here) chooses what compensates:
 ``observer`` (the law above), ``feedforward`` (the friction model of the reference velocity,
 ``w (sign(v_ref) (Cf + ff_stribeck exp(-(v_ref / ff_stribeck_velocity)^2)) + sigma v_ref) + ff_offset``
 with ``Cf``, ``sigma`` of ``[friction]`` and the weight ``w`` of
@@ -44,6 +44,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from ._registry import Entry, Registry
 from ._validate import (
     DISTANCE,
     FORCE,
@@ -56,9 +57,19 @@ from ._validate import (
     param_field,
     validate_fields,
 )
-from .sampled.choices import COMPENSATION_MODES
 
-__all__ = ["CompensationSpec", "Flag"]
+__all__ = ["CompensationSpec", "Flag", "COMPENSATION_MODES"]
+
+#: Compensation modes of ``pid+observer`` (``[compensation] mode``; the law in docs/compensation-modes.md),
+#: with the integer codes the sampled controller's kernel branches on.
+COMPENSATION_MODES = Registry("compensation.mode", [
+    Entry("observer", 0, "the observer's filtered friction estimate (the paper's law, with gain, viscous term and "
+          "deadzone fade)"),
+    Entry("feedforward", 1, "the friction model of the reference velocity (Coulomb + Stribeck + viscous + offset), "
+          "with the reversal look-ahead ramp and the build-up distance"),
+    Entry("blend", 2, "the feed-forward plus the low-passed observer estimate less the low-passed model: "
+          "(1 - LP) model + LP estimate, each part of the friction counted once"),
+])
 
 
 @dataclass(frozen=True)
@@ -98,7 +109,7 @@ class CompensationSpec:
         Velocity [m/s] below which the compensation fades linearly to zero
         (``|v_hat| / deadzone``); 0 disables the fade.
     mode : str
-        A name of :data:`obsdesign.sampled.choices.COMPENSATION_MODES`: ``observer``,
+        A name of :data:`obsdesign.compensation.COMPENSATION_MODES`: ``observer``,
         ``feedforward`` or ``blend`` (``viscous`` and ``deadzone`` are of ``observer`` only).
     ff_stribeck : float
         Stribeck force [N] of the feed-forward model at zero velocity, above ``Cf``.

@@ -18,8 +18,8 @@ from .design.noise import noise_analysis
 from .design.observer import check_stability
 from .design.pid import pid_from_config
 from .friction.presliding import coulomb_along
+from .loop.scenarios import ConstantForce, Excitation
 from .params import Config, load_preset
-from .sim.scenarios import ConstantForce, Excitation
 from .sim.simulate import simulate
 
 __all__ = ["Claim", "VERDICTS", "convergence_study", "experiments_study", "friction_loops_study", "noise_study", "pid_claims",

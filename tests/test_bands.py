@@ -14,10 +14,10 @@ import scipy.optimize
 import obsdesign as od
 from obsdesign.axis import AxisSpec
 from obsdesign.cli import main
-from obsdesign.sim import bands
-from obsdesign.sim.bands import settle_band
+from obsdesign.loop import bands
+from obsdesign.loop.bands import settle_band
+from obsdesign.loop.scenarios import Positioning, build_scenario, hold_samples
 from obsdesign.sim.metrics import loop_metrics
-from obsdesign.sim.scenarios import Positioning, build_scenario, hold_samples
 from obsdesign.sim.step_metrics import settling_sample, step_metrics
 
 

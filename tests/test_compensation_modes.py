@@ -42,7 +42,7 @@ def case(request):
     # the lag observer in its model plant (the CLI's default): in the physical lag plant table1's loop runs away
     # (2.9 m on a 5 mm chirp), flagged 'runaway' since issue 33 point 4
     plant = "model" if cfg.observer.variant == "lag" else "physical"
-    loop = od.sim.prepare(cfg, "tracking", controller="pid+observer", duration=2.0, plant=plant)
+    loop = od.loop.prepare(cfg, "tracking", controller="pid+observer", duration=2.0, plant=plant)
     res = od.sim.run(loop)
     assert not res.metrics["diverged"]
     return request.param, cfg, loop, res

@@ -288,7 +288,7 @@ def _reference_commands(loop, x_ref, x_meas, comp: CompensationSpec):
 def knob_inputs():
     kw = dict(controller="pid+observer", duration=1.0)
     res = od.simulate(VCM, "tracking", **kw)
-    loop = od.sim.prepare(VCM, "tracking", **kw)
+    loop = od.loop.prepare(VCM, "tracking", **kw)
     ref = _reference_commands(loop, res.x_ref, res.x_meas, CompensationSpec())
     assert _max_rel(ref, VCM, res.u) <= 1e-9  # the reference is the simulator's loop
     return loop, res

@@ -20,7 +20,7 @@ import pytest
 
 import obsdesign as od
 from obsdesign.export.controller import controller_files
-from obsdesign.sim import prepare
+from obsdesign.loop import prepare
 from obsdesign.sim.external import run_external
 
 HAS_GCC = shutil.which("gcc") is not None

@@ -54,7 +54,7 @@ def _simulate(cfg, kw, duration=1.0):
     kw = dict(kw)
     scenario = kw.pop("scenario")
     kw.setdefault("controller", "pid+observer")
-    loop = od.sim.prepare(cfg, scenario, duration=duration, **kw)
+    loop = od.loop.prepare(cfg, scenario, duration=duration, **kw)
     res = od.sim.run(loop)
     assert not res.metrics["diverged"]
     extra = loop.reference_feedforward() if cfg.compensation.mode != "observer" else ()

@@ -70,7 +70,7 @@ def test_the_function_block_matches_the_python_export_and_the_simulator(name, tm
     cfg, kw = CASES[name][0], dict(CASES[name][1])
     scenario = kw.pop("scenario")
     kw.setdefault("controller", "pid+observer")
-    loop = od.sim.prepare(cfg, scenario, duration=0.6, **kw)
+    loop = od.loop.prepare(cfg, scenario, duration=0.6, **kw)
     res = od.sim.run(loop)
     assert not res.metrics["diverged"]
     extra = loop.reference_feedforward() if cfg.compensation.mode != "observer" else ()

@@ -21,7 +21,7 @@ from obsdesign.friction import (
     simulate_block,
     stribeck,
 )
-from obsdesign.sim.simulate import plant_friction_arrays
+from obsdesign.loop.plant import plant_friction_arrays
 
 MASS = 0.538  # kg, paper Table 1
 DT = 1e-4  # s, 10 kHz

@@ -15,8 +15,8 @@ from obsdesign.export import armcheck, export
 from obsdesign.export.controller import controller_files
 from obsdesign.export.mcu import float_literal, mcu_controller_files
 from obsdesign.export.mcu_tables import exact_coefficients, log_polynomial, stiffness_table
+from obsdesign.loop.scenarios import Chirp
 from obsdesign.sampled import sampled_controller
-from obsdesign.sim.scenarios import Chirp
 
 VCM = od.load_preset("vcm")  # encoder 1 um, no noise: the estimated-raw schedule
 # 1.1 um noise on the 1 um encoder: the schedule with the reversal hysteresis (4.4 um: not a whole number of

@@ -34,15 +34,16 @@ def _module_name(path: Path) -> str:
     return ".".join(parts)
 
 
-def _imports(path: Path) -> set[str]:
-    """Modules of the package imported anywhere in ``path`` (resolved to module names)."""
+def _imports(path: Path, typing: bool = False) -> set[str]:
+    """Modules of the package imported anywhere in ``path`` (resolved to module names); with ``typing``
+    also those imported under ``if TYPE_CHECKING:`` (for annotations only)."""
     name = _module_name(path)
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     found = set()
     tree = ast.parse(path.read_text(encoding="utf-8"))
     typing_only = set()
     for node in ast.walk(tree):  # imports under "if TYPE_CHECKING:" are for annotations only
-        if isinstance(node, ast.If) and getattr(node.test, "id", None) == "TYPE_CHECKING":
+        if not typing and isinstance(node, ast.If) and getattr(node.test, "id", None) == "TYPE_CHECKING":
             typing_only.update(id(n) for stmt in node.body for n in ast.walk(stmt))
     for node in ast.walk(tree):
         if id(node) in typing_only:
@@ -69,8 +70,8 @@ def _imports(path: Path) -> set[str]:
 KNOWN = {_module_name(p) for p in MODULES}
 
 
-def _graph() -> dict[str, set[str]]:
-    graph = {_module_name(p): _imports(p) for p in MODULES}
+def _graph(typing: bool = False) -> dict[str, set[str]]:
+    graph = {_module_name(p): _imports(p, typing) for p in MODULES}
     # Importing a module imports its parent packages first; a package __init__ that imports a
     # submodule is an edge like any other.
     return graph
@@ -119,6 +120,79 @@ def test_the_cycle_finder_finds_a_cycle():
 def test_no_import_circle():
     cycle = _cycle(_package_edges(_graph()))
     assert cycle is None, " -> ".join(cycle)
+
+
+def _circles(graph: dict[str, set[str]]) -> list[frozenset]:
+    """The strongly connected components of more than one module (Tarjan): every import circle's modules."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    found: list[frozenset] = []
+
+    def visit(node: str) -> None:
+        index[node] = low[node] = len(index)
+        stack.append(node)
+        for nxt in sorted(graph.get(node, ())):
+            if nxt not in index:
+                visit(nxt)
+                low[node] = min(low[node], low[nxt])
+            elif nxt in stack:
+                low[node] = min(low[node], index[nxt])
+        if low[node] == index[node]:
+            part = []
+            while True:
+                top = stack.pop()
+                part.append(top)
+                if top == node:
+                    break
+            if len(part) > 1:
+                found.append(frozenset(part))
+
+    for node in sorted(graph):
+        if node not in index:
+            visit(node)
+    return found
+
+
+#: Circles that close only through annotations (``if TYPE_CHECKING:`` imports), in files other work owns.
+#: Remove a line when its circle is gone; the test fails on a stale line so that this list only shrinks.
+TYPE_ONLY_CIRCLES_PENDING = {frozenset({"obsdesign.symbolic.derivation", "obsdesign.symbolic.printing"})}
+
+
+def test_the_circle_finder_finds_every_circle():
+    assert _circles({"a": {"b"}, "b": {"a", "c"}, "c": set(), "d": {"e"}, "e": {"d"}}) == [
+        frozenset({"a", "b"}), frozenset({"d", "e"})]
+    assert _circles({"a": {"b"}, "b": set()}) == []
+
+
+def test_no_import_circle_through_annotations():
+    """Type-only imports count too: the five-file circle compensation -> sampled.choices ->
+    estimators.registry -> params -> compensation (architecture review 2026-12-04) closed only through one."""
+    circles = set(_circles(_package_edges(_graph(typing=True))))
+    assert not circles - TYPE_ONLY_CIRCLES_PENDING, sorted(sorted(c) for c in circles - TYPE_ONLY_CIRCLES_PENDING)
+    assert not TYPE_ONLY_CIRCLES_PENDING - circles, "fixed? remove from TYPE_ONLY_CIRCLES_PENDING"
+
+
+#: Rooms below the closed loop (obsdesign/loop/): they never import it; and the rooms above it that it never imports.
+BELOW_LOOP = ("obsdesign.params", "obsdesign.compensation", "obsdesign.hardware", "obsdesign.plant_spec",
+              "obsdesign.axis", "obsdesign.symbolic", "obsdesign.design", "obsdesign.estimators",
+              "obsdesign.friction", "obsdesign.sampled")
+ABOVE_LOOP = ("obsdesign.sim", "obsdesign.data", "obsdesign.export", "obsdesign.sweeps", "obsdesign.studies",
+              "obsdesign.comparison", "obsdesign.report", "obsdesign.cli")
+
+
+def _in(module: str, rooms: tuple) -> bool:
+    return any(module == r or module.startswith(r + ".") for r in rooms)
+
+
+def test_the_loop_room_sits_above_the_controller_and_below_the_simulator():
+    """``obsdesign/loop`` builds the closed loop around the sampled controller; ``sim/`` runs it."""
+    graph = _graph(typing=True)
+    up = {m: sorted(d for d in deps if _in(d, ABOVE_LOOP)) for m, deps in graph.items() if _in(m, ("obsdesign.loop",))}
+    down = {m: sorted(d for d in deps if _in(d, ("obsdesign.loop",))) for m, deps in graph.items() if _in(m, BELOW_LOOP)}
+    assert not any(up.values()), up
+    assert not any(down.values()), down
+    assert any(_in(d, ("obsdesign.loop",)) for d in graph["obsdesign.sim.simulate"])
 
 
 def test_export_does_not_import_the_simulator():
@@ -215,6 +289,7 @@ REGISTRIES = {
     "controllers": ("obsdesign.sampled.choices:CONTROLLERS", "sampled/choices.py"),
     "schedules": ("obsdesign.sampled.choices:SCHEDULES", "sampled/choices.py"),
     "plants": ("obsdesign.sampled.choices:PLANTS", "sampled/choices.py"),
+    "compensation modes": ("obsdesign.compensation:COMPENSATION_MODES", "compensation.py"),
     "export formats": ("obsdesign.export:FORMATS", "export/__init__.py"),
 }
 #: A literal may list a deliberate selection of choices (not the registry again) when the line

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import obsdesign as od
+from obsdesign.loop.numerics import MAX_STEP_RATE, substeps_for
 from obsdesign.sim import prepare, run
-from obsdesign.sim.numerics import MAX_STEP_RATE, substeps_for
 
 
 def cli(*args):

@@ -39,8 +39,8 @@ def test_window_plant_is_the_simulators_plant():
 
 @pytest.mark.parametrize("model", ["lugre", "gms"])
 def test_window_plant_of_a_friction_model_is_the_simulators(model):
+    from obsdesign.loop.plant import plant_friction_arrays
     from obsdesign.plant_spec import PlantFrictionSpec
-    from obsdesign.sim.simulate import plant_friction_arrays
 
     cfg = od.load_preset("vcm").override(noise_rms=0.0, quantization=0.0, G=0.0)
     cfg = dataclasses.replace(cfg, plant_friction=PlantFrictionSpec(model=model, parameters={}))

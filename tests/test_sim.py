@@ -267,7 +267,7 @@ def test_simulate_is_run_of_prepare():
 def test_a_hold_shorter_than_two_samples_is_refused_naming_its_end(kw, name, found):
     """dt = 1e-4 s: a hold from 3 s to 3.00002 s has no sample, to 3.00015 s one (3.0001 s); before, the
     first ended in an IndexError of the metrics, the second in step_metrics' 't: expected at least 2 samples'."""
-    from obsdesign.sim.scenarios import Positioning
+    from obsdesign.loop.scenarios import Positioning
 
     spec = Positioning(step_size=1e-3, step_up=0.5, step_down=kw.get("step_down", 3.0))
     with pytest.raises(ValueError, match=rf"^{name}: expected a hold of at least 2 samples .* found {found} "):

@@ -10,7 +10,7 @@ from pathlib import Path
 from .._validate import parse_number
 from ..params import VARIANTS
 from ..sampled.choices import CONTROLLERS, ESTIMATORS, PLANTS, SCHEDULES
-from ..sim.scenarios import DEFAULT_DURATION, SCENARIOS
+from ..loop.scenarios import DEFAULT_DURATION, SCENARIOS
 from ._common import (FINITE_ARG, INPUT_FILE, NONNEGATIVE_ARG, POSITIVE_ARG, UsageError, add_config_flags,
                       add_design_flags, check_output_dir, check_output_file, check_runs, check_samples, emit, integer,
                       load, nonempty, print_warnings, workers_arg)
@@ -29,8 +29,8 @@ _SPEC_FLAGS = {
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from ..design import design_warnings
     from ..sim import prepare, run
-    from ..sim.numerics import saturation_warning
-    from ..sim.scenarios import scenario_spec
+    from ..loop.numerics import saturation_warning
+    from ..loop.scenarios import scenario_spec
 
     check_output_file("simulate", "--out", args.out, (".csv", ".npz"))
     check_output_file("simulate", "--plot", args.plot, (".svg", ".png"))
@@ -55,7 +55,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             raise UsageError("obsdesign simulate: argument --plant-config: needs --plant physical, "
                              f"found --plant {plant}")
         from ..provenance import load_config
-        from ..sim.numerics import substeps_for
+        from ..loop.numerics import substeps_for
 
         plant = load_config(args.plant_config)
         try:  # the simulated plant is this config's: its substeps rule, as for --config (review xe20)

@@ -28,7 +28,7 @@ from ..sim.kernel import _plant_rhs_asym
 
 __all__ = ["PAPER_LAYOUT", "simulate_windows", "extremes", "select_windows"]
 
-#: The paper plant's parameter array (that of :func:`obsdesign.sim.simulate.plant_friction_arrays`).
+#: The paper plant's parameter array (that of :func:`obsdesign.loop.plant.plant_friction_arrays`).
 PAPER_LAYOUT = ("Cf", "Cf_neg", "sigma", "sigma_neg", "offset", "s", "beta", "kappa")
 _PAPER = FRICTION_MODELS.code("paper")
 #: Steps of the friction state's run-in along the gross sliding before a window (models other than paper).

@@ -1,7 +1,7 @@
 """Margins of a discrete loop: python-control's, checked for the gain crossovers it misses, and the one
 assembly of a sampled PID loop (``C z^-d H`` with ``S``, ``T``, ``PS``, ``CS``), shared by
 :mod:`obsdesign.design.sampled_loop` (the PID's design model) and :mod:`obsdesign.design.plant_loop` (the
-simulated plant).
+simulated plant), with the drive's delay both read the same way (:func:`drive_delay`).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import numpy as np
 if TYPE_CHECKING:
     import control as ct
 
-__all__ = ["loop_margins", "gain_crossovers", "closed_loop"]
+__all__ = ["loop_margins", "gain_crossovers", "closed_loop", "drive_delay"]
 
 
 def loop_margins(L: ct.TransferFunction) -> tuple[float, float, float, float, float]:
@@ -134,3 +134,35 @@ def closed_loop(C, H, d: int) -> dict:
     one = ct.tf([1.0], [1.0], dt)
     return {"C": C, "H": H, "L": L, "S": ct.feedback(one, L), "T": ct.feedback(L, one), "PS": ct.feedback(H, Cd),
             "CS": ct.feedback(Cd, H)}
+
+
+def drive_delay(cfg, delay_samples=None) -> int:
+    """The drive's delay ``d`` [samples] a loop view closes the loop with: the config's
+    ``[hardware] delay_samples``, or ``delay_samples`` given (another delay around the same gains).
+
+    Read by :func:`obsdesign.design.sampled_loop.sampled_loop` and
+    :func:`obsdesign.design.plant_loop.plant_loop` (the time-domain loop reads the config's,
+    :attr:`obsdesign.loop.LoopInputs.delay_samples`).
+
+    Parameters
+    ----------
+    cfg : Config
+        The design.
+    delay_samples : int, optional
+        An integer in [0, 10000]; None: the config's.
+
+    Examples
+    --------
+    >>> import obsdesign as od
+    >>> drive_delay(od.load_preset("vcm").override(delay_samples=2)), drive_delay(od.load_preset("vcm"), 1)
+    (2, 1)
+    >>> drive_delay(od.load_preset("vcm"), -1)
+    Traceback (most recent call last):
+    ...
+    ValueError: delay_samples: expected an integer >= 0 and <= 10000, found -1
+    """
+    if delay_samples is None:
+        return cfg.hardware.delay_samples
+    from .._validate import MAX_DELAY_SAMPLES, check_integer
+
+    return check_integer("delay_samples", delay_samples, minimum=0, maximum=MAX_DELAY_SAMPLES)

@@ -43,10 +43,10 @@ from dataclasses import dataclass
 
 from .._display import ResultDisplay
 from .._memo import memo
-from .._validate import MAX_DELAY_SAMPLES, Choice, check_integer
+from .._validate import Choice
 from ..params import Config
 from .pid_sampled import sampled_pid_gains
-from .margins import closed_loop, loop_margins
+from .margins import closed_loop, drive_delay, loop_margins
 from .sampled_loop import discrete_peak, discrete_pid
 
 __all__ = ["PlantLoop", "plant_loop", "plant_loops", "simulated_plant", "REGIMES", "LoopMargins", "loop_margins_of"]
@@ -210,8 +210,7 @@ def plant_loop(cfg: Config, *, regime: str = "sliding", delay_samples: int | Non
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
     regime = Choice(REGIMES).check("regime", regime)
-    d = cfg.hardware.delay_samples if delay_samples is None else check_integer("delay_samples", delay_samples, minimum=0,
-                                                                                      maximum=MAX_DELAY_SAMPLES)
+    d = drive_delay(cfg, delay_samples)
     dt = cfg.observer.dt
     kp, ki, kd, tau_d = sampled_pid_gains(cfg)
     num, den = _plant_coefficients(cfg, regime)

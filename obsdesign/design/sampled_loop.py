@@ -46,16 +46,42 @@ import numpy as np
 
 from .._display import ResultDisplay
 from .._memo import list_of, memo
-from .._validate import MAX_DELAY_SAMPLES, POSITIVE, check_integer
+from .._validate import POSITIVE
 from ..params import Config
-from .margins import closed_loop, loop_margins as _margins
+from .margins import closed_loop, drive_delay, loop_margins as _margins
 from .pid import lazy_system
 from .pid_sampled import sampled_pid_gains
 
 if TYPE_CHECKING:
     import control as ct
 
-__all__ = ["SampledLoop", "sampled_loop", "discrete_pid", "zoh_plant", "discrete_peak"]
+__all__ = ["SampledLoop", "sampled_loop", "discrete_pid", "derivative_pole", "zoh_plant", "discrete_peak"]
+
+
+def derivative_pole(dt: float, tau_d: float) -> float:
+    """Pole ``a = exp(-dt / tau_d)`` of the PID's first-order derivative filter per sample: its one definition.
+
+    The kernel's recursion ``D[n] = a D[n-1] + (1 - a) (e[n] - e[n-1]) / dt``
+    (:func:`obsdesign.sampled.kernel.controller_sample`, the exports' ``ALPHA_D``) and the sampled loop's
+    ``C(z)`` (:func:`discrete_pid`) read it; ``tau_d`` is
+    :func:`obsdesign.design.pid_sampled.derivative_time`. Two places write it again on purpose:
+    :func:`obsdesign.design.pid_sampled.delta_loop_polynomials` takes ``1 - a = -expm1(-dt / tau_d)``
+    (accurate where ``dt << tau_d``), and the report's explorer page recomputes it in JavaScript
+    when its fields change.
+
+    Parameters
+    ----------
+    dt : float
+        Sample time [s].
+    tau_d : float
+        Time constant of the derivative filter [s]; 0 or less: no filter (pole 0).
+
+    Examples
+    --------
+    >>> round(derivative_pole(1e-4, 1e-4), 12), derivative_pole(1e-4, 0.0)
+    (0.367879441171, 0.0)
+    """
+    return math.exp(-dt / tau_d) if tau_d > 0.0 else 0.0
 
 
 def discrete_pid(*, kp: float, ki: float, kd: float, tau_d: float, dt: float) -> ct.TransferFunction:
@@ -82,7 +108,7 @@ def discrete_pid(*, kp: float, ki: float, kd: float, tau_d: float, dt: float) ->
     2.0
     """
     tau_d, dt = POSITIVE.check("tau_d", tau_d), POSITIVE.check("dt", dt)
-    a = math.exp(-dt / tau_d)
+    a = derivative_pole(dt, tau_d)
     zm1, zma = np.array([1.0, -1.0]), np.array([1.0, -a])
     num = (kp * np.polymul(zm1, zma) + ki * dt * np.polymul([1.0, 0.0], zma)
            + kd * (1.0 - a) / dt * np.polymul(zm1, zm1))
@@ -316,8 +342,7 @@ def sampled_loop(cfg: Config, *, delay_samples: int | None = None) -> SampledLoo
     """
     if not isinstance(cfg, Config):
         raise TypeError(f"cfg: expected a Config, found {type(cfg).__name__}")
-    d = cfg.hardware.delay_samples if delay_samples is None else check_integer("delay_samples", delay_samples, minimum=0,
-                                                                                      maximum=MAX_DELAY_SAMPLES)
+    d = drive_delay(cfg, delay_samples)
     dt, N = cfg.observer.dt, cfg.pid.derivative_N
     kp, ki, kd, tau_d = sampled_pid_gains(cfg)
     args = (kp, ki, kd, tau_d, dt, cfg.phi, cfg.pid.tau, d)
@@ -342,7 +367,7 @@ def _systems(kp, ki, kd, tau_d, dt, phi, tau, d) -> dict:
 def _loop_polynomials(kp, ki, kd, tau_d, dt, phi, tau, d) -> tuple:
     """``L(z) = C(z) H_zoh(z) z^-d`` as polynomials in ``z`` (NumPy only: :func:`discrete_pid`'s numerator and
     the closed form of the ZOH plant, ``phi ((dt - tau (1 - e)) z + tau (1 - e) - dt e) / ((z - 1)(z - e))``)."""
-    a, e = math.exp(-dt / tau_d), math.exp(-dt / tau)
+    a, e = derivative_pole(dt, tau_d), math.exp(-dt / tau)
     zm1, zma, zme = np.array([1.0, -1.0]), np.array([1.0, -a]), np.array([1.0, -e])
     num_C = (kp * np.polymul(zm1, zma) + ki * dt * np.polymul([1.0, 0.0], zma)
              + kd * (1.0 - a) / dt * np.polymul(zm1, zm1))

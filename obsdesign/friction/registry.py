@@ -83,7 +83,7 @@ class FrictionModelInfo(Entry):
     """
 
     #: The kernel array of the resolved parameters; None where the array is not the model's alone
-    #: (the paper plant's also holds ``[friction] kappa``: :func:`obsdesign.sim.simulate.plant_friction_arrays`).
+    #: (the paper plant's also holds ``[friction] kappa``: :func:`obsdesign.loop.plant.plant_friction_arrays`).
     _layout: Callable[[dict[str, Any]], list[float]] | None
     _n_state: Callable[[dict[str, Any]], int]
 
@@ -125,7 +125,7 @@ class FrictionModelInfo(Entry):
         ------
         ValueError
             Unknown name, non-finite or out-of-range value, inconsistent values; the ``paper``
-            model, whose array :func:`obsdesign.sim.simulate.plant_friction_arrays` builds from a config.
+            model, whose array :func:`obsdesign.loop.plant.plant_friction_arrays` builds from a config.
         TypeError
             A value of the wrong type (e.g. a string, a bool, a float for ``N``).
         """
@@ -134,7 +134,7 @@ class FrictionModelInfo(Entry):
         values = self.resolve(params)
         if self._layout is None:
             raise ValueError(f"{self.name}: its kernel array also holds [friction] kappa; "
-                             f"build it from a Config with obsdesign.sim.simulate.plant_friction_arrays")
+                             f"build it from a Config with obsdesign.loop.plant.plant_friction_arrays")
         return np.array(self._layout(values), dtype=np.float64)
 
     def scalar_parameters(self) -> tuple[str, ...]:

@@ -23,7 +23,7 @@ Everything the page computes comes from the package's own generated code, nothin
   compares them with python-control). The live step follows the fields too: the controller's ``DT``,
   ``KP``, ``KI``, ``KD``, ``ALPHA_D = exp(-dt kp N / kd)`` and the low-pass ``LP_*`` (the generated
   ``coefficients`` of eq:3:4:5 at the field's dt), the step's samples and substeps
-  (:func:`obsdesign.sim.numerics.substeps_for`'s rule on the config's fastest plant rate) at that dt, and the
+  (:func:`obsdesign.loop.numerics.substeps_for`'s rule on the config's fastest plant rate) at that dt, and the
   drive's delay on the plant side, as :func:`obsdesign.sim.kernel.run_loop` applies it (the command of sample
   ``n`` acts from ``n + d``, the drive holding the saturated ``G / K`` before); the controller does not delay its
   command, its estimator is fed the command the drive applies (``DRIVE_DELAY`` of the field).
@@ -94,11 +94,11 @@ def preview_inputs(cfg: Config):
     Returns
     -------
     LoopInputs
-        :func:`obsdesign.sim.simulate.prepare` of ``cfg`` (``noise_rms = 0``) for a 1 mm step up at 5 % and
+        :func:`obsdesign.loop.prepare` of ``cfg`` (``noise_rms = 0``) for a 1 mm step up at 5 % and
         back at 55 % of a run :data:`PREVIEW_DURATION` s long (at most :data:`PREVIEW_SAMPLES` samples).
     """
-    from ..sim.scenarios import Positioning
-    from ..sim.simulate import prepare
+    from ..loop.inputs import prepare
+    from ..loop.scenarios import Positioning
 
     quiet = cfg.override(noise_rms=0.0)
     duration = min(PREVIEW_DURATION, PREVIEW_SAMPLES * cfg.observer.dt)
@@ -148,9 +148,9 @@ def explorer_context(cfg: Config, certificate=None) -> dict:
     from ..design import design_observer
     from ..design.certificate import certify
     from ..export.codegen import js_module
+    from ..loop.bands import SETTLE_DWELL
+    from ..loop.numerics import MAX_STEP_RATE, fastest_rate
     from ..sim import kernel
-    from ..sim.bands import SETTLE_DWELL
-    from ..sim.numerics import MAX_STEP_RATE, fastest_rate
 
     variant = cfg.observer.variant
     loop = preview_inputs(cfg)

@@ -55,7 +55,7 @@ def experiments_figure(study: ExperimentsStudy):
     study : ExperimentsStudy
         From :func:`obsdesign.studies.experiments_study`.
     """
-    from ..sim.scenarios import CHIRP_BAND_LABELS
+    from ..loop.scenarios import CHIRP_BAND_LABELS
 
     fig = plt.figure(figsize=(9, 10), constrained_layout=True)
     grid = fig.add_gridspec(3, len(CHIRP_BAND_LABELS))
@@ -98,7 +98,7 @@ def experiments_figure(study: ExperimentsStudy):
 
 def _band_slice(res, lo: float, hi: float) -> tuple[int, int]:
     """Samples of a tracking run whose chirp frequency lies in [lo, hi) Hz (default chirp of the scenario)."""
-    from ..sim.scenarios import chirp_frequency
+    from ..loop.scenarios import chirp_frequency
 
     dt = res.t[1] - res.t[0]
     freq = chirp_frequency(res.t, len(res.t) * dt)

@@ -4,7 +4,8 @@ The numba kernels branch on small integers; everything above them (the API, the
 command line's choices, the docs and the report) names the choices. Each kind of choice
 is one :class:`~obsdesign._registry.Registry`, written once: :data:`CONTROLLERS`,
 :data:`SCHEDULES` and :data:`PLANTS` here, :data:`ESTIMATORS` in its own room
-(:mod:`obsdesign.estimators.registry`, the same object), the plant friction models in
+(:mod:`obsdesign.estimators.registry`, the same object), the compensation modes with their
+section (:data:`obsdesign.compensation.COMPENSATION_MODES`), the plant friction models in
 :data:`obsdesign.friction.FRICTION_MODELS`. Every code is a plain ``int`` a numba module
 can read at import time, e.g. ``SCHEDULES.code("true")``.
 
@@ -25,7 +26,7 @@ from __future__ import annotations
 from .._registry import Entry, Registry
 from ..estimators.registry import ESTIMATORS
 
-__all__ = ["Entry", "Registry", "ESTIMATORS", "SCHEDULES", "CONTROLLERS", "PLANTS", "COMPENSATION_MODES"]
+__all__ = ["Entry", "Registry", "ESTIMATORS", "SCHEDULES", "CONTROLLERS", "PLANTS"]
 
 #: Stiffness schedules of the paper's observer.
 SCHEDULES = Registry("stiffness", [
@@ -48,14 +49,4 @@ CONTROLLERS = Registry("controller", [
 PLANTS = Registry("plant", [
     Entry("physical", 0, "the plant friction model (Coulomb with pre-sliding memory, viscous, optional lag)"),
     Entry("model", 1, "the 3-state LTV model eq:3:1 of the observer's variant"),
-])
-
-#: Compensation modes of ``pid+observer`` (``[compensation] mode``; the law in docs/compensation-modes.md).
-COMPENSATION_MODES = Registry("compensation.mode", [
-    Entry("observer", 0, "the observer's filtered friction estimate (the paper's law, with gain, viscous term and "
-          "deadzone fade)"),
-    Entry("feedforward", 1, "the friction model of the reference velocity (Coulomb + Stribeck + viscous + offset), "
-          "with the reversal look-ahead ramp and the build-up distance"),
-    Entry("blend", 2, "the feed-forward plus the low-passed observer estimate less the low-passed model: "
-          "(1 - LP) model + LP estimate, each part of the friction counted once"),
 ])

@@ -28,16 +28,15 @@ ValueError: stiffness: expected one of estimated, true, constant, estimated-raw,
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
 from .._validate import FINITE
-from ..compensation import CompensationSpec
+from ..compensation import COMPENSATION_MODES, CompensationSpec
 from ..params import Config
-from .choices import COMPENSATION_MODES, CONTROLLERS, ESTIMATORS, SCHEDULES
+from .choices import CONTROLLERS, ESTIMATORS, SCHEDULES
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..design.observer import ObserverArrays
@@ -167,7 +166,7 @@ class ControllerArgs(NamedTuple):
     comp_gain, comp_viscous, comp_deadzone : float, bool, float
         The compensation law of :class:`obsdesign.params.CompensationSpec`.
     comp_mode : int
-        Compensation mode code (:data:`obsdesign.sampled.choices.COMPENSATION_MODES`).
+        Compensation mode code (:data:`obsdesign.compensation.COMPENSATION_MODES`).
     ff_cf, ff_stribeck, ff_vs, ff_offset : float
         The feed-forward model: Coulomb level ``friction.Cf`` [N], Stribeck force [N] and velocity
         [m/s], constant force [N] (``[compensation]``).
@@ -272,7 +271,9 @@ class SampledController:
     @property
     def alpha_d(self) -> float:
         """Pole of the first-order derivative filter per sample, ``exp(-dt / tau_d)`` (0 without one)."""
-        return math.exp(-self.dt / self.tau_d) if self.tau_d > 0.0 else 0.0
+        from ..design.sampled_loop import derivative_pole
+
+        return derivative_pole(self.dt, self.tau_d)
 
     def kernel_args(self) -> tuple[ObserverArgs, EstimatorArgs, ControllerArgs]:
         """The named argument groups of :func:`obsdesign.sampled.kernel.controller_sample`."""

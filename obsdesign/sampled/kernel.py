@@ -39,7 +39,8 @@ from ..design.discretize import coefficients
 from ..estimators.base import estimator_output, estimator_step
 from ..friction.presliding import stiffness, track_reversal, track_reversal_hysteresis
 from ..estimators.registry import FIRST_BASELINE_CODE
-from .choices import COMPENSATION_MODES, CONTROLLERS, ESTIMATORS, SCHEDULES
+from ..compensation import COMPENSATION_MODES
+from .choices import CONTROLLERS, ESTIMATORS, SCHEDULES
 
 __all__ = ["observer_sample", "controller_sample", "compensation_force", "reference_compensation",
            "feedforward_model", "observe_loop", "command_ring", "OBSERVER_STATE", "CONTROLLER_STATE"]

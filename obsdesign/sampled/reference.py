@@ -1,6 +1,6 @@
 """The reference side of the feed-forward modes: reference velocity and look-ahead/build-up weight.
 
-The feed-forward modes of :data:`obsdesign.sampled.choices.COMPENSATION_MODES` compensate the
+The feed-forward modes of :data:`obsdesign.compensation.COMPENSATION_MODES` compensate the
 friction model of the *reference* velocity, not of the noisy estimate. Both inputs of that term
 come from the reference trajectory, which on an axis is the trajectory generator's (it knows the
 path ahead); :func:`reference_feedforward` is the one computation of them: the simulator feeds its

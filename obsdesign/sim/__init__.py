@@ -1,7 +1,7 @@
 """Time-varying nonlinear simulation of plant, friction, observer and controller (numba).
 
-Two public steps, :func:`prepare` (design and sample the inputs of a run) and :func:`run`
-(the numba kernel and the metrics); :func:`simulate` is both in one call; :func:`run_shared` runs
+Two public steps, :func:`prepare` (the closed loop of a run, built in :mod:`obsdesign.loop`;
+re-exported here) and :func:`run` (the numba kernel and the metrics); :func:`simulate` is both in one call; :func:`run_shared` runs
 runs that share their work (:mod:`obsdesign.sim.shared`). :func:`simulate_circle`
 runs the two-axis circle (ballbar) test (:mod:`obsdesign.sim.circle`).
 """
@@ -21,14 +21,14 @@ _LAZY = {
     'SCHEDULES': '..sampled.choices',
     'COLUMNS': '.result',
     'SimResult': '.result',
-    'SCENARIOS': '.scenarios',
-    'Chirp': '.scenarios',
-    'ConstantForce': '.scenarios',
-    'Excitation': '.scenarios',
-    'Positioning': '.scenarios',
-    'band_limited_noise': '.scenarios',
-    'LoopInputs': '.simulate',
-    'prepare': '.simulate',
+    'SCENARIOS': '..loop.scenarios',
+    'Chirp': '..loop.scenarios',
+    'ConstantForce': '..loop.scenarios',
+    'Excitation': '..loop.scenarios',
+    'Positioning': '..loop.scenarios',
+    'band_limited_noise': '..loop.scenarios',
+    'LoopInputs': '..loop.inputs',
+    'prepare': '..loop.inputs',
     'run': '.simulate',
     'simulate': '.simulate',
     'run_shared': '.shared',

@@ -7,7 +7,7 @@ tuning objective (:mod:`obsdesign.comparison`, :mod:`obsdesign.design.tune`), de
 
 from __future__ import annotations
 
-from .scenarios import Chirp, Excitation, Positioning
+from ..loop.scenarios import Chirp, Excitation, Positioning
 
 __all__ = ["CASES", "TRANSIENT"]
 

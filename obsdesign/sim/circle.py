@@ -46,7 +46,7 @@ import numpy as np
 from .._validate import POSITIVE, check_choice, check_integer
 from ..params import Config
 from . import kernel
-from .simulate import prepare
+from ..loop.inputs import prepare
 
 __all__ = ["CircleResult", "simulate_circle", "circle_modes", "circle_path", "circle_metrics", "DIRECTIONS", "MAX_RADIUS"]
 
@@ -294,7 +294,7 @@ def circle_modes(cfg: Config, *, modes=None, feeds=(1e-2,), directions=("ccw",),
         The design of both axes (its ``[compensation]`` knobs other than ``mode`` are kept).
     modes : sequence of str, optional
         ``pid`` (no compensation) and names of
-        :data:`obsdesign.sampled.choices.COMPENSATION_MODES`; default all of them.
+        :data:`obsdesign.compensation.COMPENSATION_MODES`; default all of them.
     feeds, directions, seeds : sequence
         Path velocities [m/s], ``ccw``/``cw``, noise seeds.
     radius : float
@@ -315,7 +315,7 @@ def circle_modes(cfg: Config, *, modes=None, feeds=(1e-2,), directions=("ccw",),
     >>> [r["mode"] for r in rows], rows[1]["glitch_peak"] < rows[0]["glitch_peak"]
     (['pid', 'observer'], True)
     """
-    from ..sampled.choices import COMPENSATION_MODES
+    from ..compensation import COMPENSATION_MODES
 
     names = ("pid", *COMPENSATION_MODES.names())
     modes = names if modes is None else tuple(check_choice("mode", m, names) for m in modes)

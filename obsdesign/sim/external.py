@@ -31,7 +31,7 @@ import numpy as np
 from numba import njit
 
 from . import kernel
-from .simulate import LoopInputs
+from ..loop.inputs import LoopInputs
 
 __all__ = ["run_external", "ExternalRun"]
 

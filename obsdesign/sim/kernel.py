@@ -4,8 +4,9 @@ One call of :func:`run_loop` simulates the whole horizon; there is no Python wor
 The controller is :func:`obsdesign.sampled.kernel.controller_sample`, the one step that the
 exports reproduce and that :func:`obsdesign.sampled.kernel.observe_loop` runs over a log; this
 module adds the plant, the sensor and the records. Arguments come in named groups: the
-controller's (:meth:`obsdesign.sampled.SampledController.kernel_args`), :class:`PlantArgs`,
-:class:`Signals` and :class:`Outputs`.
+controller's (:meth:`obsdesign.sampled.SampledController.kernel_args`), the loop's
+:class:`~obsdesign.loop.args.PlantArgs` and :class:`~obsdesign.loop.args.Signals`
+(:meth:`obsdesign.loop.LoopInputs.kernel_args`) and :class:`Outputs`.
 
 Per sample ``n`` (time ``n dt``):
 
@@ -33,6 +34,7 @@ from ..friction.kernels import friction_force, friction_n_state, friction_plant_
 from ..friction.kernels import friction_viscous
 from ..friction.presliding import coulomb_normalized, stiffness, track_reversal
 from ..friction.registry import FRICTION_MODELS
+from ..loop.args import PlantArgs, Signals
 from ..sampled.choices import PLANTS, SCHEDULES
 from ..sampled.kernel import CONTROLLER_STATE, OBSERVER_STATE, command_ring, controller_sample
 
@@ -49,63 +51,6 @@ PP_CF, PP_CF_NEG, PP_SIGMA, PP_SIGMA_NEG, PP_OFFSET, PP_S, PP_BETA, PP_KAPPA = 0
 #: States beyond these magnitudes count as diverged.
 DIVERGED_X = 1e3
 DIVERGED_F = 1e12
-
-
-class PlantArgs(NamedTuple):
-    """The simulated plant of :func:`run_loop`.
-
-    Attributes
-    ----------
-    n_sub : int
-        Heun substeps per sample.
-    mode : int
-        Plant structure code (:data:`obsdesign.sampled.choices.PLANTS`).
-    lag_model : bool
-        Whether the observer's variant is ``lag`` (what the estimated state w3 contains).
-    m, K, G : float
-        Mass [kg], actuator gain [N/V] and load force [N] of the plant.
-    friction_code : int
-        Plant friction model (:data:`obsdesign.friction.FRICTION_MODELS` code).
-    plant_params : ndarray
-        Its parameters (paper: the ``PP_*`` layout; others: :meth:`~obsdesign.friction.FrictionModelInfo.pack`).
-    delay : int
-        The drive's delay [samples] between the sampled position and the applied command
-        (``[hardware] delay_samples``): the command computed at sample ``n`` acts from ``n + delay``.
-    delay_init : float
-        The command [V] the drive applies before the first computed one arrives: the design's saturated
-        feed-forward ``G / K``.
-    """
-
-    n_sub: int
-    mode: int
-    lag_model: bool
-    m: float
-    K: float
-    G: float
-    friction_code: int
-    plant_params: np.ndarray
-    delay: int
-    delay_init: float
-
-
-class Signals(NamedTuple):
-    """The sampled inputs of :func:`run_loop`: reference [m], open-loop force [N], sensor noise [m],
-    encoder resolution [m] (0: none), reference velocity [m/s] and feed-forward weight
-    (:func:`obsdesign.sampled.reference.reference_feedforward`).
-
-    Attributes
-    ----------
-    x_ref, u_open, noise : ndarray
-    quantization : float
-    v_ref, w_ff : ndarray
-    """
-
-    x_ref: np.ndarray
-    u_open: np.ndarray
-    noise: np.ndarray
-    quantization: float
-    v_ref: np.ndarray
-    w_ff: np.ndarray
 
 
 #: Output arrays of :func:`run_loop`, in the order of :class:`Outputs`.

@@ -7,7 +7,7 @@ key                        meaning
 =========================  =====================================================================
 ``rms_error``              RMS of ``e = x_ref - x`` over the run [m]
 ``max_error``              largest ``|e|`` [m]
-``settle_band``            half-width of the settling band [m] (:mod:`obsdesign.sim.bands`:
+``settle_band``            half-width of the settling band [m] (:mod:`obsdesign.loop.bands`:
                            ``max(2 x resolution, 3 x noise RMS)`` unless given; ``None`` for an
                            open-loop run)
 ``settle_band_rule``       where the band comes from (``'2 x encoder resolution 1e-06 m'``, ``'given'``)
@@ -25,7 +25,7 @@ key                        meaning
 ``diverged``               the run stopped early because a state left the simulator's bounds, or ran
                            away from its task (``divergence`` ``'runaway'`` or ``'estimate'``)
 ``divergence``             ``None`` (no divergence), ``'numerical'`` (the plant's explicit step
-                           ``dt / n_sub`` broke the rule of :mod:`obsdesign.sim.numerics`, so
+                           ``dt / n_sub`` broke the rule of :mod:`obsdesign.loop.numerics`, so
                            the integrator, not the design, blew up), ``'measurement'`` (the
                            measured displacement left the bounds while the plant stayed within
                            them: the sensor noise or quantization is out of scale),
@@ -51,8 +51,8 @@ from typing import Any
 
 import numpy as np
 
-from .scenarios import CHIRP_BAND_LABELS, Scenario, chirp_frequency, hold_samples
-from .bands import SETTLE_DWELL, error_bound
+from ..loop.scenarios import CHIRP_BAND_LABELS, Scenario, chirp_frequency, hold_samples
+from ..loop.bands import SETTLE_DWELL, error_bound
 from .step_metrics import settling_sample, step_metrics
 
 __all__ = ["loop_metrics", "METRIC_UNITS", "rms"]
@@ -180,9 +180,9 @@ def loop_metrics(sc: Scenario, out: dict[str, np.ndarray], e: np.ndarray, n_writ
     step_stable : bool
         Whether the plant's integration step met the numerical rule (labels a divergence).
     settle_rule : str
-        Where the band comes from (:class:`obsdesign.sim.bands.SettleBand`), stated in the metrics.
+        Where the band comes from (:class:`obsdesign.loop.bands.SettleBand`), stated in the metrics.
     force_bound : float
-        The estimate's runaway bound [N] (:func:`obsdesign.sim.bands.force_bound`).
+        The estimate's runaway bound [N] (:func:`obsdesign.loop.bands.force_bound`).
     span : float, optional
         Peak-to-peak of the reference the run followed [m] (default: the scenario's ``x_ref``).
     """

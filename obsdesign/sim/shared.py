@@ -44,7 +44,8 @@ from ..sampled.choices import CONTROLLERS, SCHEDULES
 from ..sampled.kernel import observe_loop
 from . import kernel
 from .result import SimResult
-from .simulate import LoopInputs, loop_result, run_kernel
+from ..loop.inputs import LoopInputs
+from .simulate import loop_result, run_kernel
 
 __all__ = ["run_shared", "shares_plant", "same_run"]
 

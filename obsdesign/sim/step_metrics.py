@@ -5,7 +5,7 @@ over the samples from the step on, the last sample outside the band ``|y - y1| <
 (a NaN counts as outside) is found; the step has settled at the next sample
 (:func:`settling_sample`). No sample outside gives 0; a last sample outside, or (with ``dwell``)
 fewer than that fraction of the samples inside at the end, gives ``None``: did not settle within
-the trace. The simulator uses ``dwell`` :data:`obsdesign.sim.bands.SETTLE_DWELL` (the window of
+the trace. The simulator uses ``dwell`` :data:`obsdesign.loop.bands.SETTLE_DWELL` (the window of
 the steady-state error) and counts ``(k + 1) dt`` from the first sample of the hold; here the time
 is ``t[settled] - t_step``: the same sample, equal up to the rounding of the time stamps.
 

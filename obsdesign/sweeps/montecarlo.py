@@ -53,8 +53,8 @@ import numpy as np
 
 from .._io import atomic_path, atomic_write
 from .._validate import check_integer
+from ..loop.scenarios import build_scenario, scenario_spec
 from ..params import Config
-from ..sim.scenarios import build_scenario, scenario_spec
 from .criteria import Criterion, numeric_metrics, parse_criterion
 from .folder import SweepLock, check_start, read_manifest
 from .plan import check_axes, plan_runs

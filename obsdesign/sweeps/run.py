@@ -23,10 +23,10 @@ from typing import Any
 from .._io import atomic_write
 from .._validate import check_integer
 from ..design.observer import is_stable
+from ..loop.scenarios import CHIRP_BAND_LABELS, build_scenario, scenario_spec
 from ..params import PARAMETERS, Config
 from ..plant_spec import split_plant, with_plant_parameters
 from ..sampled.choices import CONTROLLERS
-from ..sim.scenarios import CHIRP_BAND_LABELS, build_scenario, scenario_spec
 from ..sim.simulate import simulate
 from .folder import SweepLock, check_start, read_manifest
 from .plan import RunSpec, check_axes, make_plan
@@ -46,7 +46,7 @@ def band_column(label: str) -> str:
     Parameters
     ----------
     label : str
-        A label of :data:`obsdesign.sim.scenarios.CHIRP_BAND_LABELS`.
+        A label of :data:`obsdesign.loop.scenarios.CHIRP_BAND_LABELS`.
     """
     return "rms_error_" + label.replace(" ", "").replace("-", "_")
 
@@ -93,7 +93,7 @@ def run_one(cfg: Config, scenario: str, spec: RunSpec, options: dict) -> dict:
         res = simulate(cfg_r, scenario, seed=spec.seed, keep_trace=False, **options)
         m = res.metrics
         row.update({key: m[key] for key in _METRIC_KEYS})
-        if m["settling_time"]:  # the band the settling times are measured in (obsdesign.sim.bands); empty: did not settle
+        if m["settling_time"]:  # the band the settling times are measured in (obsdesign.loop.bands); empty: did not settle
             row["settle_band"] = m["settle_band"]
         for i, value in enumerate(m["settling_time"], 1):
             row[f"settling_time_{i}"] = value
@@ -159,7 +159,7 @@ def check_controller(spec, controller: str | None) -> None:
 
     Examples
     --------
-    >>> from obsdesign.sim.scenarios import scenario_spec
+    >>> from obsdesign.loop.scenarios import scenario_spec
     >>> check_controller(scenario_spec("positioning"), "open-loop")
     Traceback (most recent call last):
     ...

@@ -25,7 +25,7 @@ import numpy as np
 __all__ = ["SUMMARY_KEYS", "STATUS_VALUES", "best_value", "best_with_spread", "make_summary", "check_summary"]
 
 #: Keys of ``summary.json``, in order (a positioning sweep adds ``settle_band``: ``{"min", "max"}`` [m] of its
-#: runs' settling bands, :mod:`obsdesign.sim.bands`).
+#: runs' settling bands, :mod:`obsdesign.loop.bands`).
 SUMMARY_KEYS = ("runs", "ok", "diverged", "failed", "resumed_runs", "wall_s", "metric", "best")
 #: Values of a row's ``status``.
 STATUS_VALUES = ("ok", "diverged", "failed")
@@ -136,7 +136,7 @@ def make_summary(rows: list[dict], varied, *, metric: str, resumed_runs: int, wa
     for name in varied:
         summary["best"][name] = best_with_spread(rows, name, metric)
     bands = [r["settle_band"] for r in rows if isinstance(r.get("settle_band"), (int, float))]
-    if bands:  # positioning: the settling band of the runs (obsdesign.sim.bands; it follows a varied sensor)
+    if bands:  # positioning: the settling band of the runs (obsdesign.loop.bands; it follows a varied sensor)
         summary["settle_band"] = {"min": min(bands), "max": max(bands)}
     return summary
 

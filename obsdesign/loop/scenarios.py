@@ -255,7 +255,6 @@ def chirp_frequency(t: np.ndarray, duration: float, spec: Chirp | None = None) -
     spec : Chirp, optional
         The chirp (default :class:`Chirp`).
     """
-    import numpy as np
     spec = spec or Chirp()
     return spec.f0 + (spec.f1 - spec.f0) * t / duration
 
@@ -344,7 +343,6 @@ def _zeros(n: int) -> np.ndarray:
 def _deterministic_signals(spec, dt: float, duration: float, n: int) -> tuple[np.ndarray, np.ndarray]:
     """``(x_ref, u_open)`` of a scenario without random parts, read-only and cached (sweeps and
     repeated runs of one scenario share them)."""
-    import numpy as np
     x_ref, u_open = _signals(spec, dt, duration, n)
     x_ref.flags.writeable = False
     u_open.flags.writeable = False

@@ -199,13 +199,13 @@ def saturation_warning(loop) -> str | None:
     Parameters
     ----------
     loop : LoopInputs
-        The inputs of a run (:func:`obsdesign.sim.prepare`).
+        The inputs of a run (:func:`obsdesign.loop.prepare`).
 
     Examples
     --------
     >>> import obsdesign as od
-    >>> from obsdesign.sim import prepare
-    >>> from obsdesign.sim.scenarios import ConstantForce
+    >>> from obsdesign.loop import prepare
+    >>> from obsdesign.loop.scenarios import ConstantForce
     >>> cfg = od.load_preset("vcm")
     >>> saturation_warning(prepare(cfg, "constant", duration=0.01)) is None
     True
