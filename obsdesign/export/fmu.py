@@ -110,6 +110,16 @@ def fmu_platform(fmi_version: str = FMI_VERSIONS[0]) -> str | None:
     FMI 2.0: ``linux64``, ``darwin64`` (32-bit: ``linux32``, ``darwin32``); FMI 3.0: the platform tuple
     ``x86_64-linux``, ``aarch64-linux``, ``x86_64-darwin``, ``aarch64-darwin`` (``x86-linux`` on 32 bits).
 
+    Parameters
+    ----------
+    fmi_version : str
+        One of :data:`~obsdesign.export.FMI_VERSIONS` (``"2"`` or ``"3"``).
+
+    Returns
+    -------
+    str or None
+        The folder's name, or None on another operating system.
+
     Examples
     --------
     >>> fmu_platform() in ("linux64", "linux32", "darwin64", "darwin32", None)
