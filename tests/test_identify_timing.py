@@ -274,3 +274,29 @@ def test_noise_rms_is_the_generators(name, tol):
     assert ident.quantization == pytest.approx(spec["step"], rel=1e-6)
     assert ident.noise_rms == pytest.approx(spec["noise"], rel=tol)
     assert ident.to_config().sensor.noise_rms == ident.noise_rms
+
+
+def test_cli_says_the_intervals_are_widened(capsys):
+    """The shipped example log (simulated with a held force, no delay) leaves held and as-logged readings
+    close: the text, the warnings and the JSON say in one line that the intervals are widened, and by what;
+    with the timing given the line goes and the intervals are the kept reading's."""
+    from obsdesign.cli import main
+    from obsdesign.datasets import example_log
+
+    flags = ["identify", str(example_log()), "--time", "t", "--position", "x", "--input", "u", "--bootstrap", "50"]
+    assert main(flags + ["--json"]) == 0
+    out, err = capsys.readouterr()
+    data = json.loads(out)
+    line = [n for n in data["notices"] if n.startswith("timing not resolved")]
+    assert len(line) == 1 and line[0] in err and "\n" not in line[0] and data["timing_shift"]
+    assert main(flags) == 0
+    text, _ = capsys.readouterr()
+    assert line[0] in " ".join(text.split())  # the text's caution row (the long line wrapped for the terminal)
+    given = flags + ["--input-timing", data["input_timing"], "--delay-samples", str(data["delay_samples"]), "--json"]
+    assert main(given) == 0
+    plain = json.loads(capsys.readouterr()[0])
+    assert "notices" not in plain or not any(n.startswith("timing not resolved") for n in plain["notices"])
+    assert plain["timing_shift"] == {} and plain["m"] == data["m"]
+    for name, (low, high) in data["timing_shift"].items():
+        lo, hi = plain["intervals"][name]
+        assert data["intervals"][name] == pytest.approx([lo + low, hi + high], rel=1e-12, abs=1e-15)
