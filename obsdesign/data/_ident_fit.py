@@ -17,6 +17,7 @@ them onto it, and the widened intervals hold it.
 from __future__ import annotations
 
 import math
+from typing import Callable
 
 import numpy as np
 
@@ -132,8 +133,8 @@ def noise_rms(white: float, quantum: float, sos: np.ndarray, q: int) -> float:
 
 
 def timing_spread(position: np.ndarray, force: np.ndarray, found, fitted: dict, intervals: dict, values: dict, *,
-                  dt: float, filter_hz: float, q: int, model: str, fix: dict, bounds: dict,
-                  speed: str) -> tuple[dict, dict, str]:
+                  dt: float, filter_hz: float, q: int, model: str, fix: dict, bounds: dict, speed: str,
+                  unit: Callable[[str], str]) -> tuple[dict, dict, str]:
     """Intervals widened to the fits under the timings the data do not reject (module docstring).
 
     Parameters
@@ -148,6 +149,8 @@ def timing_spread(position: np.ndarray, force: np.ndarray, found, fitted: dict, 
         Its intervals and estimates.
     dt, filter_hz, q, model, fix, bounds, speed :
         As for :func:`fit_aligned`.
+    unit : callable
+        A parameter's unit by name (:meth:`obsdesign.data.units.Units.si`), for a shift larger than its estimate.
 
     Returns
     -------
@@ -181,7 +184,9 @@ def timing_spread(position: np.ndarray, force: np.ndarray, found, fitted: dict, 
     high = {k: max(0.0, max(s)) for k, s in moves.items()}
     out = widened(widened(intervals, values, low), values, high)
     shift = {k: (low[k], high[k]) for k in moves}
-    names = ", ".join(f"{k} {_percent(low[k], values[k])} to {_percent(high[k], values[k])}" for k in moves)
+    names = ", ".join(f"{k} {_percent(low[k], values[k], unit(k.split('_')[0]))} to "
+                      f"{_percent(high[k], values[k], unit(k.split('_')[0]))}"
+                      for k in moves)
     read = ", ".join(f"{t}/{d}" for t, d in others if f"{t}/{d}" not in failed)
     note = (f"timing not resolved: the 95 % intervals are widened to the fits under the {len(others) - len(failed)} "
             f"other reading{'s' if len(others) - len(failed) != 1 else ''} the data do not reject ({read}): {names}"
@@ -189,5 +194,6 @@ def timing_spread(position: np.ndarray, force: np.ndarray, found, fitted: dict, 
     return out, shift, note
 
 
-def _percent(shift: float, value: float) -> str:
-    return f"{100.0 * shift / abs(value):+.2g} %" if value else f"{shift:+.3g}"
+def _percent(shift: float, value: float, unit: str) -> str:
+    """The shift relative to the estimate, or in its unit where it is larger than the estimate (an offset near 0)."""
+    return f"{100.0 * shift / abs(value):+.2g} %" if abs(shift) <= abs(value) else f"{shift:+.3g} {unit}"

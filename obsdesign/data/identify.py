@@ -443,7 +443,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     fitted = fit_aligned(*aligned(position, force, found.timing, found.delay), stribeck=stribeck, min_speed=min_speed,
                          stribeck_min_speed=stribeck_min_speed, n_boot=n_boot, seed=seed, **kw)
     est, intervals, model_shift, cols, y, threshold = (fitted[k] for k in FITTED)
-    intervals, timing_shift, spread = timing_spread(position, force, found, fitted, intervals, est["values"], **kw)
+    intervals, timing_shift, spread = timing_spread(position, force, found, fitted, intervals, est["values"],
+                                                    unit=trace.units.si, **kw)
     keep, x_f, v, a, u_f = (fitted[k] for k in ("keep", "x_f", "v", "a", "u_f"))
     position, force = aligned(position, force, found.timing, found.delay)
     values, std = est["values"], est["std"]
