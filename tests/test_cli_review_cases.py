@@ -141,15 +141,26 @@ def test_a_negative_identification_carries_a_warning_naming_the_cause(fx, capsys
     assert payload["m"] == pytest.approx(-0.5, rel=1e-3) and payload["Cf"] == pytest.approx(-0.3, rel=1e-3)
     assert len(payload["warnings"]) == 1 and "check its sign" in payload["warnings"][0]
     assert "m = -0.5 kg" in payload["warnings"][0]
-    err = captured.err.strip().splitlines()
+    err = _without_timing(captured.err, payload)
     assert err == [f"obsdesign: warning: {payload['warnings'][0]}"]
+
+
+def _without_timing(err: str, payload: dict) -> list[str]:
+    """The warning lines less the one saying the intervals are widened by an unresolved timing (5 s of slow
+    sines leave held and as-logged within BIC 10 on 30 effective rows: docs/measured-data.md), checked to be
+    the JSON's notice."""
+    lines = err.strip().splitlines()
+    timing = [e for e in lines if e.startswith("obsdesign: warning: timing not resolved")]
+    assert [e.removeprefix("obsdesign: warning: ") for e in timing] == [
+        n for n in payload.get("notices", []) if n.startswith("timing not resolved")]
+    return [e for e in lines if e not in timing]
 
 
 def test_a_plausible_identification_has_no_warnings(fx, capsys):
     assert main([*ID, "--time", "t", str(fx / "tr_good.csv")]) == 0
     captured = capsys.readouterr()
     payload = json.loads(captured.out)
-    err = captured.err.strip().splitlines()  # only the u_max caution (issue 17: the log's peak is not the limit)
+    err = _without_timing(captured.err, payload)  # and the u_max caution (issue 17: the log's peak is not the limit)
     assert "warnings" not in payload and len(err) == 1 and err[0].startswith("obsdesign: warning: u_max")
     assert payload["m"] == pytest.approx(0.5, rel=1e-3) and payload["sigma"] == pytest.approx(5.0, rel=1e-3)
 

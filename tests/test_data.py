@@ -175,7 +175,7 @@ def test_identify_exact_model_closed_form():
                                     "sample_time", "filter_hz", "filter_rule", "decimation", "stribeck", "selection",
                                     "interval_method", "at_bound", "fixed", "min_speed", "stribeck_min_speed", "window",
                                     "intervals", "eiv_shift", "units", "input_timing", "delay_samples", "timing_note",
-                                    "timing_evidence", "model_shift"}
+                                    "timing_evidence", "model_shift", "timing_shift"}
     assert (ident.input_timing, ident.delay_samples) == ("sample", 0)  # the force is the exact inverse model
     # the rows of the fit: decimated by 10 after cutting 50 samples at both ends, minus low-velocity rows
     assert ident.samples <= math.ceil((20_000 - 100) / 10)

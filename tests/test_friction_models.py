@@ -262,14 +262,17 @@ def test_stiffness_is_the_slope_of_the_force(name):
 
 @pytest.mark.parametrize("name,params,exc,match", [
     ("lugre", {"sigma3": 1.0}, ValueError, r"lugre: unknown parameter 'sigma3'; expected one of Cf, sigma"),
-    ("lugre", {"sigma0": math.inf}, ValueError, r"lugre.sigma0: expected a finite number in \[1000, 1e\+09\] N/m, found inf"),
+    ("lugre", {"sigma0": math.inf}, ValueError,
+     r"lugre.sigma0: expected a finite number in \[0.01, 1e\+12\] N/m \(N m/rad on a rotary axis\), found inf"),
     ("lugre", {"vs": float("nan")}, ValueError, r"lugre.vs: expected a finite number in .* found nan"),
-    ("lugre", {"Cf": 0.0}, ValueError, r"lugre.Cf: expected a finite number in \[1e-06, 1000\] N, found 0.0"),
+    ("lugre", {"Cf": 0.0}, ValueError,
+     r"lugre.Cf: expected a finite number in \[1e-06, 1000\] N \(N m on a rotary axis\), found 0.0"),
     ("lugre", {"Fs": 0.2}, ValueError, r"lugre.Fs: expected Fs >= Cf = 0.35 N"),
     ("lugre", {"sigma1": "316"}, TypeError, r"lugre.sigma1: expected a real number, found str '316'"),
     ("dahl", {"alpha": True}, TypeError, r"dahl.alpha: expected a real number, found bool True"),
     ("dahl", {"alpha": 10.0}, ValueError, r"dahl.alpha: expected a finite number in \[0.25, 4\], found 10.0"),
-    ("dahl", {"offset": 2e3}, ValueError, r"dahl.offset: expected a finite number in \[-1000, 1000\] N, found 2000.0"),
+    ("dahl", {"offset": 2e3}, ValueError,
+     r"dahl.offset: expected a finite number in \[-1000, 1000\] N \(N m on a rotary axis\), found 2000.0"),
     ("gms", {"N": 2.0}, TypeError, r"gms.N: expected an integer, found float 2.0"),
     ("gms", {"N": 0}, ValueError, r"gms.N: expected an integer in \[1, 64\], found 0"),
     ("gms", {"N": 3, "k": [1e4, 1e4]}, ValueError, r"gms.k: expected 3 values \(one per element, N = 3\), found 2"),
@@ -445,3 +448,62 @@ def test_gms_force_is_its_definition():
             total += f + p[G_SIGMA1] / k.sum() * rate
         want = total + (p[3] if v < 0 else p[2]) * v + p[4]
         assert gms_force(p, st, x_last + dx, v) == pytest.approx(want, rel=1e-12, abs=1e-12)  # N: sums of ~1 N
+
+
+# --- ranges that follow the axis: a rotary LuGre plant ------------------------------------------------------
+
+def _rotary_toml(extra: str) -> str:
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from _loop_axes import rotary_4khz
+
+    return rotary_4khz().to_toml() + "\n[plant_friction]\nmodel = \"lugre\"\n" + extra
+
+
+@pytest.mark.parametrize("sigma0", [1e2, 1e3, 1e4])
+def test_rotary_lugre_config_accepted(sigma0):
+    """A motor's bristles: Cf 0.02 N m, 1e2 to 1e4 N m/rad (pre-sliding 2e-4 to 2e-6 rad), sigma1 critically
+    damping the 2e-4 kg m^2 inertia (sqrt(sigma0 J)): read, and in the plant's kernel array as given (they were
+    refused below the linear guide's 1e3 N/m)."""
+    from obsdesign.friction.lugre import L_SIGMA0, L_SIGMA1
+    from obsdesign.params import Config
+    from obsdesign.sim.simulate import plant_friction_arrays
+
+    sigma1 = math.sqrt(sigma0 * 2e-4)
+    cfg = Config.from_toml(_rotary_toml(f"sigma0 = {sigma0!r}\nsigma1 = {sigma1!r}\nCf = 0.02\nFs = 0.03\n"
+                                        "vs = 0.5\n"))
+    assert cfg.units.rotary
+    code, p = plant_friction_arrays(cfg)
+    assert code == FRICTION_MODELS.code("lugre") and (p[L_SIGMA0], p[L_SIGMA1]) == (sigma0, sigma1)
+
+
+@pytest.mark.parametrize("extra, match", [
+    ("sigma0 = 1e-3", r"lugre.sigma0: expected a finite number in \[0.01, 1e\+12\] N/m \(N m/rad on a rotary "
+                      r"axis\), found 0.001"),
+    ("sigma0 = 1e13", r"lugre.sigma0: expected a finite number in \[0.01, 1e\+12\] N/m \(N m/rad on a rotary "
+                      r"axis\), found 10000000000000.0"),
+    # 2 N m/rad with 0.5 N m of Coulomb friction: a quarter of a radian (14 degrees) before sliding
+    ("sigma0 = 2.0\nCf = 0.5\nFs = 0.6", r"lugre.sigma0: expected a stiffness whose pre-sliding travel Cf/sigma0 is "
+                                        r"1e-12 to 0.1 \(m, or rad on a rotary axis\), found sigma0 = 2 \(travel "
+                                        r"0.25 with Cf = 0.5\)"),
+    ("sigma0 = 1e11\nCf = 1e-3\nFs = 1e-3", r"lugre.sigma0: .* found sigma0 = 1e\+11 \(travel 1e-14 with Cf = 0.001\)"),
+    ("sigma1 = -1.0", r"lugre.sigma1: expected a finite number in \[0, 100000\] N s/m \(N m s/rad on a rotary "
+                      r"axis\), found -1.0"),
+])
+def test_rotary_lugre_absurd_values_refused(extra, match):
+    from obsdesign.params import Config
+
+    with pytest.raises(ValueError, match=match):
+        Config.from_toml(_rotary_toml(extra + "\n"))
+
+
+def test_gms_travel_refused():
+    """The GMS total stiffness against its stiction level: Fs / K (or the sum of the element stiffnesses)."""
+    assert FRICTION_MODELS["gms"].pack({"K": 50.0, "Fs": 0.5, "Cf": 0.4}).size  # 1 cm: accepted
+    with pytest.raises(ValueError, match=r"gms.K: expected a stiffness whose pre-sliding travel Fs/K is 1e-12 to "
+                                         r"0.1 .* found K = 1 \(travel 0.525 with Fs = 0.525\)"):
+        FRICTION_MODELS["gms"].pack({"K": 1.0})
+    with pytest.raises(ValueError, match=r"gms.k: .* found the sum of k = 2"):
+        FRICTION_MODELS["gms"].pack({"N": 2, "k": [1.0, 1.0]})

@@ -120,7 +120,7 @@ def test_hysteresis_under_slow_noisy_excitation():
 
 @pytest.mark.parametrize("table, exc, match", [
     ({"model": "coulomb"}, ValueError, r"plant_friction.model: expected one of paper, lugre, dahl, gms, found 'coulomb'"),
-    ({"model": "lugre", "sigma0": -1.0}, ValueError, r"lugre.sigma0: expected a finite number in \[1000, 1e\+09\]"),
+    ({"model": "lugre", "sigma0": -1.0}, ValueError, r"lugre.sigma0: expected a finite number in \[0.01, 1e\+12\] N/m \(N m/rad on a rotary axis\)"),
     ({"model": "dahl", "Fs": 1.0}, ValueError, r"dahl: unknown parameter 'Fs'"),
     ({"model": "paper", "offset": "x"}, TypeError, r"offset: expected a real number"),
 ])

@@ -31,17 +31,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._idim import MAX_BOOTSTRAP, check_int, implausible, positive_number, quantization, second_difference, time_window
+from ._idim import MAX_BOOTSTRAP, check_int, implausible, positive_number, time_window
+from ._ident_fit import fit_aligned, timing_spread
 from .choices import INPUT_TIMINGS, MAX_DELAY, STRIBECK_CHOICES
 from .cutoff import choose_filter
 from .estimate import MODEL_SHIFT_FACTOR, STRIBECK_INTERVAL, cautions
 from .friction_fit import check_bounds, check_fix
-from .stribeck_rows import FITTED, fit_rows, row_maker, stribeck_floor
+from .stribeck_rows import FITTED
 from ._ident_rows import ASYM, FILTER_ORDER, rows
 from .timing import aligned, check_delay, find_timing
 from .presliding import MIN_REVERSALS, MIN_ROWS as MIN_PRESLIDING_ROWS, _reversals, fit_presliding
 from .trace import REVERSAL_THRESHOLD, Trace
-from .uncertainty import N_BOOT, column_noise
+from .uncertainty import N_BOOT
 from .units import Units, check_plausible
 
 __all__ = ["Identification", "identify", "MODELS", "FILTER_ORDER", "DEFAULT_DECIMATION",
@@ -105,7 +106,7 @@ class Identification:
     intervals : dict
         ``name -> (low, high)``: 95 % intervals of every parameter (moving-block bootstrap,
         widened by the errors-in-variables shift; ``interval_method`` says which); a fitted ``Fs``, ``vs``:
-        the profile likelihood joined with the bootstrap's, widened likewise.
+        the profile likelihood joined with the bootstrap's, widened likewise; and by the ``timing_shift``.
     interval_method : str
         How :attr:`intervals` were obtained.
     eiv_shift : dict
@@ -136,6 +137,10 @@ class Identification:
         How the timing and the delay were found (:mod:`obsdesign.data.timing`), and how sure.
     timing_evidence : dict
         ``'timing/delay' -> BIC difference`` to the best candidate (empty when both were given).
+    timing_shift : dict
+        ``name -> (low, high)``: the most negative and most positive change of the estimate under the other
+        timings the data do not reject, which widens the interval (empty when the timing is resolved or
+        given; :mod:`obsdesign.data._ident_fit`). A notice says so in one line.
     """
 
     model: str
@@ -192,6 +197,7 @@ class Identification:
     delay_samples: int = 0
     timing_note: str = ""
     timing_evidence: dict = field(default_factory=dict)
+    timing_shift: dict = field(default_factory=dict)
 
     _KEYS = ("m", "sigma", "Cf", "offset", "m_std", "sigma_std", "Cf_std", "offset_std", "nrmse_percent",
              "condition_number", "samples")
@@ -207,7 +213,7 @@ class Identification:
         condition_number, samples``; with ``asymmetric`` also ``sigma_pos, sigma_neg, Cf_pos,
         Cf_neg``; with the Stribeck term ``Fs, vs, Fs_std, vs_std``; always ``s, s_note, model,
         sample_time, filter_hz, filter_rule, decimation, stribeck, selection, interval_method, at_bound, fixed,
-        min_speed, stribeck_min_speed, window, input_timing, delay_samples, timing_note``, ``timing_evidence``, ``model_shift``, ``intervals`` (name -> [low, high]), ``eiv_shift`` and ``units``
+        min_speed, stribeck_min_speed, window, input_timing, delay_samples, timing_note``, ``timing_evidence``, ``model_shift``, ``timing_shift`` (name -> [low, high]), ``intervals`` (name -> [low, high]), ``eiv_shift`` and ``units``
         (``axis``, ``input_unit``, ``mass_unit``, ``force_unit``, ``length_unit``, the logged
         ``time``/``position`` units); ``warnings`` (a list of sentences) when the identification is
         not physical, ``notices`` when there are cautions.
@@ -220,6 +226,7 @@ class Identification:
         out["eiv_shift"] = dict(self.eiv_shift)
         out["timing_evidence"] = dict(self.timing_evidence)
         out["model_shift"] = dict(self.model_shift)
+        out["timing_shift"] = {k: list(v) for k, v in self.timing_shift.items()}
         u = self.units
         out["units"] = {"axis": u.axis, "input_unit": u.input_unit(self.input_gain), "mass_unit": u.mass_unit,
                         "force_unit": u.force_unit, "length_unit": u.length_unit, "time": u.time,
@@ -377,7 +384,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
        ``Cf_neg`` are the levels minus/plus it (standard errors propagated linearly).
     7. ``intervals``: a moving-block bootstrap widened by the errors-in-variables shift
        (:mod:`obsdesign.data.uncertainty`); for a fitted ``Fs`` and ``vs`` joined with the profile likelihood
-       (:func:`~obsdesign.data.friction_fit.profile_interval`; ``docs/measured-data.md``).
+       (:func:`~obsdesign.data.friction_fit.profile_interval`; ``docs/measured-data.md``); when the log's
+       timing is not resolved, widened to the fits under the other timings not rejected (``timing_shift``).
     8. ``s`` (eq:2:3:1-2:3:5) is fitted only if at least 5 reversals each stay within
        ``presliding_window`` of the reversal point for 5 rows of the fit grid (``5 decimation``
        samples; 50 samples, the benchmark's grid, when ``decimation`` is not given) over at least 5 distinct encoder readings; otherwise ``s = None`` and
@@ -397,8 +405,6 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     >>> bool(lo < ident.m < hi and (hi - lo) / ident.m < 0.01)
     True
     """
-    from scipy import signal
-
     if not isinstance(trace, Trace):
         raise TypeError(f"trace: expected a Trace, found {type(trace).__name__}")
     if not isinstance(model, str) or model not in MODELS:
@@ -433,40 +439,14 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     found = find_timing(position, force, dt=dt, filter_hz=filter_hz, decimation=q,
                         timing=None if input_timing == "auto" else input_timing, delay=delay_samples,
                         min_speed=min_speed)
-    position, force = aligned(position, force, found.timing, found.delay)
-    n = position.size
-
-    sos = signal.butter(FILTER_ORDER, filter_hz, fs=fs, output="sos")
-    x_f = signal.sosfiltfilt(sos, position)
-    u_f = signal.sosfiltfilt(sos, force)
-    v = np.gradient(x_f, dt)
-    a = second_difference(x_f, dt)
-    keep = slice(border, n - border)
-
-    dec_sos = signal.cheby1(8, 0.05, 0.8 / q, output="sos") if q > 1 else None
-
-    def dec(col: np.ndarray) -> np.ndarray:  # scipy.signal.decimate(col, q, ftype="iir", zero_phase=True), rows at once
-        return signal.sosfiltfilt(dec_sos, col, axis=-1)[..., ::q] if q > 1 else col
-
-    pos, neg = (v > 0).astype(float), (v < 0).astype(float)
-    names = ("a", "v", "sign", "one", "v_pos", "v_neg", "pos", "neg", "y")
-    stacked = dict(zip(names, dec(np.stack([a, v, np.sign(v), np.ones(n), v * pos, v * neg, pos, neg, u_f])[:, keep])))
-    peak = float(np.max(np.abs(stacked["v"])))
-    threshold = REVERSAL_THRESHOLD * peak if min_speed is None else min_speed
-    speed = trace.units.si("speed")
-    moving = np.count_nonzero(np.abs(stacked["v"]) > threshold)
-    if moving < 10:
-        raise ValueError(f"trace: expected motion in at least 10 rows of the fit, found {moving} (|v| > "
-                         f"{threshold:.3g} {speed}; the position barely changes, or min_speed is too high)")
-    quantum = quantization(position)
-    white = float(np.mean((position - x_f)[keep] ** 2))
-    noise_var = column_noise(white, sos, dec_sos, q, dt)
-    floor, rule = stribeck_floor(threshold=threshold, min_speed=min_speed, stribeck_min_speed=stribeck_min_speed,
-                                 stribeck=stribeck, white=white, sos=sos, dt=dt, q=q, quantum=quantum, filter_hz=filter_hz, speed=speed)
-    fitted = fit_rows(row_maker(stacked, v[keep], dec), threshold=threshold, floor=floor, floor_rule=rule,
-                      peak=peak, speed=speed, model=model, stribeck=stribeck, fix=fix, bounds=bounds,
-                      noise_var=noise_var, n_boot=n_boot, seed=seed)
+    kw = dict(dt=dt, filter_hz=filter_hz, q=q, model=model, fix=fix, bounds=bounds, speed=trace.units.si("speed"))
+    fitted = fit_aligned(*aligned(position, force, found.timing, found.delay), stribeck=stribeck, min_speed=min_speed,
+                         stribeck_min_speed=stribeck_min_speed, n_boot=n_boot, seed=seed, **kw)
     est, intervals, model_shift, cols, y, threshold = (fitted[k] for k in FITTED)
+    intervals, timing_shift, spread = timing_spread(position, force, found, fitted, intervals, est["values"],
+                                                    unit=trace.units.si, **kw)
+    keep, x_f, v, a, u_f = (fitted[k] for k in ("keep", "x_f", "v", "a", "u_f"))
+    position, force = aligned(position, force, found.timing, found.delay)
     values, std = est["values"], est["std"]
     shown = ("m", "sigma", "Cf", "offset") + (ASYM if model == "asymmetric" else ()) + (("Fs", "vs") if est["stribeck"] else ())
     result = {k: float(values[k]) for k in shown} | {f"{k}_std": float(std.get(k, 0.0)) for k in shown}
@@ -478,22 +458,24 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                              rows=DEFAULT_DECIMATION if decimation is None else q, window=presliding_window,
                              length_unit=trace.units.length_unit)
     notices = trace.warnings + check_plausible(trace.units, mass=result["m"], gain=trace.input_gain) + cautions(
-        est, cols, noise_var, trace.units, filter_hz)
+        est, cols, fitted["noise_var"], trace.units, filter_hz) + ((spread,) if spread else ())
     return Identification(model=model, **result, nrmse_percent=est["nrmse"], condition_number=est["condition_number"],
                           samples=int(y.size), s=s, s_note=note, sample_time=dt, filter_hz=float(filter_hz),
                           filter_rule=filter_rule, decimation=q, input_gain=trace.input_gain, force_peak=float(np.max(np.abs(force))),
-                          noise_rms=math.sqrt(max(0.0, white - quantum**2 / 12.0)), quantization=quantum,
+                          noise_rms=fitted["noise_rms"], quantization=fitted["quantum"],
                           reversals=int(_reversals(v, REVERSAL_THRESHOLD * float(np.max(np.abs(v)))).size),
                           source=trace.source, warnings=notes, notices=notices, stribeck=est["stribeck"], selection=est["selection"],
                           intervals=intervals, eiv_shift=est["eiv_shift"], model_shift=model_shift,
                           at_bound=est["at_bound"], fixed=tuple(sorted(fix)), min_speed=float(threshold),
-                          stribeck_min_speed=float(floor), window=span, interval_method=_method(est, n_boot, model_shift, fix),
+                          stribeck_min_speed=float(fitted["floor"]), window=span, timing_shift=timing_shift,
+                          interval_method=_method(est, n_boot, model_shift, fix, timing_shift),
                           units=trace.units, input_timing=found.timing, delay_samples=found.delay,
                           timing_note=found.note, timing_evidence=found.evidence)
 
 
-def _method(est: dict, n_boot: int, model_shift: dict, fix: dict) -> str:
+def _method(est: dict, n_boot: int, model_shift: dict, fix: dict, timing_shift: dict) -> str:
     return ((f"moving-block bootstrap, {n_boot} replicates, blocks of {est['block_length']} rows, " if n_boot
              else "1.96 standard errors, ") + "widened by the errors-in-variables shift"
             + (f" and by the model-error shift ({MODEL_SHIFT_FACTOR:g} x the min speed)" if model_shift else "")
+            + (" and by the shift under the timings the data do not reject" if timing_shift else "")
             + (f"; {STRIBECK_INTERVAL}" if est["stribeck"] and n_boot and not {"Fs", "vs"} <= set(fix) else ""))

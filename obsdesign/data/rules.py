@@ -203,7 +203,8 @@ def _build(ident, *, name, K, u_max, rho, presliding_window):
          else f"not resolved by the record: 1 / presliding_window = 1 / {presliding_window:g} {L}"),
         ("friction.kappa", kappa, f"{F}/{L}", f"fastest observer pole (rho + 1) sqrt(kappa/m) = "
          f"{FASTEST_POLE_DT:g} / dt"),
-        ("sensor.noise_rms", ident.noise_rms, L, "RMS of the position minus its filtered version, less q^2/12"),
+        ("sensor.noise_rms", ident.noise_rms, L, ("RMS of the position's white noise (the position minus its low-pass, over the share of a white "
+                                                     "noise above the cut-off), less q^2/12")),
         ("sensor.noise_bandwidth", nyquist, "Hz", "white up to the Nyquist frequency"),
         ("sensor.quantization", ident.quantization, L, "smallest position increment, if all are multiples of it"),
         ("observer.rho", float(rho), "", "gross-sliding poles -(rho -+ 1) sqrt(kappa/m)"),

@@ -21,7 +21,7 @@ import numpy as np
 from ._idim import positive_number
 from .estimate import estimate, model_shift as _model_shift, select_stribeck, widened
 from .friction_fit import trusted_speed
-from .uncertainty import noise_variance
+from .uncertainty import impulse_length, noise_variance, white_variance
 
 __all__ = ["NEAR_FLOOR", "stribeck_floor", "row_maker", "fit_rows", "FITTED"]
 
@@ -73,9 +73,8 @@ def stribeck_floor(*, threshold: float, min_speed: float | None, stribeck_min_sp
         return min(positive_number("stribeck_min_speed", stribeck_min_speed, 0.0, speed), threshold), "given"
     if min_speed is not None or stribeck == "off":
         return threshold, "the min speed"
-    length = max(4096, 400 * q)
-    eta2 = white / noise_variance(lambda h: h - signal.sosfiltfilt(sos, h), length)
-    sigma_v = math.sqrt(eta2 * noise_variance(lambda h: np.gradient(signal.sosfiltfilt(sos, h), dt), length))
+    eta2 = white_variance(white, sos, q)
+    sigma_v = math.sqrt(eta2 * noise_variance(lambda h: np.gradient(signal.sosfiltfilt(sos, h), dt), impulse_length(q)))
     trusted, rule = trusted_speed(sigma_v, quantum, filter_hz)
     return min(trusted, threshold), f"trusted speed: {rule}" + ("" if trusted < threshold else ", at least the min speed")
 

@@ -85,6 +85,9 @@ class Timing:
         Whether the chosen candidate beats every other by more than :data:`TIMING_MARGIN`.
     given : str
         Which of the two was given rather than found: ``''``, ``'timing'``, ``'delay'`` or ``'both'``.
+    candidates : tuple of (str, int)
+        The readings the data do not reject (within :data:`TIMING_MARGIN` of the best by some criterion), the
+        chosen one first; only it when resolved or given.
     """
 
     timing: str
@@ -93,6 +96,7 @@ class Timing:
     evidence: dict = field(default_factory=dict)
     resolved: bool = False
     given: str = ""
+    candidates: tuple = ()
 
 
 def describe(timing: str, delay: int) -> str:
@@ -257,7 +261,8 @@ def find_timing(position: np.ndarray, force: np.ndarray, *, dt: float, filter_hz
     given = {(True, True): "both", (True, False): "timing", (False, True): "delay", (False, False): ""}[
         (timing is not None, delay is not None)]
     if len(timings) * len(delays) == 1:
-        return Timing(timings[0], delays[0], f"{describe(timings[0], delays[0])} (given)", {}, False, given)
+        return Timing(timings[0], delays[0], f"{describe(timings[0], delays[0])} (given)", {}, False, given,
+                      ((timings[0], delays[0]),))
     top = max(delays)
     n = position.size
     fs = 1.0 / dt
@@ -326,4 +331,4 @@ def find_timing(position: np.ndarray, force: np.ndarray, *, dt: float, filter_hz
                 f"({how}; also {others}); give --input-timing and --delay-samples if the drive's timing is known")
     if given:
         note += f"; {'input timing' if given == 'timing' else 'delay'} given"
-    return Timing(chosen[0], chosen[1], note, evidence, resolved, given)
+    return Timing(chosen[0], chosen[1], note, evidence, resolved, given, tuple(close))

@@ -38,8 +38,8 @@ import numpy as np
 
 from ._idim import second_difference
 
-__all__ = ["block_length", "bootstrap", "column_noise", "correlation_time", "eiv_shift", "ACF_CUTOFF", "N_BOOT",
-           "LEVEL", "SOKAL_WINDOW"]
+__all__ = ["block_length", "bootstrap", "column_noise", "correlation_time", "eiv_shift", "impulse_length",
+           "white_variance", "ACF_CUTOFF", "N_BOOT", "LEVEL", "SOKAL_WINDOW"]
 
 #: The residual autocorrelation below which rows count as independent (block length rule).
 ACF_CUTOFF = 0.1
@@ -157,6 +157,38 @@ def noise_variance(chain, length: int) -> float:
     return float(h @ h)
 
 
+def impulse_length(q: int) -> int:
+    """Length of the impulse responses of :func:`noise_variance` for the decimation factor ``q``."""
+    return max(4096, 400 * q)
+
+
+def white_variance(white: float, sos: np.ndarray, q: int) -> float:
+    """The variance ``eta^2`` of a white noise whose part above the low-pass ``sos`` has mean square ``white``.
+
+    ``white / sum (delta - h_lp)^2``, ``h_lp`` the impulse response of ``sosfiltfilt(sos, .)``.
+
+    Parameters
+    ----------
+    white : float
+        Mean square of the position minus its low-passed version.
+    sos : ndarray
+        The zero-phase low-pass (``sosfiltfilt``).
+    q : int
+        Decimation factor (sets the length of the impulse response).
+
+    Examples
+    --------
+    >>> from scipy import signal
+    >>> sos = signal.butter(4, 100.0, fs=1000.0, output="sos")
+    >>> share = white_variance(1.0, sos, 10)  # 1 / the share of the variance above 100 Hz of 500
+    >>> bool(1.0 / 0.8 < share < 1.0 / 0.7)
+    True
+    """
+    from scipy import signal
+
+    return white / noise_variance(lambda h: h - signal.sosfiltfilt(sos, h), impulse_length(q))
+
+
 def column_noise(white: float, sos: np.ndarray, dec_sos: np.ndarray | None, q: int, dt: float) -> dict[str, float]:
     """Noise variance of the ``v`` and ``a`` columns of the fit from white position noise.
 
@@ -180,8 +212,8 @@ def column_noise(white: float, sos: np.ndarray, dec_sos: np.ndarray | None, q: i
     """
     from scipy import signal
 
-    length = max(4096, 400 * q)
-    eta2 = white / noise_variance(lambda h: h - signal.sosfiltfilt(sos, h), length)
+    length = impulse_length(q)
+    eta2 = white_variance(white, sos, q)
 
     def smooth(h: np.ndarray) -> np.ndarray:
         return signal.sosfiltfilt(dec_sos, h) if q > 1 else h

@@ -10,6 +10,13 @@ defaults and returns the flat ``float64`` array the numba kernels take (layout i
 :mod:`obsdesign.friction.common`). This module imports neither NumPy nor numba (NumPy
 loads in :meth:`~FrictionModelInfo.pack`), so the config and the command line read it.
 
+Ranges follow the axis. The package computes in SI for both kinds of axis (:mod:`obsdesign.axis`): on a rotary
+one every N is N m and every m is rad, so a stiffness [N/m] is N m/rad there (messages name both). A bristle's
+stiffness differs by orders of magnitude between a linear guide (1e5 to 1e8 N/m) and a motor's bearings (1e2 to
+1e5 N m/rad), so its range is a wide ceiling, and the check that catches a wrong value is relative to the model's
+own friction level: the pre-sliding travel ``Cf / sigma0`` (GMS: ``Fs / K``) of :data:`PRESLIDING_TRAVEL`, in m or
+rad (a bristle that deflects 10 cm or 6 degrees before sliding, or less than an atom, is a unit or typing mistake).
+
 Defaults. The force levels are the paper's presets (``Cf`` = 0.35 N,
 ``sigma`` = 21.1 N s/m, Table 1 and section 4, for the 0.538 kg axis). The
 dynamic parameters are the published sets: LuGre ``sigma0`` = 1e5 N/m,
@@ -31,7 +38,11 @@ Examples
 >>> info.pack({"sigma0": -1.0})
 Traceback (most recent call last):
 ...
-ValueError: lugre.sigma0: expected a finite number in [1000, 1e+09] N/m, found -1.0
+ValueError: lugre.sigma0: expected a finite number in [0.01, 1e+12] N/m (N m/rad on a rotary axis), found -1.0
+>>> info.pack({"sigma0": 1.0})  # 0.35 m (or rad) of pre-sliding
+Traceback (most recent call last):
+...
+ValueError: lugre.sigma0: expected a stiffness whose pre-sliding travel Cf/sigma0 is 1e-12 to 0.1 (m, or rad on a rotary axis), found sigma0 = 1 (travel 0.35 with Cf = 0.35)
 >>> FRICTION_MODELS["gms"].n_state({"N": 6})
 14
 >>> FRICTION_MODELS.names(), FRICTION_MODELS.code("dahl") == DAHL
@@ -48,7 +59,13 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 from .._registry import Entry, Registry
 
-__all__ = ["ParameterSpec", "FrictionModelInfo", "FRICTION_MODELS", "friction_code", "PAPER", "LUGRE", "DAHL", "GMS"]
+__all__ = ["ParameterSpec", "FrictionModelInfo", "FRICTION_MODELS", "friction_code", "PAPER", "LUGRE", "DAHL", "GMS",
+           "PRESLIDING_TRAVEL"]
+
+#: The pre-sliding travel ``Cf / sigma0`` (GMS: ``Fs / K``) a bristle stiffness may give [m, or rad on a rotary
+#: axis]: from below an atom to 10 cm (6 degrees). The published sets give 3.5e-6 m (LuGre, 1e5 N/m at 0.35 N); a
+#: motor with 0.05 N m of Coulomb friction and 1e2 to 1e4 N m/rad, 5e-4 to 5e-6 rad.
+PRESLIDING_TRAVEL = (1e-12, 0.1)
 
 #: Integer model codes (append-only: numba caches compiled code that reads them).
 #: ``PAPER`` is reserved: its kernel is :mod:`obsdesign.friction.presliding`, run by the
@@ -116,6 +133,7 @@ class FrictionModelInfo(Entry):
         if "Fs" in out and out["Fs"] < out["Cf"]:
             raise ValueError(f"{self.name}.Fs: expected Fs >= Cf = {out['Cf']!r} N "
                              f"(stiction at least the Coulomb level), found {out['Fs']!r}")
+        _check_travel(self.name, out)
         return out
 
     def pack(self, params: Mapping[str, Any]) -> np.ndarray:
@@ -163,13 +181,41 @@ def _fmt(a: float) -> str:
     return f"{a:g}"
 
 
+def _unit(unit: str) -> str:
+    """`` N/m (N m/rad on a rotary axis)``: the unit written for both kinds of axis (empty for none)."""
+    if not unit:
+        return ""
+    from ..axis import AxisSpec  # no NumPy
+
+    rotary = AxisSpec(kind="rotary", input="N m").unit(unit)
+    return f" {unit}" + (f" ({rotary} on a rotary axis)" if rotary != unit else "")
+
+
+def _check_travel(model: str, q: dict[str, Any]) -> None:
+    """The pre-sliding travel of a bristle stiffness within :data:`PRESLIDING_TRAVEL` (module docstring)."""
+    if "sigma0" in q:
+        name, stiffness, level, label = "sigma0", q["sigma0"], q["Cf"], "Cf"
+    elif "K" in q:
+        name, level, label = ("k", q["Fs"], "Fs") if q.get("k") is not None else ("K", q["Fs"], "Fs")
+        stiffness = sum(q["k"]) if q.get("k") is not None else q["K"]
+    else:
+        return
+    travel = level / stiffness
+    low, high = PRESLIDING_TRAVEL
+    if not low <= travel <= high:
+        total = f"the sum of k = {stiffness:.6g}" if name == "k" else f"{name} = {stiffness:.6g}"
+        raise ValueError(f"{model}.{name}: expected a stiffness whose pre-sliding travel {label}/{'K' if name != 'sigma0' else name} "
+                         f"is {_fmt(low)} to {_fmt(high)} (m, or rad on a rotary axis), found {total} (travel "
+                         f"{travel:.3g} with {label} = {level:.6g})")
+
+
 def _check_number(label: str, spec: ParameterSpec, value: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"{label}: expected a real number, found {type(value).__name__} {value!r}")
     number = float(value)
     if not (math.isfinite(number) and spec.low <= number <= spec.high):
         raise ValueError(f"{label}: expected a finite number in [{_fmt(spec.low)}, {_fmt(spec.high)}]"
-                         f"{' ' + spec.unit if spec.unit else ''}, found {value!r}")
+                         f"{_unit(spec.unit)}, found {value!r}")
     return number
 
 
@@ -270,7 +316,7 @@ FRICTION_MODELS = Registry("friction model", [
         name="lugre", code=LUGRE,
         doc="LuGre bristle model with Stribeck curve (Canudas de Wit et al. 1995)",
         parameters=(_CF, _SIGMA) + _COMMON + _STRIBECK + (
-            ParameterSpec("sigma0", "N/m", "bristle stiffness", 1e5, 1e3, 1e9),
+            ParameterSpec("sigma0", "N/m", "bristle stiffness", 1e5, 1e-2, 1e12),
             ParameterSpec("sigma1", "N s/m", "bristle (micro-)damping", math.sqrt(1e5), 0.0, 1e5),
         ),
         _layout=_lugre_layout, _n_state=lambda q: 3,
@@ -279,7 +325,7 @@ FRICTION_MODELS = Registry("friction model", [
         name="dahl", code=DAHL,
         doc="Dahl rate-independent pre-sliding model (Dahl 1968)",
         parameters=(_CF, _SIGMA) + _COMMON + (
-            ParameterSpec("sigma0", "N/m", "rest stiffness dF/dx at F = 0", 1e5, 1e2, 1e9),
+            ParameterSpec("sigma0", "N/m", "rest stiffness dF/dx at F = 0", 1e5, 1e-2, 1e12),
             ParameterSpec("alpha", "", "shape exponent of the stress-strain curve", 1.0, 0.25, 4.0),
         ),
         _layout=_dahl_layout, _n_state=lambda q: 3,
@@ -291,8 +337,8 @@ FRICTION_MODELS = Registry("friction model", [
             ParameterSpec("C", "N/s", "attraction parameter of the slip relaxation", 20.0, 1e-3, 1e6),
             ParameterSpec("sigma1", "N s/m", "micro-damping of the elements (sum of b_i)", 0.0, 0.0, 1e5),
             ParameterSpec("N", "", "number of elements", 4, 1, 64),
-            ParameterSpec("K", "N/m", "total element stiffness (used when k is None)", 1e5, 1e2, 1e9),
-            ParameterSpec("k", "N/m", "element stiffnesses, N values (None: K / N each)", None, 1.0, 1e9),
+            ParameterSpec("K", "N/m", "total element stiffness (used when k is None)", 1e5, 1e-2, 1e12),
+            ParameterSpec("k", "N/m", "element stiffnesses, N values (None: K / N each)", None, 1e-3, 1e12),
             ParameterSpec("alpha", "", "element shares of s(v), N values summing to 1 (None: 2 i / (N (N+1)))",
                           None, 1e-9, 1.0),
         ),
