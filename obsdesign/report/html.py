@@ -74,11 +74,24 @@ def convergence_part() -> tuple[list, str]:
 
 
 def _compile_kernels() -> None:
-    """The helper's first task: the simulator's kernel compiled and written to numba's cache (or loaded
-    from it), before this process simulates anything (:func:`obsdesign.sweeps.pool.warm`)."""
-    from ..sweeps.pool import warm
+    """The helper's first task: the simulator's kernel compiled and written to numba's cache
+    (:func:`obsdesign.sweeps.pool.warm`) before this process simulates anything; nothing when numba's
+    cache holds it already (a warm report: its helper loads no kernel it does not run)."""
+    from ..sim import kernel
 
-    warm()
+    if not _in_numba_cache(kernel.run_loop):
+        from ..sweeps.pool import warm
+
+        warm()
+
+
+def _in_numba_cache(dispatcher) -> bool:
+    """Whether numba's on-disk cache holds a compiled version of ``dispatcher`` for its current source
+    (read from the cache's index, numba's private API: False where it is not there)."""
+    try:
+        return bool(dispatcher._cache._cache_file._load_index())
+    except Exception:  # another numba version, no cache: compile
+        return False
 
 
 def _feed_task(cfg: Config, feed: float) -> dict:
