@@ -136,18 +136,27 @@ def relabel(fig, units):
     return fig
 
 
-def trace_figure(res):
+def trace_figure(res, *, pyplot: bool = True):
     """Displacement, error, friction and force of a :class:`~obsdesign.sim.SimResult`.
 
     Parameters
     ----------
     res : SimResult
         A run with its trace.
+    pyplot : bool
+        Make the figure with pyplot (default: a notebook shows it, ``plt.show()`` too); False draws it on a
+        plain :class:`matplotlib.figure.Figure` without importing pyplot (what ``simulate --plot`` writes:
+        the same bytes).
     """
-    from matplotlib.figure import Figure  # not pyplot: nothing to register, a shorter import
+    if pyplot:
+        import matplotlib.pyplot as plt
 
+        fig = plt.figure(figsize=(8, 9), constrained_layout=True)
+    else:
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(8, 9), constrained_layout=True)
     t = res.t
-    fig = Figure(figsize=(8, 9), layout="constrained")
     axes = fig.subplots(4, 1, sharex=True)
     ax = axes[0]
     ax.plot(t, res.x * 1e3, label="x")
@@ -199,7 +208,7 @@ def save_trace_figure(res, path: str | os.PathLike) -> None:
     path : str or os.PathLike
         Output file (.svg or .png).
     """
-    save_figure(trace_figure(res), path)
+    save_figure(trace_figure(res, pyplot=False), path)
 
 
 def figure_svg(fig) -> str:
@@ -430,4 +439,4 @@ def trace_figure_svg(res) -> str:
     res : SimResult
         A run with its trace.
     """
-    return figure_svg(trace_figure(res))
+    return figure_svg(trace_figure(res, pyplot=False))
