@@ -99,3 +99,18 @@ def test_the_program_exits_with_main_s_status_and_its_heap_frozen():
     from obsdesign.cli import main
 
     assert main(["--version"]) == 0 and gc.get_freeze_count() == 0
+
+
+@pytest.mark.slow  # a fresh interpreter and the kernel from numba's cache (4 s)
+def test_simulate_plot_draws_without_pyplot(tmp_path):
+    """``simulate --plot`` (the README's example) draws its trace figure on a plain matplotlib Figure: pyplot
+    (its backend registry, a figure manager per figure) is not imported (issue 37)."""
+    probe = _PROBE.replace("print('HEAVY'", "print('PYPLOT', 'matplotlib.pyplot' in sys.modules, file=sys.stderr)"
+                                            "\nprint('HEAVY'")
+    out = tmp_path / "pos.svg"
+    proc = subprocess.run([sys.executable, "-c", probe, "simulate", "positioning", "--controller", "pid+observer",
+                           "--plot", str(out)], capture_output=True, text=True, timeout=600,
+                          env={**os.environ, "OBSDESIGN_CACHE_DIR": str(tmp_path / "memo")})
+    assert "HEAVY 0 " in proc.stderr and "matplotlib" in proc.stderr, proc.stderr
+    assert "PYPLOT False" in proc.stderr, proc.stderr
+    assert out.read_text().startswith("<?xml") and "</svg>" in out.read_text()

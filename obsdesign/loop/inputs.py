@@ -164,13 +164,34 @@ class LoopInputs:
         """The groups of :func:`obsdesign.sim.kernel.run_loop` before its outputs: the controller's
         ``(ObserverArgs, EstimatorArgs, ControllerArgs)``, then ``PlantArgs`` and ``Signals``."""
         plant = PlantArgs(n_sub=self.n_sub, mode=self.mode, lag_model=self.lag_model,
-                                 m=self.m, K=self.K_plant, G=self.G_plant, friction_code=self.friction_code,
-                                 plant_params=self.plant_params, delay=self.delay_samples,
-                                 delay_init=self.sampled.held_command)  # until the first command arrives
+                          m=self.m, K=self.K_plant, G=self.G_plant, friction_code=self.friction_code,
+                          plant_params=self.plant_params, delay=self.delay_samples,
+                          delay_init=self.sampled.held_command)  # until the first command arrives
         v_ref, w_ff = self.reference_feedforward()
-        signals = Signals(x_ref=self.x_ref, u_open=self.u_open, noise=self.noise,
-                                 quantization=self.quantization, v_ref=v_ref, w_ff=w_ff)
+        signals = Signals(x_ref=_read_only(self.x_ref), u_open=_read_only(self.u_open),
+                          noise=_read_only(self.noise), quantization=self.quantization,
+                          v_ref=_read_only(v_ref), w_ff=_read_only(w_ff))
         return (*self.sampled.kernel_args(), plant, signals)
+
+
+def _read_only(a) -> np.ndarray:
+    """A read-only view of an input signal of the kernel (no copy).
+
+    numba types a read-only array apart from a writable one, so signals that are read-only in one
+    scenario (the cached reference of :func:`obsdesign.loop.scenarios.build_scenario`) and writable in
+    another (an excitation's random force, a circle's reference) made :func:`~obsdesign.sim.kernel.run_loop`
+    compile once per combination (three on a first report, 5 s of CPU each): all read-only, one signature.
+
+    Examples
+    --------
+    >>> a = np.zeros(3)
+    >>> v = _read_only(a)
+    >>> v.flags.writeable, a.flags.writeable, np.shares_memory(a, v)
+    (False, True, True)
+    """
+    view = np.asarray(a).view()
+    view.flags.writeable = False
+    return view
 
 
 def prepare(

@@ -14,6 +14,7 @@ from __future__ import annotations
 import io
 import os
 import re
+import sys
 from pathlib import Path
 
 import matplotlib  # noqa: E402
@@ -22,7 +23,23 @@ from .._io import atomic_path
 
 matplotlib.use("Agg")
 matplotlib.rcParams["svg.hashsalt"] = "obsdesign"  # the same figure gives the same SVG, byte for byte
-import matplotlib.pyplot as plt  # noqa: E402
+# pyplot is not imported here: the trace figure of ``simulate --plot`` is a plain Figure; the modules that
+# draw with pyplot import it as ``from .figures import plt`` (module ``__getattr__`` below)
+
+
+def __getattr__(name: str):
+    if name == "plt":  # matplotlib.pyplot, with the Agg backend and the salt set above
+        import matplotlib.pyplot as plt
+
+        return plt
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _close(fig) -> None:
+    """Close a figure in pyplot's registry (a figure made with pyplot); a plain Figure is left to Python."""
+    pyplot = sys.modules.get("matplotlib.pyplot")
+    if pyplot is not None:
+        pyplot.close(fig)
 
 #: No creation date in the files, so that identical figures are identical files.
 _METADATA = {"svg": {"Date": None}, "png": {}, "pdf": {"CreationDate": None}}
@@ -119,16 +136,28 @@ def relabel(fig, units):
     return fig
 
 
-def trace_figure(res):
+def trace_figure(res, *, pyplot: bool = True):
     """Displacement, error, friction and force of a :class:`~obsdesign.sim.SimResult`.
 
     Parameters
     ----------
     res : SimResult
         A run with its trace.
+    pyplot : bool
+        Make the figure with pyplot (default: a notebook shows it, ``plt.show()`` too); False draws it on a
+        plain :class:`matplotlib.figure.Figure` without importing pyplot (what ``simulate --plot`` writes:
+        the same bytes).
     """
+    if pyplot:
+        import matplotlib.pyplot as plt
+
+        fig = plt.figure(figsize=(8, 9), constrained_layout=True)
+    else:
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(8, 9), constrained_layout=True)
     t = res.t
-    fig, axes = plt.subplots(4, 1, figsize=(8, 9), sharex=True, constrained_layout=True)
+    axes = fig.subplots(4, 1, sharex=True)
     ax = axes[0]
     ax.plot(t, res.x * 1e3, label="x")
     if res.scenario in ("positioning", "tracking"):
@@ -166,7 +195,7 @@ def save_figure(fig, path: str | os.PathLike) -> None:
             fmt = Path(path).suffix.lstrip(".").lower()
             fig.savefig(tmp, format=fmt, metadata=_METADATA.get(fmt))
     finally:
-        plt.close(fig)
+        _close(fig)
 
 
 def save_trace_figure(res, path: str | os.PathLike) -> None:
@@ -179,7 +208,7 @@ def save_trace_figure(res, path: str | os.PathLike) -> None:
     path : str or os.PathLike
         Output file (.svg or .png).
     """
-    save_figure(trace_figure(res), path)
+    save_figure(trace_figure(res, pyplot=False), path)
 
 
 def figure_svg(fig) -> str:
@@ -192,7 +221,7 @@ def figure_svg(fig) -> str:
     """
     buf = io.StringIO()
     fig.savefig(buf, format="svg", metadata=_METADATA["svg"])
-    plt.close(fig)
+    _close(fig)
     return buf.getvalue()
 
 
@@ -219,6 +248,7 @@ def regrid(fig, cells, *, ncols: int, row_height: float, width: float | None = N
 
     Examples
     --------
+    >>> import matplotlib.pyplot as plt
     >>> fig, axes = plt.subplots(1, 3, figsize=(15, 3))
     >>> _ = regrid(fig, [(0, 0), (0, 1), (1, slice(0, 2))], ncols=2, row_height=3.0, width=10.0)
     >>> [float(v) for v in fig.get_size_inches()], axes[2].get_subplotspec().colspan
@@ -278,6 +308,7 @@ def legible(fig, *, width_px: float = PAGE_WIDTH_PX, min_px: float = MIN_TEXT_PX
 
     Examples
     --------
+    >>> import matplotlib.pyplot as plt
     >>> fig, ax = plt.subplots(figsize=(14, 4))
     >>> _ = ax.plot([0, 1], [0, 1], label="a line")
     >>> _ = ax.legend(fontsize=6)
@@ -386,6 +417,7 @@ def inline_svg(fig, units=None) -> str:
 
     Examples
     --------
+    >>> import matplotlib.pyplot as plt
     >>> fig, ax = plt.subplots()
     >>> text = inline_svg(fig)
     >>> text.startswith("<svg") and "<metadata>" not in text
@@ -407,4 +439,4 @@ def trace_figure_svg(res) -> str:
     res : SimResult
         A run with its trace.
     """
-    return figure_svg(trace_figure(res))
+    return figure_svg(trace_figure(res, pyplot=False))

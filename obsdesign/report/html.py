@@ -73,6 +73,27 @@ def convergence_part() -> tuple[list, str]:
     return [studies.Claim(*r) for r in rows], svg
 
 
+def _compile_kernels() -> None:
+    """The helper's first task: the simulator's kernel compiled and written to numba's cache
+    (:func:`obsdesign.sweeps.pool.warm`) before this process simulates anything; nothing when numba's
+    cache holds it already (a warm report: its helper loads no kernel it does not run)."""
+    from ..sim import kernel
+
+    if not _in_numba_cache(kernel.run_loop):
+        from ..sweeps.pool import warm
+
+        warm()
+
+
+def _in_numba_cache(dispatcher) -> bool:
+    """Whether numba's on-disk cache holds a compiled version of ``dispatcher`` for its current source
+    (read from the cache's index, numba's private API: False where it is not there)."""
+    try:
+        return bool(dispatcher._cache._cache_file._load_index())
+    except Exception:  # another numba version, no cache: compile
+        return False
+
+
 def _feed_task(cfg: Config, feed: float) -> dict:
     """The helper's other tasks: the circle test's runs at one feed."""
     from .circle_section import feed_runs
@@ -182,8 +203,12 @@ def render_report(cfg: Config, *, source_label: str | None = None, progress: boo
         # the convergence study and the slowest feed of the circle test (the lowest feed: its contour is
         # longest), or without the paper's studies every feed (on vcm the two processes then end within
         # about half a second of each other; docs/report.md)
+        # first of all the helper compiles the simulator's kernel (or loads it from numba's cache), which
+        # this process waits for before its first simulation and then loads from the cache: compiled once,
+        # not in both processes at the same time (a first report's largest cost)
         slow = sorted(CIRCLE_FEEDS)[:1] if paper else CIRCLE_FEEDS
-        jobs = {"convergence": pool.submit(convergence_part) if paper else None,
+        jobs = {"kernels": None if isinstance(pool, _Serial) else pool.submit(_compile_kernels),
+                "convergence": pool.submit(convergence_part) if paper else None,
                 "circle": {feed: pool.submit(_feed_task, cfg, feed) for feed in slow} if circle else {}}
         from .page import render_page
 

@@ -166,7 +166,8 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
     cfg : Config
         The design.
     jobs : dict
-        The helper's futures: ``convergence`` (:func:`obsdesign.report.html.convergence_part`, ``None`` without the paper's
+        The helper's futures: ``kernels`` (the simulator's kernel compiled, waited for before this process's
+        first simulation; ``None`` without a helper), ``convergence`` (:func:`obsdesign.report.html.convergence_part`, ``None`` without the paper's
         studies) and ``circle`` (feed -> the future of its runs, for the feeds the helper computes; empty
         without the circle test).
     steps : list of str
@@ -229,6 +230,8 @@ def render_page(cfg, jobs, steps, paper, circle, *, source_label, progress, data
         conv_index = len(claims)  # the convergence claims go here when the helper returns them
 
     bar.set_postfix_str("experiments")
+    if jobs.get("kernels") is not None:  # the helper has compiled the kernel: loaded from numba's cache
+        jobs["kernels"].result()
     exp = studies.experiments_study(cfg)
     claims += exp.claims
     ctx["experiments"] = exp
