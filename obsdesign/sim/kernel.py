@@ -303,7 +303,7 @@ def _run_samples(obs, est, ctrl, plant, sig, out, fst, ez, ubuf, ring):
     Compiled without numba's reference counting (``_nrt=False``): every array here is borrowed from
     :func:`run_loop`, which holds it for the whole call, and nothing is allocated. With it, each sample
     paid about 60 atomic increments and decrements of the arrays in the argument groups, bound afresh by
-    every inlined step (the refcount pruning pass removes none of them), about a quarter of the kernel's
+    every inlined step (the refcount pruning pass removes none of them), about 30 % of the kernel's
     time (benchmarks/RESULTS.md, issue 37). The arithmetic is the same, operation for operation.
     """
     x_ref, u_open, noise, quantization = sig.x_ref, sig.u_open, sig.noise, sig.quantization
