@@ -127,17 +127,18 @@ def _c(loop, repeats=3, lib=None, clock=time.perf_counter):
     best, outs = np.inf, None
     L = _flat(loop)
     for _ in range(repeats):
-        outs = [np.zeros(n) for _ in range(4)]
-        ptrs = [o.ctypes.data_as(P) for o in outs]
+        outs = [np.zeros(n) for _ in kernel.OUTPUT_NAMES]
+        ptrs = (P * len(outs))(*(o.ctypes.data_as(P) for o in outs))
         t0 = clock()
         lib.run_loop(ctypes.c_long(n), d(L.dt), ctypes.c_long(L.n_sub), ctypes.c_int(L.mode), ctypes.c_int(int(L.lag_model)),
                      d(L.m), d(L.K), d(L.G), d(L.Cf), d(L.s), d(L.sigma), d(L.beta), d(L.kappa),
                      keep["A0"][1], keep["A1"][1], keep["b0"][1], keep["b1"][1], keep["g0"][1], keep["g1"][1],
                      d(L.L1), d(L.L2), ctypes.c_int(L.schedule), ctypes.c_int(L.controller_code), d(L.kp), d(L.ki),
                      d(L.kd), d(L.tau_d), d(L.u_max), keep["lp_phi"][1], keep["lp_g0"][1], keep["lp_g1"][1],
-                     keep["x_ref"][1], keep["u_open"][1], keep["noise"][1], d(L.quantization), *ptrs)
+                     keep["x_ref"][1], keep["u_open"][1], keep["noise"][1], d(L.quantization), ctypes.c_long(L.delay),
+                     d(L.held_command), ptrs)
         best = min(best, clock() - t0)
-    return best, dict(zip(("x", "f_hat", "f_hat_filtered", "u"), outs))
+    return best, dict(zip(kernel.OUTPUT_NAMES, outs))
 
 
 @contextlib.contextmanager

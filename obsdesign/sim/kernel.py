@@ -234,6 +234,23 @@ def run_loop(obs, est, ctrl, plant, sig, out):
     drive's delay; ``sig`` (:class:`Signals`): reference, open-loop force, noise; ``out`` (:class:`Outputs`).
     Returns the number of samples written (less than the length when the run diverged).
     """
+    fst = np.zeros(max(friction_n_state(plant.friction_code, plant.plant_params), 1))  # lugre/dahl/gms state
+    ez = np.zeros(est.Phi.shape[0])  # state of a linear estimator
+    ubuf = delay_buffer(plant)  # the commands in flight of the drive's delay
+    ring = command_ring(ctrl)  # the controller's copy of them: its estimator's input
+    return _run_samples(obs, est, ctrl, plant, sig, out, fst, ez, ubuf, ring)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _run_samples(obs, est, ctrl, plant, sig, out, fst, ez, ubuf, ring):
+    """The samples of :func:`run_loop`, with its work arrays ``fst``, ``ez``, ``ubuf`` and ``ring``.
+
+    Compiled without numba's reference counting (``_nrt=False``): every array here is borrowed from
+    :func:`run_loop`, which holds it for the whole call, and nothing is allocated. With it, each sample
+    paid about 60 atomic increments and decrements of the arrays in the argument groups, bound afresh by
+    every inlined step (the refcount pruning pass removes none of them), about 30 % of the kernel's
+    time (benchmarks/RESULTS.md, issue 37). The arithmetic is the same, operation for operation.
+    """
     x_ref, u_open, noise, quantization = sig.x_ref, sig.u_open, sig.noise, sig.quantization
     v_ref, w_ff = sig.v_ref, sig.w_ff
     K_plant, G_plant = plant.K, plant.G
@@ -243,10 +260,6 @@ def run_loop(obs, est, ctrl, plant, sig, out):
     ps = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # x, v, w and the plant's pre-sliding branch
     ost = OBSERVER_STATE
     cst = CONTROLLER_STATE
-    fst = np.zeros(max(friction_n_state(plant.friction_code, plant.plant_params), 1))  # lugre/dahl/gms state
-    ez = np.zeros(est.Phi.shape[0])  # state of a linear estimator
-    ubuf = delay_buffer(plant)  # the commands in flight of the drive's delay
-    ring = command_ring(ctrl)  # the controller's copy of them: its estimator's input
     delay = plant.delay
     sc = paper_scalars(plant)
     for n in range(n_samples):
