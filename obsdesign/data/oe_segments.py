@@ -450,12 +450,17 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
         design[n] = var[i] / white[i] if white[i] > 0 else 1.0
         th = _theta(n, q[n])
         lo_v, hi_v = (_value(n, th - tq * sd), _value(n, th + tq * sd))
-        if n == "sigma1":  # a damping is not negative
-            lo_v = max(lo_v, 0.0)
         values[n] = q[n]
         std[n] = sd * (q[n] if n in _LOG else 1.0)
         intervals[n] = (lo_v, hi_v)
         ident[n], notes[n] = True, ""
+        if n == "sigma1" and q[n] <= 0.0:  # the model runs a negative damping as 0: the cost is flat below it
+            values[n] = 0.0
+            intervals[n] = (0.0, max(hi_v, tq * sd) if math.isfinite(sd) else math.inf)
+            ident[n], notes[n] = False, "at its lower bound 0 (a damping is not negative): the data do not pin it"
+            continue
+        if n == "sigma1":  # a damping is not negative
+            intervals[n] = (max(lo_v, 0.0), hi_v)
         if not math.isfinite(sd) or (n in _LOG and tq * sd > 0.5):
             ident[n], notes[n] = False, "95 % interval wider than a factor 1.65 either way"
         elif n not in _LOG and n != "offset" and tq * sd > abs(q[n]):
@@ -481,17 +486,17 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
                    else "the profile stays within the threshold at the edge of the range")
             ident[name] = False
             notes[name] = f"{why}: the data do not pin it; the profile interval is the honest one"
-            intervals[name] = (min(float(low) if not inside[0] else float(grid[0]), q[name]),
-                               max(float(high) if not inside[-1] else float(grid[-1]), q[name]))
+            intervals[name] = (min(float(low) if not inside[0] else float(grid[0]), values[name]),
+                               max(float(high) if not inside[-1] else float(grid[-1]), values[name]))
         else:
             lo_i, hi_i = intervals[name]
             intervals[name] = (max(lo_i, float(low)), min(hi_i, float(high))) if ident[name] else (float(low),
                                                                                                     float(high))
-            if not grid[k - 1] <= q[name] <= grid[k + 1]:
+            if not grid[k - 1] <= values[name] <= grid[k + 1] and not notes[name].startswith("at its lower bound"):
                 ident[name] = False
                 notes[name] = "the fit did not end in the profile's minimum"
             lo_i, hi_i = intervals[name]
-            intervals[name] = (min(lo_i, q[name]), max(hi_i, q[name]))
+            intervals[name] = (min(lo_i, values[name]), max(hi_i, values[name]))
     return SegmentFit(names=tuple(free), values=values, std=std, intervals=intervals, identifiable=ident,
                       notes=notes, profiles=profiles, segment_samples=seg.length, segments=int(seg.starts.size),
                       rms=float(np.sqrt(np.mean(r * r))) * noise, noise=noise, evaluations=budget.count,
