@@ -233,7 +233,8 @@ def refine_draw(spec: dict, clean: dict, seed: int, *, segment: float = SEGMENT)
 
 def run_axis_refine(name: str, draws: int, *, cache: Path | None = None, segment: float = SEGMENT) -> dict:
     """The segment output-error refinement over ``draws`` noise draws of axis ``name`` and its bounds
-    (:data:`REFINE_BOUNDS`); with ``cache`` each draw is kept in ``cache/<axis>_<seed>.json`` and reused."""
+    (:data:`REFINE_BOUNDS`); with ``cache`` each draw is kept in ``cache/<axis>_<seed>.json`` and the bounds in
+    ``cache/<axis>_bounds_L<segment>.json``, and reused."""
     import json
 
     spec = AXES[name]
@@ -257,10 +258,16 @@ def run_axis_refine(name: str, draws: int, *, cache: Path | None = None, segment
     noise_var = spec["noise"] ** 2 + spec["step"] ** 2 / 12.0
     force_var = (spec["i_noise"] * spec["gain"]) ** 2
     crbs = {}
+    saved = cache / f"{name}_bounds_L{segment:g}.json" if cache is not None else None
+    if saved is not None and saved.exists():
+        crbs = json.loads(saved.read_text(encoding="utf-8"))
     for label, (bristle, force) in REFINE_BOUNDS.items():
-        crbs[label] = segment_crb(spec, clean, base + (("sigma0", "sigma1") if bristle else ()), segment=segment,
-                                  noise_var=noise_var, force_var=force_var if force else 0.0,
-                                  hold=spec["timing"] == "hold")
+        if label not in crbs:
+            crbs[label] = segment_crb(spec, clean, base + (("sigma0", "sigma1") if bristle else ()),
+                                      segment=segment, noise_var=noise_var, force_var=force_var if force else 0.0,
+                                      hold=spec["timing"] == "hold")
+    if saved is not None:
+        saved.write_text(json.dumps(crbs), encoding="utf-8")
     return {"name": name, "spec": spec, "rows": rows, "crbs": crbs, "segment": segment,
             "seconds": time.perf_counter() - t0}
 
