@@ -231,10 +231,12 @@ def refine_draw(spec: dict, clean: dict, seed: int, *, segment: float = SEGMENT)
                            "high": f.intervals[n][1], "identifiable": bool(f.identifiable[n])} for n in f.names}}
 
 
-def run_axis_refine(name: str, draws: int, *, cache: Path | None = None, segment: float = SEGMENT) -> dict:
+def run_axis_refine(name: str, draws: int, *, cache: Path | None = None, segment: float = SEGMENT,
+                    cached_only: bool = False) -> dict:
     """The segment output-error refinement over ``draws`` noise draws of axis ``name`` and its bounds
     (:data:`REFINE_BOUNDS`); with ``cache`` each draw is kept in ``cache/<axis>_<seed>.json`` and the bounds in
-    ``cache/<axis>_bounds_L<segment>.json``, and reused."""
+    ``cache/<axis>_bounds_L<segment>.json``, and reused; ``cached_only``: only the draws in the cache (the
+    table names their seeds)."""
     import json
 
     spec = AXES[name]
@@ -245,6 +247,8 @@ def run_axis_refine(name: str, draws: int, *, cache: Path | None = None, segment
         path = cache / f"{name}_{seed}.json" if cache is not None else None
         if path is not None and path.exists():
             rows.append(json.loads(path.read_text(encoding="utf-8")))
+            continue
+        if cached_only:
             continue
         row = refine_draw(spec, clean, seed, segment=segment)
         if path is not None:
@@ -287,8 +291,10 @@ def refine_table(results: list[dict]) -> str:
         secs = [r["refine_s"] for r in rows]
         rms = [r["rms_over_noise"] for r in rows]
         warned = sum(bool(r["warning"]) for r in rows)
+        reran = sum(bool(r.get("rerun")) for r in rows)
         notes.append(f"- `{res['name']}`: {len(rows)} draws (seeds {', '.join(str(r['seed']) for r in rows)}), "
-                     f"refused {len(refused)}; timing found right in {right}; timing warning in {warned}; "
+                     f"refused {len(refused)}; timing right in {right} (in {reran} after the rerun the refine's "
+                     f"timing check asked for); a timing warning left in {warned}; "
                      f"L = {rows[0]['segment_samples'] if rows else '-'} samples, {rows[0]['segments'] if rows else '-'} "
                      f"segments; RMS residual {min(rms, default=0):.2f} to {max(rms, default=0):.2f} x the noise; "
                      f"refine {np.median(secs) if secs else 0:.0f} s a draw (median; {min(secs, default=0):.0f} to "
@@ -371,6 +377,7 @@ def main(argv=None) -> int:
                     help="run `refine` by segment output error after `identify` on each draw and tabulate it")
     ap.add_argument("--segment", type=float, default=SEGMENT, help="L [s] of the refinement and its bounds")
     ap.add_argument("--cache", type=Path, default=None, help="keep each refined draw here and reuse it")
+    ap.add_argument("--cached-only", action="store_true", help="with --cache: tabulate the draws kept there only")
     args = ap.parse_args(argv)
     if args.refine:
         return _main_refine(args)
@@ -417,11 +424,12 @@ def _write_section(heading: str, body: str, ends: tuple[str, ...]) -> None:
 def _main_refine(args) -> int:
     results = []
     for name in args.axes.split(","):
-        res = run_axis_refine(name, args.draws, cache=args.cache, segment=args.segment)
+        res = run_axis_refine(name, args.draws, cache=args.cache, segment=args.segment,
+                              cached_only=args.cached_only and args.cache is not None)
         results.append(res)
         print(f"{name}: {res['seconds']:.0f} s", file=sys.stderr)
     body = (f"{REFINE_HEADING}\n\n`python benchmarks/bench_recovery.py --refine segment --draws {args.draws} "
-            f"--axes {args.axes}`, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}. Each draw: `identify` "
+            f"--axes {args.axes}{' --cached-only' if args.cached_only else ''}`, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}. Each draw: `identify` "
             "with its defaults, then `refine_segments(trace, ident, parameters=())` (what `refine(..., model='lugre')` runs: segment output error, "
             f"L = {args.segment:g} s, three damping starts, the timing check; the bristle parameters fitted, not "
             "profiled). Same axes, noise draws and seeds as the table above.\n\n" + refine_table(results) + "\n")
