@@ -18,7 +18,7 @@ import numpy as np
 
 from .choices import MAX_DELAY
 from .timing import TIMING_MARGIN
-from .oe_segments import (DAMPING_STARTS, DYNAMIC, PROFILE_ITERATIONS, PROFILE_POINTS, SEGMENT, STATIC, UNITS, SegmentFit,
+from .oe_segments import (ALTERNATIVE_ITERATIONS, DAMPING_STARTS, DYNAMIC, PROFILE_ITERATIONS, PROFILE_POINTS, SEGMENT, STATIC, UNITS, SegmentFit,
                           fit_segments)
 
 __all__ = ["SegmentRefinement", "refine_segments"]
@@ -164,8 +164,9 @@ def refine_segments(trace, ident, *, parameters: tuple, segment: float = SEGMENT
     crit = 2.0 * math.sqrt(start["sigma0"] * ident.m)
     ranges["sigma1"] = (1e-3 * crit, 30.0 * crit)
     per_fit = len(free) + 5
-    total = int(len(DAMPING_STARTS) * (12 + 12 + 30) * per_fit + len(profile) * (PROFILE_POINTS * PROFILE_ITERATIONS * (per_fit - 1)
-                                                           + 30 * per_fit))
+    total = int(len(DAMPING_STARTS) * (12 + 12 + 30) * per_fit
+                + len(_neighbours(ident.input_timing, d)) * ALTERNATIVE_ITERATIONS * per_fit
+                + len(profile) * (PROFILE_POINTS * PROFILE_ITERATIONS * (per_fit - 1) + 30 * per_fit))
     bar = None
     if progress:
         from tqdm import tqdm
