@@ -468,8 +468,8 @@ def test_rotary_lugre_config_accepted(sigma0):
     damping the 2e-4 kg m^2 inertia (sqrt(sigma0 J)): read, and in the plant's kernel array as given (they were
     refused below the linear guide's 1e3 N/m)."""
     from obsdesign.friction.lugre import L_SIGMA0, L_SIGMA1
+    from obsdesign.loop.plant import plant_friction_arrays
     from obsdesign.params import Config
-    from obsdesign.sim.simulate import plant_friction_arrays
 
     sigma1 = math.sqrt(sigma0 * 2e-4)
     cfg = Config.from_toml(_rotary_toml(f"sigma0 = {sigma0!r}\nsigma1 = {sigma1!r}\nCf = 0.02\nFs = 0.03\n"

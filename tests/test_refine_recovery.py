@@ -17,7 +17,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
-from obsdesign.data.oe_segments import _covariance  # noqa: E402
+from obsdesign.data.oe_stats import segment_covariance as _covariance  # noqa: E402
 
 
 def _linear_problem(seed, n_seg=30, L=40, g=3, ar=0.0):

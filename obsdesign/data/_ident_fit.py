@@ -196,4 +196,4 @@ def timing_spread(position: np.ndarray, force: np.ndarray, found, fitted: dict, 
 
 def _percent(shift: float, value: float, unit: str) -> str:
     """The shift relative to the estimate, or in its unit where it is larger than the estimate (an offset near 0)."""
-    return f"{100.0 * shift / abs(value):+.2g} %" if abs(shift) <= abs(value) else f"{shift:+.3g} {unit}"
+    return f"{100.0 * shift / abs(value):+.2g} %" if 0.0 < abs(value) and abs(shift) <= abs(value) else f"{shift:+.3g} {unit}"

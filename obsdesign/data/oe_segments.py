@@ -32,6 +32,7 @@ from numba import njit
 
 from ..friction.kernels import friction_plant_step
 from ..friction.registry import FRICTION_MODELS
+from .oe_stats import segment_covariance
 
 __all__ = ["SEGMENT", "DYNAMIC", "STATIC", "UNITS", "DAMPING_STARTS", "PROFILE_POINTS", "PROFILE_ITERATIONS", "SegmentFit", "segment_bounds", "substeps",
            "simulate_segments", "fit_segments", "BudgetExceeded"]
@@ -304,23 +305,6 @@ def _gauss_newton(seg, names, q, nu, *, iterations):
     return q, nu, cost, r, mom
 
 
-def _covariance(names, r, mom):
-    """Covariance of the fitted coordinates, nuisances projected out: the larger of white-noise and
-    segment-clustered (sandwich) per parameter."""
-    A, B, C, Jg, Jn = mom
-    Cinv = np.linalg.pinv(C)
-    Jp = Jg - np.einsum("sln,snm,sgm->slg", Jn, Cinv, B)
-    Ared = np.einsum("slg,slh->gh", Jp, Jp)
-    d = np.sqrt(np.maximum(np.diag(Ared), 1e-300))
-    Ainv = np.linalg.pinv(Ared / np.outer(d, d), rcond=1e-10) / np.outer(d, d)
-    n_seg = r.shape[0]
-    dof = max(r.size - len(names) - 3 * n_seg, 1)
-    white = float(np.sum(r * r)) / dof * Ainv
-    score = np.einsum("slg,sl->sg", Jp, r)
-    cluster = n_seg / max(n_seg - 1, 1) * Ainv @ (score.T @ score) @ Ainv
-    return np.maximum(np.diag(white), np.diag(cluster)), np.diag(white)
-
-
 def _smooth(x, dt):
     """Zero-phase low-passed position (a tenth of the rate) and its derivative: the segments' first states."""
     from scipy import signal
@@ -444,7 +428,7 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
     if not np.all(np.abs(r) < 1e6):
         raise FloatingPointError("the model could not be simulated from the start (IDIM-LS's estimate) on every "
                                  "segment")
-    var, white = _covariance(free, r, mom)
+    var, white = segment_covariance(free, r, mom)
     tq = float(stats.t.ppf(0.975, max(r.shape[0] - 1, 1)))
     design = {}
     values, std, intervals, ident, notes = {}, {}, {}, {}, {}

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-__all__ = ["NEAR_NULL", "DIFF_STEP"]
+__all__ = ["NEAR_NULL", "DIFF_STEP", "segment_covariance"]
 
 #: A direction of the scaled Jacobian whose singular value is below this fraction of the largest is null.
 NEAR_NULL = 1e-4
@@ -127,3 +127,38 @@ def _null_loadings(A: np.ndarray) -> np.ndarray:
     u, sv, _ = np.linalg.svd(A / np.outer(d, d))
     small = np.sqrt(sv) < NEAR_NULL * math.sqrt(sv[0])
     return np.any(np.abs(u[:, small]) > 0.3, axis=1) if np.any(small) else np.zeros(A.shape[0], bool)
+
+
+def segment_covariance(names, r, mom):
+    """Covariance of the segment fit's coordinates (:mod:`obsdesign.data.oe_segments`), the segments' initial
+    states projected out (Schur complement): per parameter the larger of the white-noise and the
+    segment-clustered (sandwich) variance, and the white-noise one.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The fitted parameters (their number sets the degrees of freedom).
+    r : ndarray
+        Weighted residuals, segments x samples.
+    mom : tuple
+        ``(A, B, C, Jg, Jn)``: the moments of the Jacobian and the Jacobian itself in the global parameters
+        (``Jg``, segments x samples x parameters) and in each segment's nuisances (``Jn``, x 3).
+
+    Returns
+    -------
+    var, white : ndarray
+        The variances used for the intervals and the white-noise ones (tests/test_refine_recovery.py checks
+        both against the full least-squares problem).
+    """
+    A, B, C, Jg, Jn = mom
+    Cinv = np.linalg.pinv(C)
+    Jp = Jg - np.einsum("sln,snm,sgm->slg", Jn, Cinv, B)
+    Ared = np.einsum("slg,slh->gh", Jp, Jp)
+    d = np.sqrt(np.maximum(np.diag(Ared), 1e-300))
+    Ainv = np.linalg.pinv(Ared / np.outer(d, d), rcond=1e-10) / np.outer(d, d)
+    n_seg = r.shape[0]
+    dof = max(r.size - len(names) - 3 * n_seg, 1)
+    white = float(np.sum(r * r)) / dof * Ainv
+    score = np.einsum("slg,sl->sg", Jp, r)
+    cluster = n_seg / max(n_seg - 1, 1) * Ainv @ (score.T @ score) @ Ainv
+    return np.maximum(np.diag(white), np.diag(cluster)), np.diag(white)

@@ -158,7 +158,18 @@ def noise_variance(chain, length: int) -> float:
 
 
 def impulse_length(q: int) -> int:
-    """Length of the impulse responses of :func:`noise_variance` for the decimation factor ``q``."""
+    """Length of the impulse responses of :func:`noise_variance` for the decimation factor ``q``.
+
+    Parameters
+    ----------
+    q : int
+        Decimation factor.
+
+    Examples
+    --------
+    >>> impulse_length(1), impulse_length(20)
+    (4096, 8000)
+    """
     return max(4096, 400 * q)
 
 
