@@ -29,7 +29,7 @@ import dataclasses
 import functools
 import math
 from dataclasses import dataclass
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
 
@@ -233,7 +233,7 @@ def _resolve(phi: float, tau: float, max_S: float, pm: float, N: float, dt: floa
     if not all(math.isfinite(x) and x > 0 for x in (k0, T0, kp0, k0 / T0, k0 * tau, tau_d0, dt / tau_d0, dt / tau)):
         raise OverflowError(f"pid: the paper's PID is not finite (k = {k0:g}, T_I = {T0:g}, kp = {kp0:g}, "
                             f"tau_d = {tau_d0:g} s)")
-    loop = dict(tau=tau, phi=phi, derivative_N=N, dt=dt, delay_samples=d)
+    loop: dict[str, Any] = dict(tau=tau, phi=phi, derivative_N=N, dt=dt, delay_samples=d)
     paper_pm, w0, ms0, _, paper_stable = sampled_loop_margins(*_series(k0, T0, tau), **loop)
     paper_pm = paper_pm if paper_stable else -math.inf
     cost = pm - paper_pm

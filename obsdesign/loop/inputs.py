@@ -285,8 +285,9 @@ def prepare(
         band = settle_band(cfg, span=float(np.max(sc.x_ref) - np.min(sc.x_ref)), given=settle_tol)
     friction_code, plant_params = plant_friction_arrays(plant_cfg)
     if plant == "model" and friction_code != 0:
+        pf = plant_cfg.plant_friction
         raise ValueError(f"plant: the 'model' plant has the paper's friction, found [plant_friction] model "
-                         f"{plant_cfg.plant_friction.model!r}")
+                         f"{pf.model if pf is not None else 'paper'!r}")
     return LoopInputs(
         config=cfg, scenario=sc, plant=plant, settle_tol=None if band is None else band.value, sampled=ctrl,
         n_sub=substeps, settle_rule="given" if band is None else band.rule,

@@ -308,7 +308,7 @@ def _observe(obs, est, x_meas, u, k_true, out_vh, out_fh, out_ff, out_k):
         xm_prev = xm
 
 
-@njit(cache=True, error_model="numpy", _nrt=False)
+@njit(cache=True, error_model="numpy", _nrt=False)  # type: ignore[call-overload]  # numba-internal flag
 def _observe_paper(obs, x_meas, u, k_true, out_vh, out_fh, out_ff, out_k):
     # no reference counting (_nrt=False; it allocates nothing, its arrays are the caller's): the inlined
     # step binds obs's nine arrays afresh every sample, 18 atomic operations (obsdesign.sim.kernel._run_samples)

@@ -241,7 +241,7 @@ def run_loop(obs, est, ctrl, plant, sig, out):
     return _run_samples(obs, est, ctrl, plant, sig, out, fst, ez, ubuf, ring)
 
 
-@njit(cache=True, error_model="numpy", _nrt=False)
+@njit(cache=True, error_model="numpy", _nrt=False)  # type: ignore[call-overload]  # numba-internal flag
 def _run_samples(obs, est, ctrl, plant, sig, out, fst, ez, ubuf, ring):
     """The samples of :func:`run_loop`, with its work arrays ``fst``, ``ez``, ``ubuf`` and ``ring``.
 
