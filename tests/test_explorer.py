@@ -235,7 +235,10 @@ def test_the_step_follows_the_loop_fields(page, dt, delay, kp_scale):
     assert x_page.shape == x_sim.shape and np.max(np.abs(x_sim)) > 5e-4
     assert np.max(np.abs(x_page - x_sim)) <= FIELDS_TOLERANCE
     # the delay matters: the same fields without it are another response
-    x_nodelay = run(dataclasses.replace(loop, config=loop.config.override(delay_samples=0))).x
+    # (the loop's delay is its controller's, the one value the plant and the estimator's ring read)
+    no_delay = loop.sampled.config.override(delay_samples=0)
+    x_nodelay = run(dataclasses.replace(loop, config=loop.config.override(delay_samples=0),
+                                        sampled=dataclasses.replace(loop.sampled, config=no_delay))).x
     assert np.max(np.abs(x_nodelay - x_sim)) > 100 * FIELDS_TOLERANCE
 
 
