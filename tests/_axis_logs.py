@@ -226,3 +226,19 @@ def axis_trace(spec: dict, log: dict):
     units = Units(position="rad" if rotary else "m", input="A", rotary=rotary)
     return Trace(t=log["t"], position=log["x"], force=log["i"] * spec["gain"], sample_time=1.0 / spec["rate"],
                  input_gain=spec["gain"], units=units, source="simulated")
+
+
+def pure_inertia_log(*, L: int, rate: float = 1e3, m: float = 0.5, offset: float = 0.3, seed: int = 2) -> dict:
+    """A pure inertia under a held random force, no friction, four segments of ``L`` samples: the closed-form
+    reference of the segment Cramer-Rao bound (benchmarks/bench_recovery.segment_crb). Returns the axis ``spec``,
+    the ``clean`` log in simulate_axis's layout, the acceleration ``acc`` and ``dt``, ``n``."""
+    spec = dict(rate=rate, m=m, sigma=0.0, Cf=1e-9, Fs=1e-9, vs=1.0, offset=offset, sigma0=1e3, sigma1=0.0)
+    rng = np.random.default_rng(seed)
+    n = 4 * L
+    u = np.repeat(rng.normal(0.0, 1.0, n // 10), 10)
+    dt = 1.0 / rate
+    acc = (u - offset) / m
+    v = np.concatenate([[0.0], np.cumsum(acc) * dt])[:-1]
+    x = np.concatenate([[0.0], np.cumsum(v * dt + 0.5 * acc * dt**2)])[:-1]
+    clean = {"state": (x, v, np.zeros(n)), "u_sub": np.repeat(u, SUBSTEPS)}
+    return {"spec": spec, "clean": clean, "acc": acc, "dt": dt, "n": n}

@@ -182,19 +182,12 @@ def test_segment_crb_of_a_pure_inertia_is_the_closed_form():
     in 1/m, offset/m; the bound from the closed-form Jacobian (Schur complement of x0, v0) equals the
     benchmark's finite-difference one."""
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-    from _axis_logs import SUBSTEPS
+    from _axis_logs import pure_inertia_log
     from bench_recovery import segment_crb
 
-    rate, m, offset, L = 1e3, 0.5, 0.3, 100
-    spec = dict(rate=rate, m=m, sigma=0.0, Cf=1e-9, Fs=1e-9, vs=1.0, offset=offset, sigma0=1e3, sigma1=0.0)
-    rng = np.random.default_rng(2)
-    n = 4 * L
-    u = np.repeat(rng.normal(0.0, 1.0, n // 10), 10)
-    dt = 1.0 / rate
-    acc = (u - offset) / m
-    v = np.concatenate([[0.0], np.cumsum(acc) * dt])[:-1]
-    x = np.concatenate([[0.0], np.cumsum(v * dt + 0.5 * acc * dt**2)])[:-1]
-    clean = {"state": (x, v, np.zeros(n)), "u_sub": np.repeat(u, SUBSTEPS)}
+    m, offset, L = 0.5, 0.3, 100
+    log = pure_inertia_log(L=L, m=m, offset=offset)
+    spec, clean, acc, dt, n = log["spec"], log["clean"], log["acc"], log["dt"], log["n"]
     crb = segment_crb(spec, clean, ("m", "offset"), noise_var=1e-12, segment=L * dt)
     info = np.zeros((2, 2))
     t = np.arange(L) * dt

@@ -96,19 +96,12 @@ def test_crb_with_the_logged_force_noise_is_the_closed_form():
     """A pure inertia under a held force: a sample's force error d moves the position of every later sample
     k by d dt^2 / m (k - j - 1/2). With the logged force's noise the bound is (J' Sigma^-1 J) with
     Sigma = s^2 I + f^2 G G' per segment (nuisances projected out), computed here from the closed forms."""
-    from _axis_logs import SUBSTEPS
+    from _axis_logs import pure_inertia_log
     from bench_recovery import segment_crb
 
-    rate, m, offset, L = 1e3, 0.5, 0.3, 50
-    spec = dict(rate=rate, m=m, sigma=0.0, Cf=1e-9, Fs=1e-9, vs=1.0, offset=offset, sigma0=1e3, sigma1=0.0)
-    rng = np.random.default_rng(2)
-    n = 4 * L
-    u = np.repeat(rng.normal(0.0, 1.0, n // 10), 10)
-    dt = 1.0 / rate
-    acc = (u - offset) / m
-    v = np.concatenate([[0.0], np.cumsum(acc) * dt])[:-1]
-    x = np.concatenate([[0.0], np.cumsum(v * dt + 0.5 * acc * dt**2)])[:-1]
-    clean = {"state": (x, v, np.zeros(n)), "u_sub": np.repeat(u, SUBSTEPS)}
+    m, offset, L = 0.5, 0.3, 50
+    log = pure_inertia_log(L=L, m=m, offset=offset)
+    spec, clean, acc, dt, n = log["spec"], log["clean"], log["acc"], log["dt"], log["n"]
     noise_var, force_var = 1e-12, 1e-4
     crb = segment_crb(spec, clean, ("m", "offset"), noise_var=noise_var, force_var=force_var, segment=L * dt)
     k = np.arange(L)
