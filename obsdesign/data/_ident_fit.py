@@ -24,12 +24,13 @@ import numpy as np
 from ._idim import quantization, second_difference
 from ._ident_rows import FILTER_ORDER
 from .estimate import widened
+from .presliding import fit_presliding
 from .stribeck_rows import fit_rows, row_maker, stribeck_floor
 from .timing import aligned
 from .trace import REVERSAL_THRESHOLD
 from .uncertainty import column_noise, white_variance
 
-__all__ = ["fit_aligned", "timing_spread", "TIMING_SHIFTED"]
+__all__ = ["fit_aligned", "timing_spread", "settled_rows", "presliding_scale", "TIMING_SHIFTED"]
 
 #: The parameters whose intervals the competing timings widen (those the shift is reported for).
 TIMING_SHIFTED = ("m", "sigma", "Cf", "offset", "sigma_pos", "sigma_neg", "Cf_pos", "Cf_neg", "Fs", "vs")
@@ -37,7 +38,7 @@ TIMING_SHIFTED = ("m", "sigma", "Cf", "offset", "sigma_pos", "sigma_neg", "Cf_po
 
 def fit_aligned(position: np.ndarray, force: np.ndarray, *, dt: float, filter_hz: float, q: int, model: str,
                 stribeck: str, fix: dict, bounds: dict, min_speed: float | None, stribeck_min_speed: float | None,
-                n_boot: int, seed: int, speed: str) -> dict:
+                n_boot: int, seed: int, speed: str, travel_floor: float = 0.0) -> dict:
     """The rows and the fit of :func:`obsdesign.data.identify` on aligned position and force.
 
     Parameters
@@ -50,6 +51,9 @@ def fit_aligned(position: np.ndarray, force: np.ndarray, *, dt: float, filter_hz
         As for :func:`~obsdesign.data.identify` (checked).
     speed : str
         The speed's unit (messages).
+    travel_floor : float
+        Rows within this travel of the last velocity reversal are left out [m, rad] (:func:`settled_rows`; 0:
+        none).
 
     Returns
     -------
@@ -92,11 +96,74 @@ def fit_aligned(position: np.ndarray, force: np.ndarray, *, dt: float, filter_hz
     floor, rule = stribeck_floor(threshold=threshold, min_speed=min_speed, stribeck_min_speed=stribeck_min_speed,
                                  stribeck=stribeck, white=white, sos=sos, dt=dt, q=q, quantum=quantum,
                                  filter_hz=filter_hz, speed=speed)
-    fitted = fit_rows(row_maker(stacked, v[keep], dec), threshold=threshold, floor=floor, floor_rule=rule,
+    settled = settled_rows(x_f, v, travel_floor, lambda c: dec(signal.sosfiltfilt(sos, c)[keep]))
+    fitted = fit_rows(row_maker(stacked, v[keep], dec, settled), threshold=threshold, floor=floor, floor_rule=rule,
                       peak=peak, speed=speed, model=model, stribeck=stribeck, fix=fix, bounds=bounds,
                       noise_var=noise_var, n_boot=n_boot, seed=seed)
     return dict(fitted, base_threshold=threshold, floor=floor, x_f=x_f, v=v, a=a, u_f=u_f, keep=keep, white=white,
                 quantum=quantum, noise_var=noise_var, noise_rms=noise_rms(white, quantum, sos, q))
+
+
+#: A decimated row is within the pre-sliding travel when the decimated indicator of its samples exceeds this.
+NEAR_SHARE = 0.02
+
+
+def settled_rows(x_f: np.ndarray, v: np.ndarray, travel_floor: float, rows: Callable) -> np.ndarray | None:
+    """Which decimated rows are at least ``travel_floor`` of travel past the last velocity reversal.
+
+    After a reversal the friction is in pre-sliding until the axis has travelled ``1/s`` (the paper's map,
+    eq:2:3:3-2:3:4; LuGre's bristles a few ``Cf/sigma0``): there it is below the Coulomb level the gross-sliding
+    model assumes, at speeds above any min speed on a fast reversal. Every sign change of ``v`` counts (a slow
+    reversal turns the friction too; at a standstill the travel is small and the rows are below the min speed
+    anyway). The indicator of the samples within the floor is low-passed and decimated like the force
+    (``rows``); a row where it exceeds :data:`NEAR_SHARE` is left out.
+
+    Parameters
+    ----------
+    x_f, v : ndarray
+        Filtered position and its velocity, full rate.
+    travel_floor : float
+        The travel [m, rad]; 0 or less: every row (``None``).
+    rows : callable
+        A full-rate column to the fit's rows (the low-pass, the transients cut, the decimation).
+
+    Returns
+    -------
+    ndarray of bool or None
+        Per decimated row, True where it may be used; ``None`` when ``travel_floor`` is 0.
+
+    Examples
+    --------
+    >>> t = np.arange(4000) * 1e-3
+    >>> x = 0.01 * np.sin(2 * np.pi * t)           # reversals at 0.25, 0.75, ... s
+    >>> ok = settled_rows(x, np.gradient(x, 1e-3), 1e-3, lambda c: c)
+    >>> bool(ok[300]), bool(ok[500]), round(float(np.mean(ok)), 2)   # 1 mm of 20 mm: cos(phi) = 0.9
+    (False, True, 0.86)
+    """
+    if not travel_floor > 0.0:
+        return None
+    moving = np.flatnonzero(v != 0.0)
+    sign = np.sign(v[moving])
+    revs = moving[1:][sign[1:] != sign[:-1]]   # every sign change (zeros skipped): a slow one turns the friction too
+    last = np.full(v.size, -1)
+    last[revs] = revs
+    last = np.maximum.accumulate(last)
+    near = (last >= 0) & (np.abs(x_f - x_f[np.maximum(last, 0)]) < travel_floor)
+    return np.abs(rows(near.astype(float))) <= NEAR_SHARE
+
+
+def presliding_scale(fitted: dict, position: np.ndarray, force: np.ndarray, *, dt: float, rows: int, window: float,
+                     length_unit: str) -> tuple[float | None, str]:
+    """``s`` and its note (:func:`~obsdesign.data.presliding.fit_presliding`) from :func:`fit_aligned`'s result.
+
+    ``position``, ``force``: the aligned columns the fit was made on; ``rows``: the samples a row of the dwell
+    test stands for; ``window``: the pre-sliding window; ``length_unit``: the note's.
+    """
+    keep, x_f, v, a, u_f = (fitted[k] for k in ("keep", "x_f", "v", "a", "u_f"))
+    values = fitted["est"]["values"]
+    return fit_presliding(x=position[keep], x_f=x_f[keep], v=v[keep], a=a[keep], u_f=u_f[keep], dt=dt,
+                          m=float(values["m"]), sigma=float(values["sigma"]), Cf=float(values["Cf"]),
+                          offset=float(values["offset"]), rows=rows, window=window, length_unit=length_unit)
 
 
 def noise_rms(white: float, quantum: float, sos: np.ndarray, q: int) -> float:
@@ -134,7 +201,7 @@ def noise_rms(white: float, quantum: float, sos: np.ndarray, q: int) -> float:
 
 def timing_spread(position: np.ndarray, force: np.ndarray, found, fitted: dict, intervals: dict, values: dict, *,
                   dt: float, filter_hz: float, q: int, model: str, fix: dict, bounds: dict, speed: str,
-                  unit: Callable[[str], str]) -> tuple[dict, dict, str]:
+                  unit: Callable[[str], str], travel_floor: float = 0.0) -> tuple[dict, dict, str]:
     """Intervals widened to the fits under the timings the data do not reject (module docstring).
 
     Parameters
@@ -147,7 +214,7 @@ def timing_spread(position: np.ndarray, force: np.ndarray, found, fitted: dict, 
         :func:`fit_aligned`'s result under the chosen timing.
     intervals, values : dict
         Its intervals and estimates.
-    dt, filter_hz, q, model, fix, bounds, speed :
+    dt, filter_hz, q, model, fix, bounds, speed, travel_floor :
         As for :func:`fit_aligned`.
     unit : callable
         A parameter's unit by name (:meth:`obsdesign.data.units.Units.si`), for a shift larger than its estimate.
@@ -173,7 +240,7 @@ def timing_spread(position: np.ndarray, force: np.ndarray, found, fitted: dict, 
             alt = fit_aligned(*aligned(position, force, timing, delay), dt=dt, filter_hz=filter_hz, q=q, model=model,
                               stribeck="on" if kept else "off", fix=fix, bounds=bounds,
                               min_speed=fitted["base_threshold"], stribeck_min_speed=fitted["floor"], n_boot=0, seed=0,
-                              speed=speed)
+                              speed=speed, travel_floor=travel_floor)
         except ValueError:
             failed.append(f"{timing}/{delay}")
             continue

@@ -46,6 +46,8 @@ def rows(self) -> list[tuple[str, str]]:
              ("selection", words(self.selection or "-")), ("intervals", self.interval_method or "-"),
              ("NRMSE", f"{self.nrmse_percent:.3g} %"), ("condition number", f"{self.condition_number:.4g}"),
              ("rows in the fit", f"{self.samples} (|v| > {self.min_speed:.3g} {u.si('speed')}"
+              + (f", past {self.travel_floor:.3g} {u.length_unit} of travel after each reversal (1/s: pre-sliding)"
+                 if self.travel_floor else "")
               + (f", {self.window}" if self.window else "") + ")"),
              ("filter", f"Butterworth {FILTER_ORDER}th order {self.filter_hz:.4g} Hz, zero phase ({words(self.filter_rule)})"),
              ("decimation", f"{self.decimation} (sample time {self.sample_time:g} s)")]

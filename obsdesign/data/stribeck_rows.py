@@ -79,7 +79,8 @@ def stribeck_floor(*, threshold: float, min_speed: float | None, stribeck_min_sp
     return min(trusted, threshold), f"trusted speed: {rule}" + ("" if trusted < threshold else ", at least the min speed")
 
 
-def row_maker(stacked: dict, v_full: np.ndarray, dec: Callable) -> Callable[[float], tuple[dict, np.ndarray]]:
+def row_maker(stacked: dict, v_full: np.ndarray, dec: Callable,
+              settled: np.ndarray | None = None) -> Callable[[float], tuple[dict, np.ndarray]]:
     """``rows_above(limit) -> (cols, y)``: the decimated columns of the rows with ``|v| > limit``.
 
     ``cols["shape"]`` computes the Stribeck columns at the full rate (``v_full``) and decimates them (``dec``)
@@ -93,9 +94,13 @@ def row_maker(stacked: dict, v_full: np.ndarray, dec: Callable) -> Callable[[flo
         The velocity at the full rate over the kept samples.
     dec : callable
         The decimation of a stack of columns.
+    settled : ndarray of bool, optional
+        Rows that may be used at all (past the pre-sliding travel, :func:`obsdesign.data._ident_fit.settled_rows`).
     """
     def rows_above(limit: float) -> tuple[dict, np.ndarray]:
         mask = np.abs(stacked["v"]) > limit
+        if settled is not None:
+            mask &= settled
         cols = {k: c[mask] for k, c in stacked.items() if k != "y"}
 
         def shape(vs: float, parts: tuple[str, ...]) -> dict:  # Stribeck columns at the full rate, decimated
