@@ -341,3 +341,35 @@ def test_presliding_rows_do_not_bias_the_fit(s, monkeypatch):
     monkeypatch.setattr(sys.modules["obsdesign.data.identify"], "PRESLIDING_TRAVEL", 0.0)
     before = identify(trace, presliding_window=1e-3)
     assert before.Cf < 0.99 * TRUE["Cf"] and before.travel_floor == 0.0
+
+
+def test_fast_reversals_resolve_s_in_the_wider_window(monkeypatch):
+    # a 4 kHz axis (2^20 counts/rev, the paper's pre-sliding over 0.5 mrad) tracking a chirp up to 4 Hz: no
+    # reversal dwells 5 rows within 0.1 mrad, so s needs the wider window; without the travel floor Coulomb is
+    # 6.8 % low (outside its interval on 2 of 6 seeds), with it the intervals hold the truth
+    q = 2 * math.pi / 2**20
+    cfg = od.load_preset("vcm").override(m=2.5e-3, sigma=1e-3, Cf=0.05, s=2000.0, G=0.0, dt=2.5e-4,
+                                         noise_rms=3e-6, quantization=q)
+    res = od.simulate(cfg, od.sim.Chirp(f0=0.5, f1=4.0, peak_velocity=2.0), controller="pid", duration=8.0, seed=0)
+    trace = Trace(t=res.t, position=res.x_meas, force=res.u, sample_time=2.5e-4)
+    ident = identify(trace)
+    assert ident.s is not None and ident.travel_floor == pytest.approx(1.0 / ident.s)
+    for name, value in dict(m=2.5e-3, sigma=1e-3, Cf=0.05).items():
+        lo, hi = ident.intervals[name]
+        assert lo <= value <= hi, (name, lo, hi)
+    assert ident.m == pytest.approx(2.5e-3, rel=0.005) and ident.Cf == pytest.approx(0.05, rel=0.03)
+    module = sys.modules["obsdesign.data.identify"]
+    monkeypatch.setattr(module, "WINDOW_STEPS", 1)   # the default window alone: s not resolved, no floor
+    narrow = identify(trace)
+    assert narrow.s is None and narrow.travel_floor == 0.0
+    assert narrow.Cf < 0.95 * 0.05 and narrow.m < 0.99 * 2.5e-3
+
+
+def test_a_travel_floor_that_leaves_too_few_rows_keeps_them(monkeypatch):
+    # s so small that 1/s covers every stroke: identify keeps its first fit and says why, not an error
+    trace = _simulated_trace(3000.0)
+    monkeypatch.setattr(sys.modules["obsdesign.data.identify"], "PRESLIDING_TRAVEL", 1e6)
+    ident = identify(trace, presliding_window=1e-3)
+    assert ident.travel_floor == 0.0 and ident.s is not None
+    assert "the fit keeps the rows within 1/s of the reversals: without them" in ident.s_note
+    assert "expected at least 20" in ident.s_note

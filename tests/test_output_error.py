@@ -84,7 +84,9 @@ def test_emps_what_is_identifiable():
     assert not alone["s"].identifiable and alone["s"].high / alone["s"].low > 100
     joint = refine(tr, ident, parameters=("s", "Cf", "offset"))
     assert joint.rms < 0.25 * alone.rms          # the Coulomb level at the reversals explains the windows, not s
-    assert joint["Cf"].identifiable and joint["offset"].identifiable and joint["Cf"].high < ident.Cf
+    # the Coulomb level at the reversals lies below the sliding fit's (19.45 against 20.40 N); with the held m and
+    # sigma's 95 % intervals carried (oe_stats.held_std) its interval reaches 20.55 N, just above
+    assert joint["Cf"].identifiable and joint["offset"].identifiable and joint["Cf"].value < ident.Cf
     asym = refine(tr, identify(tr, model="asymmetric"), parameters=("s", "Cf", "offset"))
     assert asym["s"].identifiable and 2e4 < asym["s"].value < 6e4
 
@@ -181,7 +183,10 @@ def test_synthetic_lugre_sigma0_sigma1_and_zero_delay_recovered():
                    initial={"sigma1": 400.0}, method="windows")
     _recovered(delay, dict(sigma0=2e5, Cf=0.35), dict(sigma0=0.05, Cf=0.005))
     d = delay["delay"]
-    assert d.low <= 0.0 <= d.high and d.high - d.low < 2.5 * tr.sample_time and abs(d.value) < tr.sample_time
+    # the interval is about 3 samples wide since the held m and sigma carry their 95 % intervals (oe_stats.held_std;
+    # 2.0 with their standard errors alone), and says so: "wider than one sample"
+    assert d.low <= 0.0 <= d.high and d.high - d.low < 4.0 * tr.sample_time and abs(d.value) < tr.sample_time
+    assert d.identifiable == (d.high - d.value <= tr.sample_time)
 
 
 @pytest.mark.slow

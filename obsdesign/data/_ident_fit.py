@@ -97,6 +97,9 @@ def fit_aligned(position: np.ndarray, force: np.ndarray, *, dt: float, filter_hz
                                  stribeck=stribeck, white=white, sos=sos, dt=dt, q=q, quantum=quantum,
                                  filter_hz=filter_hz, speed=speed)
     settled = settled_rows(x_f, v, travel_floor, lambda c: dec(signal.sosfiltfilt(sos, c)[keep]))
+    if settled is not None and np.count_nonzero(settled & (np.abs(stacked["v"]) > threshold)) < MIN_SETTLED_ROWS:
+        raise ValueError(f"{np.count_nonzero(settled & (np.abs(stacked['v']) > threshold))} rows are left, "
+                         f"expected at least {MIN_SETTLED_ROWS}")
     fitted = fit_rows(row_maker(stacked, v[keep], dec, settled), threshold=threshold, floor=floor, floor_rule=rule,
                       peak=peak, speed=speed, model=model, stribeck=stribeck, fix=fix, bounds=bounds,
                       noise_var=noise_var, n_boot=n_boot, seed=seed)
@@ -104,6 +107,8 @@ def fit_aligned(position: np.ndarray, force: np.ndarray, *, dt: float, filter_hz
                 quantum=quantum, noise_var=noise_var, noise_rms=noise_rms(white, quantum, sos, q))
 
 
+#: Rows a fit without the pre-sliding rows needs (:func:`settled_rows`); fewer, and identify keeps them.
+MIN_SETTLED_ROWS = 20
 #: A decimated row is within the pre-sliding travel when the decimated indicator of its samples exceeds this.
 NEAR_SHARE = 0.02
 
