@@ -30,7 +30,7 @@ from .timing import aligned
 from .trace import REVERSAL_THRESHOLD
 from .uncertainty import column_noise, white_variance
 
-__all__ = ["fit_aligned", "timing_spread", "settled_rows", "presliding_scale", "TIMING_SHIFTED"]
+__all__ = ["fit_aligned", "timing_spread", "settled_rows", "presliding_scale", "past_presliding", "TIMING_SHIFTED"]
 
 #: The parameters whose intervals the competing timings widen (those the shift is reported for).
 TIMING_SHIFTED = ("m", "sigma", "Cf", "offset", "sigma_pos", "sigma_neg", "Cf_pos", "Cf_neg", "Fs", "vs")
@@ -169,6 +169,38 @@ def presliding_scale(fitted: dict, position: np.ndarray, force: np.ndarray, *, d
     return fit_presliding(x=position[keep], x_f=x_f[keep], v=v[keep], a=a[keep], u_f=u_f[keep], dt=dt,
                           m=float(values["m"]), sigma=float(values["sigma"]), Cf=float(values["Cf"]),
                           offset=float(values["offset"]), rows=rows, window=window, length_unit=length_unit)
+
+
+def past_presliding(fitted: dict, position: np.ndarray, force: np.ndarray, *, dt: float, rows: int, window: float,
+                    steps: int, travel: float, length_unit: str,
+                    refit: Callable[[float], dict]) -> tuple[dict, float | None, str, float]:
+    """The fit again without the rows within ``travel / s`` past each reversal (:func:`settled_rows`).
+
+    ``s`` comes from the dwell test in ``window`` (:func:`presliding_scale`); where no reversal dwells there, the
+    floor alone comes from ``10^k window``, ``0 < k < steps`` (a fast reversal reads the filter's smear of the
+    Coulomb jump as a pre-sliding scale: 7.5e5 1/m on a noise-free record with none, harmless as a floor of
+    1.3 um, not a scale to design with, so ``s`` stays ``None``). A floor that leaves too few rows keeps them.
+
+    Returns
+    -------
+    fitted, s, s_note, travel_floor
+        ``refit(floor)``'s result (or ``fitted``), the reported ``s`` and its note, the floor used (0: none).
+    """
+    s, note = presliding_scale(fitted, position, force, dt=dt, rows=rows, window=window, length_unit=length_unit)
+    scale, wide = s, ""
+    for k in range(1, steps if s is None else 1):
+        scale, _ = presliding_scale(fitted, position, force, dt=dt, rows=rows, window=window * 10.0**k,
+                                    length_unit=length_unit)
+        if scale is not None:
+            wide = (f"; the rows within 1/s = {1.0 / scale:.3g} {length_unit} of each reversal are left out all the same "
+                    f"(s of the reversals in {window * 10.0**k:g} {length_unit}, no scale to design with)")
+            break
+    if scale is None or not travel > 0.0:
+        return fitted, s, note, 0.0
+    try:
+        return refit(travel / scale), s, note + wide, travel / scale
+    except ValueError as exc:  # the first fit ran on the same columns: only the rows can be missing
+        return fitted, s, note + f"; the fit keeps the rows within 1/s of the reversals: without them {exc}", 0.0
 
 
 def noise_rms(white: float, quantum: float, sos: np.ndarray, q: int) -> float:

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._idim import MAX_BOOTSTRAP, check_int, implausible, positive_number, time_window
-from ._ident_fit import fit_aligned, presliding_scale, timing_spread
+from ._ident_fit import fit_aligned, past_presliding, timing_spread
 from .choices import INPUT_TIMINGS, MAX_DELAY, STRIBECK_CHOICES
 from .cutoff import choose_filter
 from .estimate import MODEL_SHIFT_FACTOR, STRIBECK_INTERVAL, cautions
@@ -386,10 +386,9 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
        statistics assume they are not; decimation keeps one row per correlation length.
     4. Rows with ``|v|`` at or below ``min_speed`` (1 % of the largest ``|v|``) are dropped: there
        the axis sticks or is in pre-sliding, where ``Cf sign(v)`` (eq:2:1:2) does not hold. Where ``s`` is
-       fitted (8.), so are the rows within ``1/s`` of travel past a reversal (``travel_floor``), at any speed:
-       after a fast reversal the friction is still in pre-sliding there, below the Coulomb level (on the
-       shipped example log 309 of 697 rows; m -1.7 %, Cf -3.3 % and intervals that missed the truth before,
-       -0.18 % and +0.06 % after), and the fit is run again without them.
+       fitted (8.; for the rows only, also in 10 times the window), so are the rows within ``1/s`` of travel past
+       a reversal (``travel_floor``) at any speed, and the fit is run again: the friction is in pre-sliding there
+       (the example log: m -1.7 %, Cf -3.3 % and intervals that missed the truth before, -0.18 %, +0.06 % after).
     5. Bounded least squares (:mod:`obsdesign.data.friction_fit`); without an active bound, a
        fixed value or the Stribeck term this is the IDIM-LS solution and ``*_std`` are its
        standard errors ``sigma_e^2 (X^T X)^-1``; otherwise from the Jacobian at the solution.
@@ -402,7 +401,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
        (:func:`~obsdesign.data.friction_fit.profile_interval`; ``docs/measured-data.md``); when the log's
        timing is not resolved, widened to the fits under the other timings not rejected (``timing_shift``).
     8. ``s`` (eq:2:3:1-2:3:5) is fitted only if at least 5 reversals each stay within
-       ``presliding_window`` (or, where none does, 10 times it) of the reversal point for 5 rows of the fit grid (``5 decimation``
+       ``presliding_window`` of the reversal point for 5 rows of the fit grid (``5 decimation``
        samples; 50 samples, the benchmark's grid, when ``decimation`` is not given) over at least 5 distinct encoder readings; otherwise ``s = None`` and
        ``s_note`` says why.
 
@@ -458,18 +457,12 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     pair = aligned(position, force, found.timing, found.delay)
     fitted = fit_aligned(*pair, stribeck=stribeck, min_speed=min_speed, stribeck_min_speed=stribeck_min_speed,
                          n_boot=n_boot, seed=seed, **kw)
-    for step in range(WINDOW_STEPS):  # a fast reversal leaves the default window before 5 rows: a wider one
-        s, s_note = presliding_scale(fitted, *pair, dt=dt, rows=DEFAULT_DECIMATION if decimation is None else q,
-                                     window=presliding_window * 10.0**step, length_unit=trace.units.length_unit)
-        if s is not None:
-            break
-    if s is not None and PRESLIDING_TRAVEL > 0:
-        try:
-            fitted = fit_aligned(*pair, stribeck=stribeck, min_speed=min_speed, stribeck_min_speed=stribeck_min_speed,
-                                 n_boot=n_boot, seed=seed, travel_floor=PRESLIDING_TRAVEL / s, **kw)
-            kw["travel_floor"] = PRESLIDING_TRAVEL / s
-        except ValueError as exc:  # the first fit ran on the same columns: only the rows can be missing
-            s_note += f"; the fit keeps the rows within 1/s of the reversals: without them {exc}"
+    fitted, s, s_note, floor = past_presliding(
+        fitted, *pair, dt=dt, rows=DEFAULT_DECIMATION if decimation is None else q, window=presliding_window,
+        steps=WINDOW_STEPS, travel=PRESLIDING_TRAVEL, length_unit=trace.units.length_unit,
+        refit=lambda f: fit_aligned(*pair, stribeck=stribeck, min_speed=min_speed, n_boot=n_boot, seed=seed,
+                                    stribeck_min_speed=stribeck_min_speed, travel_floor=f, **kw))
+    kw["travel_floor"] = floor
     est, intervals, model_shift, cols, y, threshold = (fitted[k] for k in FITTED)
     intervals, timing_shift, spread = timing_spread(position, force, found, fitted, intervals, est["values"],
                                                     unit=trace.units.si, **kw)
@@ -491,7 +484,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                           source=trace.source, warnings=notes, notices=notices, stribeck=est["stribeck"], selection=est["selection"],
                           intervals=intervals, eiv_shift=est["eiv_shift"], model_shift=model_shift,
                           at_bound=est["at_bound"], fixed=tuple(sorted(fix)), min_speed=float(threshold),
-                          stribeck_min_speed=float(fitted["floor"]), travel_floor=float(kw.get("travel_floor", 0.0)),
+                          stribeck_min_speed=float(fitted["floor"]), travel_floor=floor,
                           window=span, timing_shift=timing_shift,
                           interval_method=_method(est, n_boot, model_shift, fix, timing_shift),
                           units=trace.units, input_timing=found.timing, delay_samples=found.delay,
