@@ -68,18 +68,6 @@ def test_covariance_is_the_full_least_squares_one(ar):
     np.testing.assert_allclose(var, np.maximum(white, cluster), rtol=1e-8)
 
 
-def test_segment_step_is_the_full_least_squares_fit():
-    """The global part of the least-squares fit of a residual change with every segment's nuisances as columns
-    (the integration-shift diagnostic of the segment fit), computed without the Schur complement."""
-    from obsdesign.data.oe_stats import segment_step
-
-    Jg, Jn, X, _r = _linear_problem(5)
-    d = np.random.default_rng(6).normal(size=(Jg.shape[0], Jg.shape[1]))
-    d += Jg @ np.array([0.3, -1.0, 2.0])     # a part along the global columns
-    beta = np.linalg.lstsq(X, d.ravel(), rcond=None)[0]
-    np.testing.assert_allclose(segment_step(d, _moments(Jg, Jn)), beta[:3], rtol=1e-8, atol=1e-10)
-
-
 def test_clustered_covariance_covers_correlated_residuals():
     """Residuals correlated within a segment (AR(1), 0.9): over 200 draws of the same design the empirical
     variance of the estimate is about the clustered one and well above the white one (the white interval

@@ -31,8 +31,7 @@ _LAYOUT = FRICTION_MODELS["lugre"]._layout
 #: near reversals, and a noise-free fit read it as sigma1 +17 %, sigma0 -1.4 %; at 8 (18) 0.82 times, +5.3 %,
 #: -0.5 %; at 16 (36) 0.20 times, +1.6 %, -0.06 % (m and Cf within 4e-5 % at every rule). The error is second
 #: order in ``h`` and is measured against the position noise, so a log with a noise 10 times lower needs about 3
-#: times the sub-steps for the same margin (``integration_shift`` of :class:`~obsdesign.data.oe_segments.SegmentFit`
-#: says what they move the estimates by).
+#: times the sub-steps for the same margin.
 SUBSTEP_RULE = 16.0
 
 

@@ -34,7 +34,7 @@ from .oe_segment_sim import _Budget, _Segments
 from .oe_segment_sim import segment_bounds as segment_bounds
 from .oe_segment_sim import simulate_segments as simulate_segments
 from .oe_segment_sim import substeps as substeps
-from .oe_stats import segment_covariance, segment_step
+from .oe_stats import segment_covariance
 
 __all__ = ["SEGMENT", "DYNAMIC", "STATIC", "UNITS", "DAMPING_STARTS", "PROFILE_POINTS", "PROFILE_ITERATIONS",
            "SUBSTEP_RULE", "SegmentFit", "segment_bounds", "substeps", "simulate_segments",
@@ -95,10 +95,6 @@ class SegmentFit:
         (negative: the alternative fits better, though refitted with fewer iterations).
     substeps : int
         Heun sub-steps a sample of the final fit's simulation.
-    integration_shift : float
-        The largest move of a fitted parameter, in its standard errors, that the fit's own integration error
-        causes: Richardson's ``4/3`` of the optimum's move from ``substeps`` to twice as many (to first order,
-        :func:`~obsdesign.data.oe_stats.segment_step`); a diagnostic, not used by the fit.
     """
 
     names: tuple
@@ -116,7 +112,6 @@ class SegmentFit:
     stopped: str
     alternatives: dict
     substeps: int = 0
-    integration_shift: float = math.nan
 
 
 def _theta(name, value):  # the fitted coordinate: ln p for a positive parameter
@@ -311,21 +306,11 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
         if best is None or best[4] is None:
             raise
     q, nu, cost, r, mom = best
-    seg.n_sub = substeps(q["sigma0"], q["m"], dt)
+    seg.n_sub = substeps(q["sigma0"], q["m"], dt)  # the rule at the estimate (what a refit would use)
     if not np.all(np.abs(r) < 1e6):
         raise FloatingPointError("the model could not be simulated from the start (IDIM-LS's estimate) on every "
                                  "segment")
     var, white = segment_covariance(free, r, mom)
-    shift = math.nan
-    if not stopped:
-        fine = np.empty_like(seg.meas)
-        try:
-            seg.simulate(q, nu, 2 * seg.n_sub, fine)
-            seg.simulate(q, nu, seg.n_sub, seg.out)
-            moved = 4.0 / 3.0 * segment_step((fine - seg.out) / noise, mom)
-            shift = float(np.max(np.abs(moved) / np.sqrt(np.where(var > 0, var, np.inf))))
-        except BudgetExceeded:
-            pass
     tq = float(stats.t.ppf(0.975, max(r.shape[0] - 1, 1)))
     design = {}
     values, std, intervals, ident, notes = {}, {}, {}, {}, {}
@@ -384,4 +369,4 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
     return SegmentFit(names=tuple(free), values=values, std=std, intervals=intervals, identifiable=ident,
                       notes=notes, profiles=profiles, segment_samples=seg.length, segments=int(seg.starts.size),
                       rms=float(np.sqrt(np.mean(r * r))) * noise, noise=noise, evaluations=budget.count,
-                      stopped=stopped, alternatives=checked, substeps=seg.n_sub, integration_shift=shift)
+                      stopped=stopped, alternatives=checked, substeps=seg.n_sub)

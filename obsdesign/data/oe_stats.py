@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-__all__ = ["NEAR_NULL", "DIFF_STEP", "segment_covariance", "segment_step"]
+__all__ = ["NEAR_NULL", "DIFF_STEP", "segment_covariance"]
 
 #: A direction of the scaled Jacobian whose singular value is below this fraction of the largest is null.
 NEAR_NULL = 1e-4
@@ -163,27 +163,3 @@ def segment_covariance(names, r, mom):
     cluster = n_seg / max(n_seg - 1, 1) * Ainv @ (score.T @ score) @ Ainv
     return np.maximum(np.diag(white), np.diag(cluster)), np.diag(white)
 
-
-def segment_step(d, mom):
-    """The global parameters' least-squares fit to a residual change ``d`` (segments x samples), each segment's
-    nuisances fitted with them (projected out, Schur complement): ``(Jp' Jp)^-1 Jp' d``.
-
-    Parameters
-    ----------
-    d : ndarray
-        Weighted residual change, segments x samples.
-    mom : tuple
-        ``(A, B, C, Jg, Jn)`` as in :func:`segment_covariance`.
-
-    Returns
-    -------
-    ndarray
-        The change of the fitted coordinates that ``d`` moves the optimum by (to first order).
-    """
-    A, B, C, Jg, Jn = mom
-    Cinv = np.linalg.pinv(C)
-    Jp = Jg - np.einsum("sln,snm,sgm->slg", Jn, Cinv, B)
-    Ared = np.einsum("slg,slh->gh", Jp, Jp)
-    dd = np.sqrt(np.maximum(np.diag(Ared), 1e-300))
-    Ainv = np.linalg.pinv(Ared / np.outer(dd, dd), rcond=1e-10) / np.outer(dd, dd)
-    return Ainv @ np.einsum("slg,sl->g", Jp, d)
