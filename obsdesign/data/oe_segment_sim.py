@@ -29,7 +29,7 @@ _LAYOUT = FRICTION_MODELS["lugre"]._layout
 #: the rotary 4 kHz benchmark axis (``omega dt = 2.24``), each 0.1 s segment replayed from the true states against
 #: the generator's 128-sub-step log: at 4 (the rule before, 9 sub-steps) up to 3.2 times the position noise off
 #: near reversals, and a noise-free fit read it as sigma1 +17 %, sigma0 -1.4 %; at 8 (18) 0.82 times, +5.3 %,
-#: -0.5 %; at 16 (36) 0.20 times, +1.6 %, -0.06 % (m and Cf within 4e-5 % at every rule). The error is second
+#: -0.5 %; at 16 (36) 0.20 times, +1.6 %, -0.06 % (m within 4e-5 %, Cf 2e-4 % at every rule). The error is second
 #: order in ``h`` and is measured against the position noise, so a log with a noise 10 times lower needs about 3
 #: times the sub-steps for the same margin.
 SUBSTEP_RULE = 16.0
