@@ -226,7 +226,7 @@ def refine_draw(spec: dict, clean: dict, seed: int, *, segment: float = SEGMENT)
     return {"seed": seed, "timing": [ident.input_timing, int(ident.delay_samples)], "identify_s": t1 - t0,
             "refine_s": time.perf_counter() - t1, "evaluations": f.evaluations, "rms_over_noise": f.rms / f.noise,
             "warning": ref.warning, "rerun": rerun, "alternatives": dict(f.alternatives),
-            "segment_samples": f.segment_samples, "segments": f.segments,
+            "segment_samples": f.segment_samples, "segments": f.segments, "substeps": f.substeps,
             "params": {n: {"value": f.values[n], "std": f.std[n], "low": f.intervals[n][0],
                            "high": f.intervals[n][1], "identifiable": bool(f.identifiable[n])} for n in f.names}}
 

@@ -81,13 +81,13 @@ class SegmentRefinement:
 
     def to_dict(self) -> dict:
         """JSON-ready: ``model, method, segment_samples, segment_time, segments, timing, rms, noise, evaluations,
-        wall_time, stopped`` and ``parameters`` (name -> ``value, initial, std, low, high, unit, identifiable,
+        wall_time, stopped, substeps`` and ``parameters`` (name -> ``value, initial, std, low, high, unit, identifiable,
         note``), ``profiles`` (name -> ``{grid, cost}``)."""
         f = self.fit
         return {"model": self.model, "method": "segment output error", "segment_samples": f.segment_samples,
                 "segment_time": self.segment_time, "segments": f.segments, "timing": self.timing, "rms": f.rms,
                 "noise": f.noise, "length_unit": self.length_unit, "evaluations": f.evaluations,
-                "wall_time": self.wall_time, "stopped": f.stopped, "timing_alternatives": dict(f.alternatives),
+                "wall_time": self.wall_time, "stopped": f.stopped, "substeps": f.substeps, "timing_alternatives": dict(f.alternatives),
                 "warning": self.warning,
                 "parameters": {n: self[n] for n in f.names},
                 "profiles": {n: {"grid": g.tolist(), "cost": c.tolist()} for n, (g, c) in f.profiles.items()}}
@@ -101,7 +101,8 @@ class SegmentRefinement:
         lines = [f"Output-error refinement ({self.model}, segments): {f.segments} segments of L = {f.segment_samples} "
                  f"samples ({self.segment_time:.4g} s), each with its own initial position, velocity and bristle "
                  f"force; {self.timing}; RMS position residual {f.rms:.3g} {self.length_unit} "
-                 f"({f.rms / f.noise:.3g} x the noise level); {f.evaluations} simulations"]
+                 f"({f.rms / f.noise:.3g} x the noise level); {f.evaluations} simulations, {f.substeps} Heun sub-steps "
+                 "a sample"]
         if f.stopped:
             lines.append(f"  {f.stopped}")
         if self.warning:

@@ -24,18 +24,21 @@ Examples
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
-from ..friction.kernels import friction_plant_step
-from ..friction.registry import FRICTION_MODELS
+from .oe_segment_sim import SUBSTEP_RULE as SUBSTEP_RULE
+from .oe_segment_sim import BudgetExceeded as BudgetExceeded
+from .oe_segment_sim import _Budget, _Segments
+from .oe_segment_sim import segment_bounds as segment_bounds
+from .oe_segment_sim import simulate_segments as simulate_segments
+from .oe_segment_sim import substeps as substeps
 from .oe_stats import segment_covariance
 
-__all__ = ["SEGMENT", "DYNAMIC", "STATIC", "UNITS", "DAMPING_STARTS", "PROFILE_POINTS", "PROFILE_ITERATIONS", "SegmentFit", "segment_bounds", "substeps",
-           "simulate_segments", "fit_segments", "BudgetExceeded"]
+__all__ = ["SEGMENT", "DYNAMIC", "STATIC", "UNITS", "DAMPING_STARTS", "PROFILE_POINTS", "PROFILE_ITERATIONS",
+           "SUBSTEP_RULE", "SegmentFit", "segment_bounds", "substeps", "simulate_segments",
+           "fit_segments", "BudgetExceeded"]
 
 #: Default segment length [s] of the final stage (the review's 0.1 s: the bound converged there).
 SEGMENT = 0.1
@@ -56,8 +59,6 @@ ALTERNATIVE_ITERATIONS = 20
 STATIC = ("m", "sigma", "Cf", "offset")
 #: The bristle parameters, profiled when asked for.
 DYNAMIC = ("sigma0", "sigma1")
-_LUGRE = FRICTION_MODELS.code("lugre")
-_LAYOUT = FRICTION_MODELS["lugre"]._layout
 #: Points of a profile over a parameter's plausible range.
 PROFILE_POINTS = 11
 #: Levenberg-Marquardt iterations at each point of a profile (each starts from its neighbour's optimum).
@@ -66,56 +67,6 @@ PROFILE_ITERATIONS = 6
 UNITS = {"m": "kg", "sigma": "N s/m", "Cf": "N", "offset": "N", "Fs": "N", "vs": "m/s", "sigma0": "N/m",
          "sigma1": "N s/m"}
 _LOG = {"m", "Cf", "Fs", "vs", "sigma0"}
-
-
-class BudgetExceeded(Exception):
-    """The time budget ran out (internal: the fit returns its best so far)."""
-
-
-def segment_bounds(n: int, length: int, *, skip: int) -> np.ndarray:
-    """``[start, length]`` rows of consecutive segments of ``length`` samples in ``n``, ``skip`` left at both ends.
-
-    Parameters
-    ----------
-    n, length, skip : int
-        Samples of the record, of a segment, and left out at each end.
-    """
-    starts = np.arange(skip, n - skip - length + 1, length, dtype=np.int64)
-    return np.column_stack([starts, np.full(starts.size, length, dtype=np.int64)])
-
-
-@njit(cache=True, error_model="numpy")
-def simulate_segments(pp, force, starts, length, x0, v0, fz0, m, dt, n_sub, hold, out):
-    """Simulate each segment from ``(x0, v0, sigma0 z0 = fz0)``; write ``x`` to ``out`` (segments x length).
-
-    ``force[k]`` is held over ``[k, k+1)`` when ``hold``, else interpolated linearly to ``force[k+1]``.
-    Returns False if a simulation diverged (its samples NaN).
-    """
-    h = dt / n_sub
-    st = np.zeros(3)
-    sigma0 = pp[8]
-    ok = True
-    for i in range(starts.shape[0]):
-        x, v = x0[i], v0[i]
-        st[0] = fz0[i] / sigma0
-        st[1] = x
-        st[2] = 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
-        for k in range(length):
-            out[i, k] = x
-            if not (abs(x) < 1e6 and abs(v) < 1e9):
-                for j in range(k, length):
-                    out[i, j] = np.nan
-                ok = False
-                break
-            j = starts[i] + k
-            if hold:
-                x, v = friction_plant_step(_LUGRE, pp, st, x, v, force[j], m, h, n_sub)
-            else:
-                u1 = force[j + 1] if j + 1 < force.shape[0] else force[j]
-                for s in range(n_sub):
-                    a = (s + 0.5) / n_sub
-                    x, v = friction_plant_step(_LUGRE, pp, st, x, v, (1.0 - a) * force[j] + a * u1, m, h, 1)
-    return ok
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -142,6 +93,8 @@ class SegmentFit:
     alternatives : dict
         Label -> ``segments x ln(MS_alternative / MS_fit)`` of each other reading of the log's timing tried
         (negative: the alternative fits better, though refitted with fewer iterations).
+    substeps : int
+        Heun sub-steps a sample of the final fit's simulation.
     """
 
     names: tuple
@@ -158,79 +111,7 @@ class SegmentFit:
     evaluations: int
     stopped: str
     alternatives: dict
-
-
-class _Segments:
-    """The data, the parameter vector and the residual of one segment length."""
-
-    def __init__(self, x_meas, force, x_f, v_f, dt, length, skip, hold, noise, n_sub, values, budget):
-        rows = segment_bounds(x_meas.size, length, skip=skip)
-        if rows.shape[0] < 2:
-            raise ValueError(f"trace: expected at least 2 segments of {length} samples, found {rows.shape[0]} "
-                             f"(the record has {x_meas.size} samples)")
-        self.starts, self.length = rows[:, 0], int(length)
-        self.meas = x_meas[self.starts[:, None] + np.arange(length)]
-        self.force, self.dt, self.hold, self.noise, self.n_sub = force, dt, hold, noise, n_sub
-        self.x0, self.v0 = x_f[self.starts], v_f[self.starts]
-        self.values = dict(values)
-        self.out = np.empty_like(self.meas)
-        self.budget = budget
-
-    def pack(self, q):
-        """The kernel array: the registry's LuGre layout, without its ranges (written in N/m and m/s: a rotary
-        axis's N m/rad and rad/s fall outside them); a Stribeck level below Cf is taken as Cf."""
-        fs = max(q["Fs"], q["Cf"])
-        if not (q["Cf"] > 0 and q["vs"] > 0 and q["sigma0"] > 0 and q["m"] > 0):
-            raise ValueError("a positive parameter at or below 0")
-        return np.array(_LAYOUT({"Cf": q["Cf"], "Cf_neg": q["Cf"], "sigma": q["sigma"], "sigma_neg": q["sigma"],
-                                 "offset": q["offset"], "Fs": fs, "vs": q["vs"], "sigma0": q["sigma0"],
-                                 "sigma1": max(q["sigma1"], 0.0)}), dtype=np.float64)
-
-    def residual(self, q, nu):
-        """Weighted residual (segments x L) at global values ``q`` and nuisances ``nu`` (segments x 3)."""
-        self.budget.tick()
-        try:
-            pp = self.pack(q)
-        except ValueError:
-            return np.full(self.meas.shape, 1e6)
-        simulate_segments(pp, self.force, self.starts, self.length, self.x0 + nu[:, 0] * self.noise,
-                          self.v0 + nu[:, 1] * self.noise / self.dt, nu[:, 2] * q["Cf"], q["m"], self.dt,
-                          self.n_sub, self.hold, self.out)
-        r = (self.meas - self.out) / self.noise
-        return np.where(np.isfinite(r), r, 1e6)
-
-
-class _Budget:
-    """Counts simulations, drives the progress bar and stops at the time budget."""
-
-    def __init__(self, seconds, bar):
-        self.t0 = time.perf_counter()
-        self.seconds = seconds
-        self.bar = bar
-        self.count = 0
-
-    def tick(self):
-        self.count += 1
-        if self.bar is not None:
-            self.bar.update(1)
-        if self.seconds is not None and time.perf_counter() - self.t0 > self.seconds:
-            raise BudgetExceeded
-
-
-def substeps(sigma0: float, m: float, dt: float) -> int:
-    """Heun substeps a sample for a bristle resonance ``sqrt(sigma0/m)`` [rad/s]: ``omega h <= 1/4``, 4 to 64.
-
-    Parameters
-    ----------
-    sigma0, m, dt : float
-        Bristle stiffness, mass (inertia), sample time.
-
-    Examples
-    --------
-    >>> substeps(2e5, 2.5e-3, 2.5e-4)        # omega dt = 2.24
-    9
-    """
-    return int(min(max(math.ceil(4.0 * math.sqrt(sigma0 / m) * dt), 4), 64))
+    substeps: int = 0
 
 
 def _theta(name, value):  # the fitted coordinate: ln p for a positive parameter
@@ -425,6 +306,7 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
         if best is None or best[4] is None:
             raise
     q, nu, cost, r, mom = best
+    seg.n_sub = substeps(q["sigma0"], q["m"], dt)  # the rule at the estimate (what a refit would use)
     if not np.all(np.abs(r) < 1e6):
         raise FloatingPointError("the model could not be simulated from the start (IDIM-LS's estimate) on every "
                                  "segment")
@@ -487,4 +369,4 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
     return SegmentFit(names=tuple(free), values=values, std=std, intervals=intervals, identifiable=ident,
                       notes=notes, profiles=profiles, segment_samples=seg.length, segments=int(seg.starts.size),
                       rms=float(np.sqrt(np.mean(r * r))) * noise, noise=noise, evaluations=budget.count,
-                      stopped=stopped, alternatives=checked)
+                      stopped=stopped, alternatives=checked, substeps=seg.n_sub)

@@ -185,3 +185,4 @@ def segment_covariance(names, r, mom):
     score = np.einsum("slg,sl->sg", Jp, r)
     cluster = n_seg / max(n_seg - 1, 1) * Ainv @ (score.T @ score) @ Ainv
     return np.maximum(np.diag(white), np.diag(cluster)), np.diag(white)
+
