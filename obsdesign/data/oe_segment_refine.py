@@ -113,7 +113,7 @@ class SegmentRefinement:
         for n in f.names:
             p = self[n]
             verdict = "identifiable" if p["identifiable"] else f"NOT identifiable: {p['note']}"
-            lines.append(f"  {n:<7} {p['value']:.6g} {p['unit']}  95 % [{p['low']:.5g}, {p['high']:.5g}]  "
+            lines.append(f"  {n:<7} {p['value']:.6g} {p['unit']}  95 % [{p['low']:.6g}, {p['high']:.6g}]  "
                          f"(start {p['initial']:.4g})  {verdict}")
         return "\n".join(lines)
 

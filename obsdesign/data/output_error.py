@@ -154,7 +154,7 @@ class Refinement:
                  f"condition number {self.condition_number:.3g}"]
         for p in self.parameters:
             verdict = "identifiable" if p.identifiable else f"NOT identifiable: {p.note}"
-            lines.append(f"  {p.name:<8} {p.value:.5g} {p.unit}  95 % [{p.low:.4g}, {p.high:.4g}]  "
+            lines.append(f"  {p.name:<8} {p.value:.5g} {p.unit}  95 % [{p.low:.5g}, {p.high:.5g}]  "
                          f"(start {p.initial:.4g})  {verdict}")
         return "\n".join(lines)
 
