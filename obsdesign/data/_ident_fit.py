@@ -97,9 +97,9 @@ def fit_aligned(position: np.ndarray, force: np.ndarray, *, dt: float, filter_hz
                                  stribeck=stribeck, white=white, sos=sos, dt=dt, q=q, quantum=quantum,
                                  filter_hz=filter_hz, speed=speed)
     settled = settled_rows(x_f, v, travel_floor, lambda c: dec(signal.sosfiltfilt(sos, c)[keep]))
-    if settled is not None and np.count_nonzero(settled & (np.abs(stacked["v"]) > threshold)) < MIN_SETTLED_ROWS:
-        raise ValueError(f"{np.count_nonzero(settled & (np.abs(stacked['v']) > threshold))} rows are left, "
-                         f"expected at least {MIN_SETTLED_ROWS}")
+    left = moving if settled is None else np.count_nonzero(settled & (np.abs(stacked["v"]) > threshold))
+    if left < MIN_SETTLED_ROWS and settled is not None:
+        raise ValueError(f"{left} rows are left, expected at least {MIN_SETTLED_ROWS}")
     fitted = fit_rows(row_maker(stacked, v[keep], dec, settled), threshold=threshold, floor=floor, floor_rule=rule,
                       peak=peak, speed=speed, model=model, stribeck=stribeck, fix=fix, bounds=bounds,
                       noise_var=noise_var, n_boot=n_boot, seed=seed)
@@ -157,11 +157,11 @@ def settled_rows(x_f: np.ndarray, v: np.ndarray, travel_floor: float, rows: Call
     return np.abs(rows(near.astype(float))) <= NEAR_SHARE
 
 
-def presliding_scale(fitted: dict, position: np.ndarray, force: np.ndarray, *, dt: float, rows: int, window: float,
+def presliding_scale(fitted: dict, position: np.ndarray, *, dt: float, rows: int, window: float,
                      length_unit: str) -> tuple[float | None, str]:
     """``s`` and its note (:func:`~obsdesign.data.presliding.fit_presliding`) from :func:`fit_aligned`'s result.
 
-    ``position``, ``force``: the aligned columns the fit was made on; ``rows``: the samples a row of the dwell
+    ``position``: the aligned position the fit was made on; ``rows``: the samples a row of the dwell
     test stands for; ``window``: the pre-sliding window; ``length_unit``: the note's.
     """
     keep, x_f, v, a, u_f = (fitted[k] for k in ("keep", "x_f", "v", "a", "u_f"))
@@ -171,7 +171,7 @@ def presliding_scale(fitted: dict, position: np.ndarray, force: np.ndarray, *, d
                           offset=float(values["offset"]), rows=rows, window=window, length_unit=length_unit)
 
 
-def past_presliding(fitted: dict, position: np.ndarray, force: np.ndarray, *, dt: float, rows: int, window: float,
+def past_presliding(fitted: dict, position: np.ndarray, *, dt: float, rows: int, window: float,
                     steps: int, travel: float, length_unit: str,
                     refit: Callable[[float], dict]) -> tuple[dict, float | None, str, float]:
     """The fit again without the rows within ``travel / s`` past each reversal (:func:`settled_rows`).
@@ -186,10 +186,10 @@ def past_presliding(fitted: dict, position: np.ndarray, force: np.ndarray, *, dt
     fitted, s, s_note, travel_floor
         ``refit(floor)``'s result (or ``fitted``), the reported ``s`` and its note, the floor used (0: none).
     """
-    s, note = presliding_scale(fitted, position, force, dt=dt, rows=rows, window=window, length_unit=length_unit)
+    s, note = presliding_scale(fitted, position, dt=dt, rows=rows, window=window, length_unit=length_unit)
     scale, wide = s, ""
     for k in range(1, steps if s is None else 1):
-        scale, _ = presliding_scale(fitted, position, force, dt=dt, rows=rows, window=window * 10.0**k,
+        scale, _ = presliding_scale(fitted, position, dt=dt, rows=rows, window=window * 10.0**k,
                                     length_unit=length_unit)
         if scale is not None:
             wide = (f"; the rows within 1/s = {1.0 / scale:.3g} {length_unit} of each reversal are left out all the same "

@@ -57,9 +57,9 @@ PRESLIDING_WINDOW = 1e-4
 #: Rows within ``PRESLIDING_TRAVEL / s`` of travel past a reversal are left out of the gross-sliding fit
 #: (``s`` fitted from the log; the paper's map reaches the Coulomb level at ``1/s``).
 PRESLIDING_TRAVEL = 1.0
-#: The dwell test of ``s`` tries ``presliding_window`` and then 10 times it (a fast reversal leaves the default
-#: 0.1 mm before 5 rows); ``10^k`` windows for ``k < WINDOW_STEPS``. A third step (100 times) resolved ``s`` on
-#: EMPS from its gross-sliding reversals and moved its estimates by up to 1.9 %; two leave EMPS unchanged.
+#: ``s`` is reported from ``presliding_window``; where no reversal dwells there, the rows' travel floor alone comes
+#: from ``10^k`` times it, ``0 < k < WINDOW_STEPS`` (``_ident_fit.past_presliding``; a fast reversal leaves 0.1 mm
+#: before 5 rows). A third step (100 times) moved EMPS's estimates by up to 1.9 %; two leave EMPS unchanged.
 WINDOW_STEPS = 2
 
 
@@ -458,7 +458,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     fitted = fit_aligned(*pair, stribeck=stribeck, min_speed=min_speed, stribeck_min_speed=stribeck_min_speed,
                          n_boot=n_boot, seed=seed, **kw)
     fitted, s, s_note, floor = past_presliding(
-        fitted, *pair, dt=dt, rows=DEFAULT_DECIMATION if decimation is None else q, window=presliding_window,
+        fitted, pair[0], dt=dt, rows=DEFAULT_DECIMATION if decimation is None else q, window=presliding_window,
         steps=WINDOW_STEPS, travel=PRESLIDING_TRAVEL, length_unit=trace.units.length_unit,
         refit=lambda f: fit_aligned(*pair, stribeck=stribeck, min_speed=min_speed, n_boot=n_boot, seed=seed,
                                     stribeck_min_speed=stribeck_min_speed, travel_floor=f, **kw))
@@ -466,8 +466,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     est, intervals, model_shift, cols, y, threshold = (fitted[k] for k in FITTED)
     intervals, timing_shift, spread = timing_spread(position, force, found, fitted, intervals, est["values"],
                                                     unit=trace.units.si, **kw)
-    keep, x_f, v, a, u_f = (fitted[k] for k in ("keep", "x_f", "v", "a", "u_f"))
-    position, force = aligned(position, force, found.timing, found.delay)
+    v = fitted["v"]
+    position, force = pair
     values, std = est["values"], est["std"]
     shown = ("m", "sigma", "Cf", "offset") + (ASYM if model == "asymmetric" else ()) + (("Fs", "vs") if est["stribeck"] else ())
     result = {k: float(values[k]) for k in shown} | {f"{k}_std": float(std.get(k, 0.0)) for k in shown}
