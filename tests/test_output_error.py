@@ -128,11 +128,14 @@ def test_cli_refine_json_and_config(tmp_path, capsys):
 
 @pytest.mark.skipif(not EMPS.exists(), reason="EMPS data not present")
 def test_emps_lugre_stiffness_with_the_coulomb_level_free():
-    """A refined Cf moves the held Fs with it (Fs >= Cf); sigma0 is resolved, sigma1 with it is not."""
+    """A refined Cf moves the held Fs with it (Fs >= Cf); sigma0 is bounded within 1e6 to 5e6 N/m (at the edge of
+    the factor-1.65 rule: identifiable with the held parameters' intervals before identify widened them by the
+    change without the rows near the reversals, 1.66e6 to 4.44e6; docs/measured-data.md), sigma1 with it is not."""
     tr = load_trace(EMPS, position="qm", input="vir", time="t", input_gain=35.15065188)
     ident = identify(tr, model="asymmetric")
     ref = refine(tr, ident, parameters=("sigma0", "Cf", "offset"), model="lugre", method="windows")
-    assert ref["sigma0"].identifiable and 1e6 < ref["sigma0"].value < 5e6
+    s0 = ref["sigma0"]
+    assert 1e6 < s0.low < s0.value < s0.high < 5e6 and s0.high / s0.low < 1.65**2 * 1.05
     assert ref.fixed["Fs"] == pytest.approx(ident.Cf_pos)   # the start; the fit moved it with Cf
     both = refine(tr, ident, parameters=("sigma0", "sigma1", "Cf", "offset"), model="lugre", method="windows")
     assert not both["sigma0"].identifiable and not both["sigma1"].identifiable
@@ -183,9 +186,10 @@ def test_synthetic_lugre_sigma0_sigma1_and_zero_delay_recovered():
                    initial={"sigma1": 400.0}, method="windows")
     _recovered(delay, dict(sigma0=2e5, Cf=0.35), dict(sigma0=0.05, Cf=0.005))
     d = delay["delay"]
-    # the interval is about 3 samples wide since the held m and sigma carry their 95 % intervals (oe_stats.held_std;
-    # 2.0 with their standard errors alone), and says so: "wider than one sample"
-    assert d.low <= 0.0 <= d.high and d.high - d.low < 4.0 * tr.sample_time and abs(d.value) < tr.sample_time
+    # the interval is about 5 samples wide since the held m and sigma carry their 95 % intervals (oe_stats.held_std;
+    # 2.0 with their standard errors alone, 3 before identify widened m's by the change without the rows near the
+    # staircase's reversals, +9 %), and says so: "wider than one sample"
+    assert d.low <= 0.0 <= d.high and d.high - d.low < 6.0 * tr.sample_time and abs(d.value) < tr.sample_time
     assert d.identifiable == (d.high - d.value <= tr.sample_time)
 
 

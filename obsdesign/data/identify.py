@@ -32,10 +32,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._idim import MAX_BOOTSTRAP, check_int, implausible, positive_number, time_window
-from ._ident_fit import fit_aligned, past_presliding, timing_spread
+from ._ident_fit import fit_aligned, interval_method, past_presliding, presliding_notice, timing_spread
 from .choices import INPUT_TIMINGS, MAX_DELAY, STRIBECK_CHOICES
 from .cutoff import choose_filter
-from .estimate import MODEL_SHIFT_FACTOR, STRIBECK_INTERVAL, cautions
+from .estimate import cautions, widened
 from .friction_fit import check_bounds, check_fix
 from .stribeck_rows import FITTED
 from ._ident_rows import ASYM, FILTER_ORDER, rows
@@ -120,7 +120,7 @@ class Identification:
         ``name -> shift``: predicted change of the bias-compensated estimate (errors in variables).
     model_shift : dict
         ``name -> shift``: the change of the estimate without the rows near reversals (below
-        :data:`MODEL_SHIFT_FACTOR` x the min speed), which widens the interval: model error.
+        :data:`~obsdesign.data.estimate.MODEL_SHIFT_FACTOR` x the min speed), which widens the interval: model error.
     at_bound : dict
         ``name -> 'lower'|'upper'`` for a fitted parameter at one of its bounds.
     fixed : tuple of str
@@ -151,6 +151,10 @@ class Identification:
         ``name -> (low, high)``: the most negative and most positive change of the estimate under the other
         timings the data do not reject, which widens the interval (empty when the timing is resolved or
         given; :mod:`obsdesign.data._ident_fit`). A notice says so in one line.
+    presliding_shift : dict
+        ``name -> shift``: where ``s`` is not resolved, the change of the estimate without the rows within
+        ``presliding_window`` of travel past each reversal, which widens the interval (empty where ``s`` or a
+        travel floor is found); a notice names the shifts beyond two standard errors.
     """
 
     model: str
@@ -209,6 +213,7 @@ class Identification:
     timing_note: str = ""
     timing_evidence: dict = field(default_factory=dict)
     timing_shift: dict = field(default_factory=dict)
+    presliding_shift: dict = field(default_factory=dict)
 
     _KEYS = ("m", "sigma", "Cf", "offset", "m_std", "sigma_std", "Cf_std", "offset_std", "nrmse_percent",
              "condition_number", "samples")
@@ -224,7 +229,7 @@ class Identification:
         condition_number, samples``; with ``asymmetric`` also ``sigma_pos, sigma_neg, Cf_pos,
         Cf_neg``; with the Stribeck term ``Fs, vs, Fs_std, vs_std``; always ``s, s_note, model,
         sample_time, filter_hz, filter_rule, decimation, stribeck, selection, interval_method, at_bound, fixed,
-        min_speed, stribeck_min_speed, travel_floor, window, input_timing, delay_samples, timing_note``, ``timing_evidence``, ``model_shift``, ``timing_shift`` (name -> [low, high]), ``intervals`` (name -> [low, high]), ``eiv_shift`` and ``units``
+        min_speed, stribeck_min_speed, travel_floor, window, input_timing, delay_samples, timing_note``, ``timing_evidence``, ``model_shift``, ``presliding_shift``, ``timing_shift`` (name -> [low, high]), ``intervals`` (name -> [low, high]), ``eiv_shift`` and ``units``
         (``axis``, ``input_unit``, ``mass_unit``, ``force_unit``, ``length_unit``, the logged
         ``time``/``position`` units); ``warnings`` (a list of sentences) when the identification is
         not physical, ``notices`` when there are cautions.
@@ -238,6 +243,7 @@ class Identification:
         out["timing_evidence"] = dict(self.timing_evidence)
         out["model_shift"] = dict(self.model_shift)
         out["timing_shift"] = {k: list(v) for k, v in self.timing_shift.items()}
+        out["presliding_shift"] = dict(self.presliding_shift)
         u = self.units
         out["units"] = {"axis": u.axis, "input_unit": u.input_unit(self.input_gain), "mass_unit": u.mass_unit,
                         "force_unit": u.force_unit, "length_unit": u.length_unit, "time": u.time,
@@ -457,13 +463,15 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     pair = aligned(position, force, found.timing, found.delay)
     fitted = fit_aligned(*pair, stribeck=stribeck, min_speed=min_speed, stribeck_min_speed=stribeck_min_speed,
                          n_boot=n_boot, seed=seed, **kw)
-    fitted, s, s_note, floor = past_presliding(
+    first = dict(stribeck=stribeck, min_speed=min_speed, n_boot=n_boot, seed=seed, stribeck_min_speed=stribeck_min_speed)
+    fitted, s, s_note, floor, pre_shift = past_presliding(
         fitted, pair[0], dt=dt, rows=DEFAULT_DECIMATION if decimation is None else q, window=presliding_window,
         steps=WINDOW_STEPS, travel=PRESLIDING_TRAVEL, length_unit=trace.units.length_unit,
-        refit=lambda f: fit_aligned(*pair, stribeck=stribeck, min_speed=min_speed, n_boot=n_boot, seed=seed,
-                                    stribeck_min_speed=stribeck_min_speed, travel_floor=f, **kw))
+        refit=lambda f, **o: fit_aligned(*pair, travel_floor=f, **(first | o), **kw))
     kw["travel_floor"] = floor
     est, intervals, model_shift, cols, y, threshold = (fitted[k] for k in FITTED)
+    intervals = widened(intervals, est["values"], pre_shift)
+    pre_note = presliding_notice(pre_shift, est, presliding_window, trace.units.length_unit, trace.units.si)
     intervals, timing_shift, spread = timing_spread(position, force, found, fitted, intervals, est["values"],
                                                     unit=trace.units.si, **kw)
     v = fitted["v"]
@@ -475,7 +483,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     for note in notes:
         warnings.warn(note, stacklevel=2)
     notices = trace.warnings + check_plausible(trace.units, mass=result["m"], gain=trace.input_gain) + cautions(
-        est, cols, fitted["noise_var"], trace.units, filter_hz) + ((spread,) if spread else ())
+        est, cols, fitted["noise_var"], trace.units, filter_hz) + tuple(n for n in (pre_note, spread) if n)
     return Identification(model=model, **result, nrmse_percent=est["nrmse"], condition_number=est["condition_number"],
                           samples=int(y.size), s=s, s_note=s_note, sample_time=dt, filter_hz=float(filter_hz),
                           filter_rule=filter_rule, decimation=q, input_gain=trace.input_gain, force_peak=float(np.max(np.abs(force))),
@@ -485,15 +493,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                           intervals=intervals, eiv_shift=est["eiv_shift"], model_shift=model_shift,
                           at_bound=est["at_bound"], fixed=tuple(sorted(fix)), min_speed=float(threshold),
                           stribeck_min_speed=float(fitted["floor"]), travel_floor=floor,
-                          window=span, timing_shift=timing_shift,
-                          interval_method=_method(est, n_boot, model_shift, fix, timing_shift),
+                          window=span, timing_shift=timing_shift, presliding_shift=pre_shift,
+                          interval_method=interval_method(est, n_boot, model_shift, fix, timing_shift, pre_shift),
                           units=trace.units, input_timing=found.timing, delay_samples=found.delay,
                           timing_note=found.note, timing_evidence=found.evidence)
 
-
-def _method(est: dict, n_boot: int, model_shift: dict, fix: dict, timing_shift: dict) -> str:
-    return ((f"moving-block bootstrap, {n_boot} replicates, blocks of {est['block_length']} rows, " if n_boot
-             else "1.96 standard errors, ") + "widened by the errors-in-variables shift"
-            + (f" and by the model-error shift ({MODEL_SHIFT_FACTOR:g} x the min speed)" if model_shift else "")
-            + (" and by the shift under the timings the data do not reject" if timing_shift else "")
-            + (f"; {STRIBECK_INTERVAL}" if est["stribeck"] and n_boot and not {"Fs", "vs"} <= set(fix) else ""))
