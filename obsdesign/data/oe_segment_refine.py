@@ -21,7 +21,7 @@ from .timing import TIMING_MARGIN
 from .oe_segments import (ALTERNATIVE_ITERATIONS, DAMPING_STARTS, DYNAMIC, PROFILE_ITERATIONS, PROFILE_POINTS, SEGMENT, STATIC, UNITS, SegmentFit,
                           fit_segments)
 
-__all__ = ["SegmentRefinement", "refine_segments"]
+__all__ = ["SegmentRefinement", "refine_segments", "segment_start"]
 
 
 def _neighbours(timing: str, delay: int) -> list[tuple[str, int]]:
@@ -118,6 +118,44 @@ class SegmentRefinement:
         return "\n".join(lines)
 
 
+def segment_start(ident, dt: float) -> tuple[float, dict, dict]:
+    """The segment fit's noise level, start and profile ranges from ``identify``'s result.
+
+    The start is the static fit with a bristle stiffness ``Cf / (10 noise)`` (the Coulomb level over ten times the
+    noise, at most a tenth of the stiffest bristle the sampling resolves, ``16 m / dt^2``: a resonance at
+    ``4 / dt``) and a damping ratio 0.3; ``sigma0`` is profiled from ``Cf / (1e3 noise)`` to ``Cf / (1e-3 noise)``
+    (within that stiffest bristle), ``sigma1`` from 0.001 to 30 times the critical damping of the start.
+
+    Returns
+    -------
+    noise : float
+        The position noise RMS the residual is weighted by (with the encoder's ``q / sqrt(12)`` as its floor).
+    start, ranges : dict
+        Name -> value of ``m, sigma, Cf, offset, Fs, vs, sigma0, sigma1``; name -> ``(low, high)`` of
+        ``sigma0`` and ``sigma1``.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> ident = SimpleNamespace(noise_rms=1e-6, quantization=0.0, m=2.0, sigma=10.0, Cf=1.0, offset=0.0, Fs=None,
+    ...                         vs=None)
+    >>> noise, start, ranges = segment_start(ident, 1e-3)
+    >>> round(start["sigma0"]), ranges["sigma0"]      # Cf / (10 noise); Cf / (1e3 noise) up to 16 m / dt^2
+    (100000, (1000.0, 32000000.0))
+    """
+    noise = max(ident.noise_rms, ident.quantization / math.sqrt(12.0), 1e-15)
+    sigma0_max = 16.0 * ident.m / dt**2  # a bristle resonance 4 / dt (0.64 x the rate): beyond, a rigid stick
+    start = {"m": ident.m, "sigma": ident.sigma, "Cf": ident.Cf, "offset": ident.offset,
+             "Fs": ident.Fs if ident.Fs is not None else ident.Cf,
+             "vs": ident.vs if ident.vs is not None else 1.0,
+             "sigma0": min(ident.Cf / (10.0 * noise), sigma0_max / 10.0)}
+    start["sigma1"] = 0.6 * math.sqrt(start["sigma0"] * ident.m)  # damping ratio 0.3 (the stage-1 starts vary it)
+    crit = 2.0 * math.sqrt(start["sigma0"] * ident.m)
+    ranges = {"sigma0": (min(ident.Cf / (1e3 * noise), sigma0_max / 1e4), min(ident.Cf / (1e-3 * noise), sigma0_max)),
+              "sigma1": (1e-3 * crit, 30.0 * crit)}
+    return noise, start, ranges
+
+
 def refine_segments(trace, ident, *, parameters: tuple, segment: float = SEGMENT, time_budget: float | None = None,
                     progress: bool = False) -> SegmentRefinement:
     """LuGre and the rigid body refined by segment output error (:func:`fit_segments`) from ``ident``.
@@ -150,20 +188,10 @@ def refine_segments(trace, ident, *, parameters: tuple, segment: float = SEGMENT
     x = np.asarray(trace.position, dtype=np.float64)[d:]
     u = np.asarray(trace.force, dtype=np.float64)[:trace.force.size - d]
     dt = trace.sample_time
-    noise = max(ident.noise_rms, ident.quantization / math.sqrt(12.0), 1e-15)
+    noise, start, ranges = segment_start(ident, dt)
     stribeck = ident.Fs is not None or "Fs" in parameters or "vs" in parameters
-    sigma0 = ident.Cf / (10.0 * noise)
-    sigma0_max = 16.0 * ident.m / dt**2  # a bristle resonance 4 / dt (0.64 x the rate): beyond, a rigid stick
-    start = {"m": ident.m, "sigma": ident.sigma, "Cf": ident.Cf, "offset": ident.offset,
-             "Fs": ident.Fs if ident.Fs is not None else ident.Cf,
-             "vs": ident.vs if ident.vs is not None else 1.0, "sigma0": min(sigma0, sigma0_max / 10.0)}
-    start["sigma1"] = 0.6 * math.sqrt(start["sigma0"] * ident.m)  # damping ratio 0.3 (the stage-1 starts vary it)
     free = STATIC + (("Fs", "vs") if stribeck else ()) + DYNAMIC
     profile = tuple(n for n in DYNAMIC if n in parameters)
-    ranges = {"sigma0": (min(ident.Cf / (1e3 * noise), sigma0_max / 1e4), min(ident.Cf / (1e-3 * noise), sigma0_max)),
-              "sigma1": None}
-    crit = 2.0 * math.sqrt(start["sigma0"] * ident.m)
-    ranges["sigma1"] = (1e-3 * crit, 30.0 * crit)
     per_fit = len(free) + 5
     total = int(len(DAMPING_STARTS) * (12 + 12 + 30) * per_fit
                 + len(_neighbours(ident.input_timing, d)) * ALTERNATIVE_ITERATIONS * per_fit

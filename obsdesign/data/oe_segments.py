@@ -38,7 +38,7 @@ from .oe_stats import segment_covariance
 
 __all__ = ["SEGMENT", "DYNAMIC", "STATIC", "UNITS", "DAMPING_STARTS", "PROFILE_POINTS", "PROFILE_ITERATIONS",
            "SUBSTEP_RULE", "SegmentFit", "segment_bounds", "substeps", "simulate_segments",
-           "fit_segments", "BudgetExceeded"]
+           "fit_segments", "profile_fits", "summarize", "BudgetExceeded"]
 
 #: Default segment length [s] of the final stage (the review's 0.1 s: the bound converged there).
 SEGMENT = 0.1
@@ -242,7 +242,6 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
     -------
     SegmentFit
     """
-    from scipy import stats
 
     budget = _Budget(time_budget, bar)
     skip = 50
@@ -275,29 +274,11 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
             fit, sg = chain(q0)
             if best is None or fit[2] < best[2]:
                 best, seg = fit, sg
-        for name in profile:
-            lo, hi = ranges[name]
-            logg = lo > 0
-            grid = np.geomspace(lo, hi, PROFILE_POINTS) if logg else np.linspace(lo, hi, PROFILE_POINTS)
-            rest = tuple(n for n in free if n != name)
-            costs = np.empty(grid.size)
-            qa, nua = dict(best[0]), best[1]
-            here = max(best[0][name], 1e-300)
-            order = np.argsort(np.abs(np.log(grid / here)) if logg else np.abs(grid - here))
-            fitted = {}
-            for k in order:
-                near = min(fitted, key=lambda j: abs(j - k)) if fitted else None
-                qs, nus = (fitted[near][0], fitted[near][1]) if near is not None else (qa, nua)
-                qs = {**qs, name: float(grid[k])}
-                qk, nuk, ck, _r, _m = _gauss_newton(seg, rest, qs, nus, iterations=PROFILE_ITERATIONS)
-                fitted[k] = (qk, nuk)
-                costs[k] = ck
-            profiles[name] = (grid, costs)
-            k = int(np.argmin(costs))
-            if costs[k] < best[2] * (1 - 1e-6):  # a better basin than the start's: refit from it
-                q2, nu2, c2, r2, m2 = _gauss_newton(seg, free, fitted[k][0], fitted[k][1], iterations=30)
-                if c2 < best[2]:
-                    best = (q2, nu2, c2, r2, m2)
+        held = [best]
+        try:
+            profile_fits(seg, free, held, profile, ranges, profiles)
+        finally:
+            best = held[0]
         ms = best[2] / best[3].size
         for label, (xa, ua, ha) in (alternatives or {}).items():
             sa = _Segments(xa, ua, *_smooth(xa, dt), dt, seg.length, skip, ha, noise, seg.n_sub, best[0], budget)
@@ -309,6 +290,48 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
             best, seg = partial
         if best is None or best[4] is None:
             raise
+    return summarize(seg, best, free, profiles, noise=noise, dt=dt, evaluations=budget.count, stopped=stopped,
+                     alternatives=checked)
+
+
+def profile_fits(seg, free, held, profile, ranges, profiles):
+    """Profile each of ``profile`` over ``ranges[name]`` (the other parameters of ``free`` refitted at every point,
+    each from its neighbour's optimum) into ``profiles`` (name -> ``(grid, cost)``). ``held[0]`` is the best fit
+    (``_gauss_newton``'s tuple), replaced where a profile's point found a lower cost. Both are filled in place as
+    each profile ends: a time budget that runs out keeps what was done."""
+    best = held[0]
+    for name in profile:
+        lo, hi = ranges[name]
+        logg = lo > 0
+        grid = np.geomspace(lo, hi, PROFILE_POINTS) if logg else np.linspace(lo, hi, PROFILE_POINTS)
+        rest = tuple(n for n in free if n != name)
+        costs = np.empty(grid.size)
+        qa, nua = dict(best[0]), best[1]
+        here = max(best[0][name], 1e-300)
+        order = np.argsort(np.abs(np.log(grid / here)) if logg else np.abs(grid - here))
+        fitted = {}
+        for k in order:
+            near = min(fitted, key=lambda j: abs(j - k)) if fitted else None
+            qs, nus = (fitted[near][0], fitted[near][1]) if near is not None else (qa, nua)
+            qs = {**qs, name: float(grid[k])}
+            qk, nuk, ck, _r, _m = _gauss_newton(seg, rest, qs, nus, iterations=PROFILE_ITERATIONS)
+            fitted[k] = (qk, nuk)
+            costs[k] = ck
+        profiles[name] = (grid, costs)
+        k = int(np.argmin(costs))
+        if costs[k] < best[2] * (1 - 1e-6):  # a better basin than the start's: refit from it
+            q2, nu2, c2, r2, m2 = _gauss_newton(seg, free, fitted[k][0], fitted[k][1], iterations=30)
+            if c2 < best[2]:
+                best = held[0] = (q2, nu2, c2, r2, m2)
+
+
+def summarize(seg, best, free, profiles, *, noise, dt, evaluations, stopped="", alternatives=None):
+    """The :class:`SegmentFit` of ``best`` (``_gauss_newton``'s tuple) on ``seg``: the covariance and intervals,
+    the profiles read (one minimum within the interval and inside the range, else the profile's interval), and
+    the notes."""
+    from scipy import stats
+
+    checked = alternatives or {}
     q, nu, cost, r, mom = best
     seg.n_sub = substeps(q["sigma0"], q["m"], dt)  # the rule at the estimate (what a refit would use)
     if not np.all(np.abs(r) < 1e6):
@@ -374,5 +397,5 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
         ident[name], notes[name] = False, UNPROFILED
     return SegmentFit(names=tuple(free), values=values, std=std, intervals=intervals, identifiable=ident,
                       notes=notes, profiles=profiles, segment_samples=seg.length, segments=int(seg.starts.size),
-                      rms=float(np.sqrt(np.mean(r * r))) * noise, noise=noise, evaluations=budget.count,
+                      rms=float(np.sqrt(np.mean(r * r))) * noise, noise=noise, evaluations=evaluations,
                       stopped=stopped, alternatives=checked, substeps=seg.n_sub)
