@@ -461,9 +461,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                         min_speed=min_speed)
     kw = dict(dt=dt, filter_hz=filter_hz, q=q, model=model, fix=fix, bounds=bounds, speed=trace.units.si("speed"))
     pair = aligned(position, force, found.timing, found.delay)
-    fitted = fit_aligned(*pair, stribeck=stribeck, min_speed=min_speed, stribeck_min_speed=stribeck_min_speed,
-                         n_boot=n_boot, seed=seed, **kw)
     first = dict(stribeck=stribeck, min_speed=min_speed, n_boot=n_boot, seed=seed, stribeck_min_speed=stribeck_min_speed)
+    fitted = fit_aligned(*pair, **first, **kw)
     fitted, s, s_note, floor, pre_shift = past_presliding(
         fitted, pair[0], dt=dt, rows=DEFAULT_DECIMATION if decimation is None else q, window=presliding_window,
         steps=WINDOW_STEPS, travel=PRESLIDING_TRAVEL, length_unit=trace.units.length_unit,

@@ -126,6 +126,13 @@ def segment_start(ident, dt: float) -> tuple[float, dict, dict]:
     ``4 / dt``) and a damping ratio 0.3; ``sigma0`` is profiled from ``Cf / (1e3 noise)`` to ``Cf / (1e-3 noise)``
     (within that stiffest bristle), ``sigma1`` from 0.001 to 30 times the critical damping of the start.
 
+    Parameters
+    ----------
+    ident : Identification
+        ``identify``'s result (``noise_rms, quantization, m, sigma, Cf, offset, Fs, vs``).
+    dt : float
+        Sample time [s].
+
     Returns
     -------
     noise : float

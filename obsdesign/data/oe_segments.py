@@ -296,9 +296,26 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
 
 def profile_fits(seg, free, held, profile, ranges, profiles):
     """Profile each of ``profile`` over ``ranges[name]`` (the other parameters of ``free`` refitted at every point,
-    each from its neighbour's optimum) into ``profiles`` (name -> ``(grid, cost)``). ``held[0]`` is the best fit
-    (``_gauss_newton``'s tuple), replaced where a profile's point found a lower cost. Both are filled in place as
-    each profile ends: a time budget that runs out keeps what was done."""
+    each from its neighbour's optimum) into ``profiles``, and keep the best fit in ``held``: both are filled in
+    place as each profile ends, so a time budget that runs out keeps what was done.
+
+    Parameters
+    ----------
+    seg : _Segments
+        The segments of the final stage.
+    free : tuple of str
+        The fitted global parameters.
+    held : list
+        ``[best]``: the best fit (``_gauss_newton``'s tuple ``(q, nu, cost, r, moments)``), replaced where a
+        profile's point refits to a lower cost.
+    profile : tuple of str
+        The parameters of ``free`` to profile.
+    ranges : dict
+        Name -> ``(low, high)`` of each profiled parameter (a geometric grid of :data:`PROFILE_POINTS` where
+        ``low > 0``).
+    profiles : dict
+        Filled: name -> ``(grid, cost)`` (cost: the weighted RSS).
+    """
     best = held[0]
     for name in profile:
         lo, hi = ranges[name]
@@ -326,9 +343,34 @@ def profile_fits(seg, free, held, profile, ranges, profiles):
 
 
 def summarize(seg, best, free, profiles, *, noise, dt, evaluations, stopped="", alternatives=None):
-    """The :class:`SegmentFit` of ``best`` (``_gauss_newton``'s tuple) on ``seg``: the covariance and intervals,
-    the profiles read (one minimum within the interval and inside the range, else the profile's interval), and
-    the notes."""
+    """The :class:`SegmentFit` of ``best`` on ``seg``: the covariance and intervals, the profiles read (one
+    minimum within the interval and inside the range, else the profile's interval), and the notes.
+
+    Parameters
+    ----------
+    seg : _Segments
+        The segments the fit ran on.
+    best : tuple
+        ``_gauss_newton``'s ``(q, nu, cost, r, moments)``.
+    free : tuple of str
+        The fitted global parameters.
+    profiles : dict
+        Name -> ``(grid, cost)`` (:func:`profile_fits`).
+    noise : float
+        The position noise RMS the residual is weighted by [m or rad].
+    dt : float
+        Sample time [s].
+    evaluations : int
+        Simulations run (reported).
+    stopped : str
+        Why the fit stopped early (the time budget), or ``""``: every parameter is then not identified.
+    alternatives : dict, optional
+        Label -> BIC of each other reading of the log's timing tried (reported).
+
+    Returns
+    -------
+    SegmentFit
+    """
     from scipy import stats
 
     checked = alternatives or {}

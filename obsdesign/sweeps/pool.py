@@ -222,11 +222,14 @@ class Executor:
             return
         if self.owned:
             processes = list((getattr(self.pool, "_processes", None) or {}).values())
+            manager = getattr(self.pool, "_executor_manager_thread", None)
             self.pool.shutdown(wait=False, cancel_futures=True)
             for proc in processes:
                 proc.terminate()
             for proc in processes:
                 proc.join(2.0)
+            if manager is not None:  # let it close its wake-up pipe before the interpreter's exit hook writes to it
+                manager.join(2.0)    # (CPython 3.11: "Exception ignored ... OSError: Bad file descriptor" on stderr)
         elif self.dask:
             self.pool.cancel(self.futures)
         else:
