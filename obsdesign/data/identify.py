@@ -28,6 +28,7 @@ import html
 import math
 import warnings
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
@@ -461,21 +462,20 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
                         min_speed=min_speed)
     kw = dict(dt=dt, filter_hz=filter_hz, q=q, model=model, fix=fix, bounds=bounds, speed=trace.units.si("speed"))
     pair = aligned(position, force, found.timing, found.delay)
-    first = dict(stribeck=stribeck, min_speed=min_speed, n_boot=n_boot, seed=seed, stribeck_min_speed=stribeck_min_speed)
-    fitted = fit_aligned(*pair, **first, **kw)
+    fit = partial(fit_aligned, *pair, stribeck=stribeck, min_speed=min_speed, n_boot=n_boot, seed=seed,
+                  stribeck_min_speed=stribeck_min_speed, **kw)  # a refit overrides any keyword
+    fitted = fit()
     fitted, s, s_note, floor, pre_shift = past_presliding(
         fitted, pair[0], dt=dt, rows=DEFAULT_DECIMATION if decimation is None else q, window=presliding_window,
         steps=WINDOW_STEPS, travel=PRESLIDING_TRAVEL, length_unit=trace.units.length_unit,
-        refit=lambda f, **o: fit_aligned(*pair, travel_floor=f, **(first | o), **kw))
+        refit=lambda f, **o: fit(travel_floor=f, **o))
     kw["travel_floor"] = floor
     est, intervals, model_shift, cols, y, threshold = (fitted[k] for k in FITTED)
     intervals = widened(intervals, est["values"], pre_shift)
     pre_note = presliding_notice(pre_shift, est, presliding_window, trace.units.length_unit, trace.units.si)
     intervals, timing_shift, spread = timing_spread(position, force, found, fitted, intervals, est["values"],
                                                     unit=trace.units.si, **kw)
-    v = fitted["v"]
-    position, force = pair
-    values, std = est["values"], est["std"]
+    v, (position, force), (values, std) = fitted["v"], pair, (est["values"], est["std"])
     shown = ("m", "sigma", "Cf", "offset") + (ASYM if model == "asymmetric" else ()) + (("Fs", "vs") if est["stribeck"] else ())
     result = {k: float(values[k]) for k in shown} | {f"{k}_std": float(std.get(k, 0.0)) for k in shown}
     notes = implausible({k: (None if k in est["at_bound"] else v) for k, v in result.items()}, trace)
