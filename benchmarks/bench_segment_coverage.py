@@ -72,11 +72,11 @@ def draw(name: str, seed: int, profile: tuple = ()) -> dict:
     for label, free in (("free", S.STATIC + S.DYNAMIC), ("held", S.STATIC)):
         budget = _Budget(None, None)
         seg = _Segments(x, u, x_f, v_f, dt, int(round(S.SEGMENT / dt)), 50, spec["timing"] == "hold", noise,
-                        substeps(truth["sigma0"], truth["m"], dt), truth, budget)
-        held = [S._gauss_newton(seg, free, dict(truth), S._bristle_start(seg, truth), iterations=30)]
+                        substeps(truth["sigma0"], truth["m"], dt), budget)
+        best = [S._gauss_newton(seg, free, dict(truth), S._bristle_start(seg, truth), iterations=30)]
         profiles: dict = {}
-        S.profile_fits(seg, free, held, profile if label == "free" else (), ranges, profiles)
-        fit = S.summarize(seg, held[0], free, profiles, noise=noise, dt=dt, evaluations=budget.count)
+        S.profile_fits(seg, free, best, profile if label == "free" else (), ranges, profiles)
+        fit = S.summarize(seg, best[0], free, profiles, noise=noise, dt=dt, evaluations=budget.count)
         out[label] = {n: (fit.values[n], fit.std[n], *fit.intervals[n], bool(fit.identifiable[n])) for n in free}
         out[label + "_rms"] = fit.rms / fit.noise
         out[label + "_sims"] = budget.count

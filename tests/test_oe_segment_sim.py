@@ -21,7 +21,7 @@ def _true_segments():
     dt = 1.0 / spec["rate"]
     noise = math.sqrt(spec["noise"] ** 2 + spec["step"] ** 2 / 12.0)
     q = {k: float(spec[k]) for k in ("m", "sigma", "Cf", "offset", "Fs", "vs", "sigma0", "sigma1")}
-    seg = _Segments(x, clean["force"], x, v, dt, 400, 50, True, noise, 1, q, _Budget(None, None))
+    seg = _Segments(x, clean["force"], x, v, dt, 400, 50, True, noise, 1, _Budget(None, None))
     nu = np.zeros((seg.starts.size, 3))
     nu[:, 2] = q["sigma0"] * z[seg.starts] / q["Cf"]
     truth = x[seg.starts[:, None] + np.arange(seg.length)]

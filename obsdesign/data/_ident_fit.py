@@ -98,9 +98,10 @@ def fit_aligned(position: np.ndarray, force: np.ndarray, *, dt: float, filter_hz
                                  stribeck=stribeck, white=white, sos=sos, dt=dt, q=q, quantum=quantum,
                                  filter_hz=filter_hz, speed=speed)
     settled = settled_rows(x_f, v, travel_floor, lambda c: dec(signal.sosfiltfilt(sos, c)[keep]))
-    left = moving if settled is None else np.count_nonzero(settled & (np.abs(stacked["v"]) > threshold))
-    if left < MIN_SETTLED_ROWS and settled is not None:
-        raise ValueError(f"{left} rows are left, expected at least {MIN_SETTLED_ROWS}")
+    if settled is not None:
+        left = np.count_nonzero(settled & (np.abs(stacked["v"]) > threshold))
+        if left < MIN_SETTLED_ROWS:
+            raise ValueError(f"{left} rows are left, expected at least {MIN_SETTLED_ROWS}")
     fitted = fit_rows(row_maker(stacked, v[keep], dec, settled), threshold=threshold, floor=floor, floor_rule=rule,
                       peak=peak, speed=speed, model=model, stribeck=stribeck, fix=fix, bounds=bounds,
                       noise_var=noise_var, n_boot=n_boot, seed=seed)

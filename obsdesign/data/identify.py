@@ -153,9 +153,8 @@ class Identification:
         timings the data do not reject, which widens the interval (empty when the timing is resolved or
         given; :mod:`obsdesign.data._ident_fit`). A notice says so in one line.
     presliding_shift : dict
-        ``name -> shift``: where ``s`` is not resolved, the change of the estimate without the rows within
-        ``presliding_window`` of travel past each reversal, which widens the interval (empty where ``s`` or a
-        travel floor is found); a notice names the shifts beyond two standard errors.
+        ``name -> shift``: where ``s`` is not resolved, the change without the rows within ``presliding_window``
+        past each reversal, which widens the interval (else empty); a notice names those beyond 2 standard errors.
     """
 
     model: str
@@ -475,7 +474,8 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
     pre_note = presliding_notice(pre_shift, est, presliding_window, trace.units.length_unit, trace.units.si)
     intervals, timing_shift, spread = timing_spread(position, force, found, fitted, intervals, est["values"],
                                                     unit=trace.units.si, **kw)
-    v, (position, force), (values, std) = fitted["v"], pair, (est["values"], est["std"])
+    v = fitted["v"]
+    values, std = est["values"], est["std"]
     shown = ("m", "sigma", "Cf", "offset") + (ASYM if model == "asymmetric" else ()) + (("Fs", "vs") if est["stribeck"] else ())
     result = {k: float(values[k]) for k in shown} | {f"{k}_std": float(std.get(k, 0.0)) for k in shown}
     notes = implausible({k: (None if k in est["at_bound"] else v) for k, v in result.items()}, trace)
@@ -485,7 +485,7 @@ def identify(trace: Trace, *, model: str = "coulomb-viscous", filter_hz: float |
         est, cols, fitted["noise_var"], trace.units, filter_hz) + tuple(n for n in (pre_note, spread) if n)
     return Identification(model=model, **result, nrmse_percent=est["nrmse"], condition_number=est["condition_number"],
                           samples=int(y.size), s=s, s_note=s_note, sample_time=dt, filter_hz=float(filter_hz),
-                          filter_rule=filter_rule, decimation=q, input_gain=trace.input_gain, force_peak=float(np.max(np.abs(force))),
+                          filter_rule=filter_rule, decimation=q, input_gain=trace.input_gain, force_peak=float(np.max(np.abs(pair[1]))),
                           noise_rms=fitted["noise_rms"], quantization=fitted["quantum"],
                           reversals=int(_reversals(v, REVERSAL_THRESHOLD * float(np.max(np.abs(v)))).size),
                           source=trace.source, warnings=notes, notices=notices, stribeck=est["stribeck"], selection=est["selection"],

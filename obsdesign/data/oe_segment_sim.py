@@ -1,5 +1,5 @@
-"""The simulation of the segment fit (:mod:`obsdesign.data.oe_segments`): the segments, their plant (numba), the
-Heun sub-step rule and the check of the fit's own integration error against the position noise.
+"""The simulation of the segment fit (:mod:`obsdesign.data.oe_segments`): the segments, their plant (numba) and
+the Heun sub-step rule.
 
 Examples
 --------
@@ -88,7 +88,7 @@ def simulate_segments(pp, force, starts, length, x0, v0, fz0, m, dt, n_sub, hold
 class _Segments:
     """The data, the parameter vector and the residual of one segment length."""
 
-    def __init__(self, x_meas, force, x_f, v_f, dt, length, skip, hold, noise, n_sub, values, budget):
+    def __init__(self, x_meas, force, x_f, v_f, dt, length, skip, hold, noise, n_sub, budget):
         rows = segment_bounds(x_meas.size, length, skip=skip)
         if rows.shape[0] < 2:
             raise ValueError(f"trace: expected at least 2 segments of {length} samples, found {rows.shape[0]} "
@@ -97,7 +97,6 @@ class _Segments:
         self.meas = x_meas[self.starts[:, None] + np.arange(length)]
         self.force, self.dt, self.hold, self.noise, self.n_sub = force, dt, hold, noise, n_sub
         self.x0, self.v0 = x_f[self.starts], v_f[self.starts]
-        self.values = dict(values)
         self.out = np.empty_like(self.meas)
         self.budget = budget
 

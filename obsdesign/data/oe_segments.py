@@ -255,7 +255,7 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
         """The stages from ``q``: segments of L/10, L/4, then L, each from the last optimum."""
         for frac in _STAGES:
             length = max(20, int(round(final * frac)))
-            sg = _Segments(x_meas, force, x_f, v_f, dt, length, skip, hold, noise, n_sub, q, budget)
+            sg = _Segments(x_meas, force, x_f, v_f, dt, length, skip, hold, noise, n_sub, budget)
             fit = _gauss_newton(sg, free, q, _bristle_start(sg, q), iterations=30 if frac == 1.0 else 12)
             q = fit[0]
             partial[:] = [fit, sg]
@@ -281,7 +281,7 @@ def fit_segments(x_meas, force, *, dt, hold, noise, start, free, profile=(), seg
             best = held[0]
         ms = best[2] / best[3].size
         for label, (xa, ua, ha) in (alternatives or {}).items():
-            sa = _Segments(xa, ua, *_smooth(xa, dt), dt, seg.length, skip, ha, noise, seg.n_sub, best[0], budget)
+            sa = _Segments(xa, ua, *_smooth(xa, dt), dt, seg.length, skip, ha, noise, seg.n_sub, budget)
             fa = _gauss_newton(sa, free, best[0], _bristle_start(sa, best[0]), iterations=ALTERNATIVE_ITERATIONS)
             checked[label] = float(seg.starts.size * math.log(max(fa[2] / fa[3].size, 1e-300) / max(ms, 1e-300)))
     except BudgetExceeded:
